@@ -1,0 +1,146 @@
+#include "haptic/daemon/daemon_core.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace haptic::daemon {
+
+DaemonCore::DaemonCore(CoreSettings settings, std::vector<DeviceDescriptor> devices)
+    : settings_(std::move(settings)),
+      statistics_(settings_.rate_hz),
+      window_ticks_(static_cast<std::uint64_t>(std::max(1.0, settings_.rate_hz))) {
+    devices_.reserve(devices.size());
+    for (auto& descriptor : devices) {
+        devices_.push_back(DeviceSlot{std::move(descriptor)});
+    }
+}
+
+void DaemonCore::markStarted(std::int64_t now_ns) noexcept {
+    started_ns_ = now_ns;
+    last_tick_ns_ = now_ns;
+    last_snapshot_ns_ = now_ns;
+    state_ = msgs::DaemonState::kIdle;
+}
+
+InputRejection DaemonCore::account(DeviceSlot& slot, InputRejection reason,
+                                   std::int64_t now_ns) noexcept {
+    if (reason == InputRejection::kNone) {
+        ++slot.received;
+        slot.last_accepted_ns = now_ns;
+    } else {
+        ++slot.rejected;
+        ++slot.rejected_by[static_cast<std::size_t>(reason)];
+    }
+    return reason;
+}
+
+InputRejection DaemonCore::offerConstraintSet(std::size_t device,
+                                              const msgs::ConstraintSet& message,
+                                              std::int64_t now_ns) noexcept {
+    DeviceSlot& slot = devices_[device];
+    return account(slot, validate(message, slot.descriptor.name, slot.descriptor.joint_count),
+                   now_ns);
+}
+
+InputRejection DaemonCore::offerContactSurface(std::size_t device,
+                                               const msgs::ContactSurface& message,
+                                               std::int64_t now_ns) noexcept {
+    DeviceSlot& slot = devices_[device];
+    return account(slot, validate(message, slot.descriptor.name), now_ns);
+}
+
+double DaemonCore::ageMs(const DeviceSlot& slot, std::int64_t now_ns) const noexcept {
+    if (slot.last_accepted_ns < 0) {
+        return std::numeric_limits<double>::infinity();
+    }
+    return static_cast<double>(now_ns - slot.last_accepted_ns) * 1e-6;
+}
+
+void DaemonCore::update(std::int64_t now_ns, const TickTiming& timing) noexcept {
+    const double dt_s =
+        static_cast<double>(std::max<std::int64_t>(0, now_ns - last_tick_ns_)) * 1e-9;
+    last_tick_ns_ = now_ns;
+    const double timeout_ms = static_cast<double>(settings_.sim_timeout_ns) * 1e-6;
+    const double fade_in_s = std::max(1e-9, static_cast<double>(settings_.fade_in_ns) * 1e-9);
+
+    for (auto& slot : devices_) {
+        const double age_ms = ageMs(slot, now_ns);
+        // Full force up to half the timeout, zero at the timeout.
+        const double target = std::clamp(2.0 * (1.0 - age_ms / timeout_ms), 0.0, 1.0);
+        // Falling follows the target at once; rising is rate limited so force never steps up.
+        slot.fade = std::min(target, slot.fade + dt_s / fade_in_s);
+    }
+
+    statistics_.add(timing);
+    if (statistics_.windowCount() >= window_ticks_) {
+        statistics_.closeWindow(last_window_);
+    }
+}
+
+void DaemonCore::fillDeviceState(std::size_t device, std::int64_t now_ns,
+                                 msgs::DeviceState& out) noexcept {
+    DeviceSlot& slot = devices_[device];
+    out = msgs::DeviceState{};
+    out.header.seq = ++slot.state_seq;
+    out.header.stamp_ns = now_ns;
+    out.header.source_id.assign(slot.descriptor.name);
+    out.joint_count = slot.descriptor.joint_count;
+    out.actuator_count = slot.descriptor.actuator_count;
+    // No device driver is attached yet (CAN drivers arrive with their own issue), so the
+    // sensed values stay zero and the device reports itself offline and in its safe state.
+    std::uint32_t bits = static_cast<std::uint32_t>(msgs::DeviceStatusBit::kSafeState);
+    if (slot.fade < 1.0) {
+        bits |= static_cast<std::uint32_t>(msgs::DeviceStatusBit::kStaleSimInput);
+    }
+    out.status_bits = bits;
+}
+
+std::uint64_t DaemonCore::rejectedCount(std::size_t device, InputRejection reason) const noexcept {
+    return devices_[device].rejected_by[static_cast<std::size_t>(reason)];
+}
+
+bool DaemonCore::snapshotDue(std::int64_t now_ns) const noexcept {
+    return now_ns - last_snapshot_ns_ >= settings_.status_period_ns;
+}
+
+void DaemonCore::fillStatus(std::int64_t now_ns, msgs::HapticStatus& out) noexcept {
+    out = msgs::HapticStatus{};
+    out.header.seq = ++status_seq_;
+    out.header.stamp_ns = now_ns;
+    out.header.source_id.assign("hapticd");
+    out.state = state_;
+    out.rendering_method.assign(settings_.rendering_method);
+    out.uptime_s = static_cast<double>(now_ns - started_ns_) * 1e-9;
+    out.loop = last_window_;
+
+    std::uint64_t received = 0;
+    std::uint64_t rejected = 0;
+    double newest_age_ms = std::numeric_limits<double>::infinity();
+    for (const auto& slot : devices_) {
+        msgs::DeviceStatus status;
+        status.device_id.assign(slot.descriptor.name);
+        status.kind = slot.descriptor.kind;
+        status.state = msgs::DeviceRunState::kOffline;
+        status.last_frame_age_ms = -1.0;  // no CAN frame ever received
+        out.devices.push_back(status);
+        received += slot.received;
+        rejected += slot.rejected;
+        newest_age_ms = std::min(newest_age_ms, ageMs(slot, now_ns));
+    }
+
+    const double window_s = static_cast<double>(now_ns - last_snapshot_ns_) * 1e-9;
+    out.sim_link.transport = settings_.sim_transport;
+    out.sim_link.connected = newest_age_ms <= static_cast<double>(settings_.sim_timeout_ns) * 1e-6;
+    out.sim_link.age_ms = std::isfinite(newest_age_ms) ? newest_age_ms : -1.0;
+    out.sim_link.rate_hz =
+        window_s > 0.0 ? static_cast<double>(received - received_at_last_snapshot_) / window_s
+                       : 0.0;
+    out.sim_link.received = received;
+    out.sim_link.rejected = rejected;
+
+    received_at_last_snapshot_ = received;
+    last_snapshot_ns_ = now_ns;
+}
+
+}  // namespace haptic::daemon

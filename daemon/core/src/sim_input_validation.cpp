@@ -1,0 +1,102 @@
+#include "haptic/daemon/sim_input_validation.hpp"
+
+#include <cmath>
+
+namespace haptic::daemon {
+namespace {
+
+bool finite(double value) noexcept {
+    return std::isfinite(value);
+}
+
+template <std::size_t N>
+bool allFinite(const std::array<double, N>& values, std::size_t used = N) noexcept {
+    for (std::size_t i = 0; i < used && i < N; ++i) {
+        if (!finite(values[i])) {
+            return false;
+        }
+    }
+    return true;
+}
+
+}  // namespace
+
+std::string_view describe(InputRejection reason) noexcept {
+    switch (reason) {
+        case InputRejection::kNone:
+            return "accepted";
+        case InputRejection::kWrongDevice:
+            return "source_id names another device";
+        case InputRejection::kDofMismatch:
+            return "dof differs from the device's joint count";
+        case InputRejection::kNonFinite:
+            return "NaN or Inf in the message";
+        case InputRejection::kCountOverCapacity:
+            return "count exceeds the array capacity";
+        case InputRejection::kDegenerateConstraint:
+            return "constraint normal has zero length";
+        case InputRejection::kBadNormal:
+            return "contact normal is not unit length";
+        case InputRejection::kNegativeWeight:
+            return "negative sample weight";
+        case InputRejection::kCount_:
+            break;
+    }
+    return "unknown";
+}
+
+InputRejection validate(const msgs::ConstraintSet& message, std::string_view device_id,
+                        std::uint16_t joint_count) noexcept {
+    if (message.header.source_id.view() != device_id) {
+        return InputRejection::kWrongDevice;
+    }
+    if (message.constraints.count > msgs::kMaxConstraints) {
+        return InputRejection::kCountOverCapacity;
+    }
+    if (message.dof != joint_count || message.dof > msgs::kMaxJointDofs) {
+        return InputRejection::kDofMismatch;
+    }
+    if (!allFinite(message.q_sim_rad, message.dof)) {
+        return InputRejection::kNonFinite;
+    }
+    for (const auto& constraint : message.constraints) {
+        if (!allFinite(constraint.a, message.dof) || !finite(constraint.b)) {
+            return InputRejection::kNonFinite;
+        }
+        double norm_squared = 0.0;
+        for (std::size_t i = 0; i < message.dof; ++i) {
+            norm_squared += constraint.a[i] * constraint.a[i];
+        }
+        if (!(norm_squared > 1e-24)) {
+            return InputRejection::kDegenerateConstraint;
+        }
+    }
+    return InputRejection::kNone;
+}
+
+InputRejection validate(const msgs::ContactSurface& message, std::string_view device_id) noexcept {
+    if (message.header.source_id.view() != device_id) {
+        return InputRejection::kWrongDevice;
+    }
+    if (message.samples.count > msgs::kMaxContactSamples) {
+        return InputRejection::kCountOverCapacity;
+    }
+    for (const auto& sample : message.samples) {
+        if (!allFinite(sample.p_device_m) || !allFinite(sample.normal_device) ||
+            !finite(sample.signed_distance_m) || !finite(sample.weight)) {
+            return InputRejection::kNonFinite;
+        }
+        const double norm = std::sqrt(sample.normal_device[0] * sample.normal_device[0] +
+                                      sample.normal_device[1] * sample.normal_device[1] +
+                                      sample.normal_device[2] * sample.normal_device[2]);
+        if (std::abs(norm - 1.0) > 1e-3) {
+            return InputRejection::kBadNormal;
+        }
+        if (sample.weight < 0.0) {
+            return InputRejection::kNegativeWeight;
+        }
+    }
+    return InputRejection::kNone;
+}
+
+}  // namespace haptic::daemon

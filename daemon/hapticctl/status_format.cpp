@@ -1,0 +1,134 @@
+#include "status_format.hpp"
+
+#include <fmt/format.h>
+
+namespace haptic::ctl {
+
+std::string_view toString(msgs::DaemonState state) noexcept {
+    switch (state) {
+        case msgs::DaemonState::kInit:
+            return "INIT";
+        case msgs::DaemonState::kIdle:
+            return "IDLE";
+        case msgs::DaemonState::kRendering:
+            return "RENDERING";
+        case msgs::DaemonState::kFault:
+            return "FAULT";
+        case msgs::DaemonState::kEstop:
+            return "E-STOP";
+    }
+    return "?";
+}
+
+std::string_view toString(msgs::DeviceRunState state) noexcept {
+    switch (state) {
+        case msgs::DeviceRunState::kOffline:
+            return "OFFLINE";
+        case msgs::DeviceRunState::kReady:
+            return "READY";
+        case msgs::DeviceRunState::kActive:
+            return "ACTIVE";
+        case msgs::DeviceRunState::kSafe:
+            return "SAFE";
+        case msgs::DeviceRunState::kFault:
+            return "FAULT";
+    }
+    return "?";
+}
+
+std::string_view toString(msgs::DeviceKind kind) noexcept {
+    switch (kind) {
+        case msgs::DeviceKind::kExoskeleton:
+            return "exoskeleton";
+        case msgs::DeviceKind::kThimble:
+            return "thimble";
+    }
+    return "?";
+}
+
+std::string_view toString(msgs::BusState state) noexcept {
+    switch (state) {
+        case msgs::BusState::kUnknown:
+            return "unknown";
+        case msgs::BusState::kErrorActive:
+            return "error-active";
+        case msgs::BusState::kErrorWarning:
+            return "error-warning";
+        case msgs::BusState::kErrorPassive:
+            return "error-passive";
+        case msgs::BusState::kBusOff:
+            return "bus-off";
+    }
+    return "?";
+}
+
+std::string_view toString(msgs::SimTransport transport) noexcept {
+    switch (transport) {
+        case msgs::SimTransport::kIceoryx:
+            return "iceoryx";
+        case msgs::SimTransport::kDds:
+            return "dds";
+    }
+    return "?";
+}
+
+namespace {
+
+std::string percentilesLine(std::string_view label, const msgs::Percentiles& p) {
+    return fmt::format("            {:<8} p50 {:7.1f} us   p99 {:7.1f} us   max {:7.1f} us\n",
+                       label, p.p50, p.p99, p.max);
+}
+
+}  // namespace
+
+std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s) {
+    std::string out;
+    out += "\u25cf hapticd - haptic runtime daemon\n";
+    out += fmt::format("     State: {}   rendering method: {}\n", toString(status.state),
+                       status.rendering_method.empty() ? std::string_view("(none)")
+                                                       : status.rendering_method.view());
+    out += fmt::format("    Uptime: {:.1f} s   (status #{}, received {:.2f} s ago)\n",
+                       status.uptime_s, status.header.seq, sample_age_s);
+
+    const auto& loop = status.loop;
+    out += fmt::format(
+        "      Loop: {:.0f} Hz, {} ticks, {} overruns (read {} / compute {} / write {})\n",
+        loop.rate_hz, loop.ticks, loop.overruns, loop.overruns_read, loop.overruns_compute,
+        loop.overruns_write);
+    out += percentilesLine("period", loop.period_us);
+    out += percentilesLine("wake-up", loop.wakeup_latency_us);
+    out += percentilesLine("compute", loop.compute_us);
+
+    const auto& link = status.sim_link;
+    const std::string age =
+        link.age_ms < 0.0 ? std::string("never") : fmt::format("{:.1f} ms ago", link.age_ms);
+    out += fmt::format("  Sim link: {}, {}, last input {}, {:.1f} Hz, {} received, {} rejected\n",
+                       toString(link.transport), link.connected ? "connected" : "NOT CONNECTED",
+                       age, link.rate_hz, link.received, link.rejected);
+
+    out += fmt::format("   Devices: {}\n", status.devices.empty() ? "none configured" : "");
+    for (const auto& device : status.devices) {
+        const std::string frame_age = device.last_frame_age_ms < 0.0
+                                          ? std::string("never")
+                                          : fmt::format("{:.1f} ms ago", device.last_frame_age_ms);
+        out += fmt::format(
+            "            {:<16} {:<11} {:<8} bus {:<13} rx {} tx {} err {}/{} rejected {}  last "
+            "frame {}\n",
+            device.device_id.view(), toString(device.kind), toString(device.state),
+            toString(device.can.bus_state), device.can.rx_frames, device.can.tx_frames,
+            device.can.rx_errors, device.can.tx_errors, device.can.rejected_frames, frame_age);
+    }
+
+    if (status.faults.empty()) {
+        out += "    Faults: none\n";
+    } else {
+        out += fmt::format("    Faults: {}\n", status.faults.size());
+        for (const auto& fault : status.faults) {
+            out += fmt::format("            [{}] {}: {}\n", fault.code, fault.device_id.view(),
+                               fault.message.view());
+        }
+    }
+    return out;
+}
+
+}  // namespace haptic::ctl

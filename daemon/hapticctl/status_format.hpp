@@ -1,0 +1,21 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "haptic/msgs/messages.hpp"
+
+namespace haptic::ctl {
+
+std::string_view toString(msgs::DaemonState state) noexcept;
+std::string_view toString(msgs::DeviceRunState state) noexcept;
+std::string_view toString(msgs::DeviceKind kind) noexcept;
+std::string_view toString(msgs::BusState state) noexcept;
+std::string_view toString(msgs::SimTransport transport) noexcept;
+
+// One screen in the style of `systemctl status`: state, loop statistics, sim link, devices
+// and faults. `sample_age_s` is how long ago hapticctl received the snapshot.
+std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s);
+
+}  // namespace haptic::ctl

@@ -1,0 +1,28 @@
+#pragma once
+
+// Where each message travels. iceoryx names a channel by (service, instance, event); we use
+// service "haptic", the device or scene id as the instance and the message type as the
+// event, so one subscriber per device sees only its own data. DDS topics follow the
+// architecture's table.
+
+#include <string_view>
+
+namespace haptic::ipc {
+
+inline constexpr std::string_view kIceoryxService = "haptic";
+inline constexpr std::string_view kConstraintSetEvent = "ConstraintSet";
+inline constexpr std::string_view kContactSurfaceEvent = "ContactSurface";
+inline constexpr std::string_view kDeviceStateEvent = "DeviceState";
+
+inline constexpr const char* kStatusTopic = "haptic/status";
+inline constexpr const char* kTelemetryTopic = "haptic/telemetry";
+inline constexpr const char* kCommandTopic = "haptic/command";
+inline constexpr const char* kCommandReplyTopic = "haptic/command_reply";
+inline constexpr const char* kSimStatusTopic = "sim/status";
+inline constexpr const char* kHandPoseTopic = "tracking/hand";
+// The sim -> daemon link over DDS, for a sim on another host.
+inline constexpr const char* kConstraintSetTopic = "sim/constraint_set";
+inline constexpr const char* kContactSurfaceTopic = "sim/contact_surface";
+inline constexpr const char* kDeviceStateTopic = "haptic/device_state";
+
+}  // namespace haptic::ipc

@@ -1,0 +1,20 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace haptic::testing {
+
+// Counts heap allocations made by this thread while a scope is active (global operator new
+// is replaced in allocation_counter.cpp), as Drake's limit_malloc does. Used to prove that
+// code on the RT path does not allocate after start.
+class ScopedAllocationCounter {
+  public:
+    ScopedAllocationCounter();
+    ~ScopedAllocationCounter();
+    ScopedAllocationCounter(const ScopedAllocationCounter&) = delete;
+    ScopedAllocationCounter& operator=(const ScopedAllocationCounter&) = delete;
+    [[nodiscard]] std::uint64_t allocations() const;
+};
+
+}  // namespace haptic::testing

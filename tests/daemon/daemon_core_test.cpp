@@ -1,0 +1,218 @@
+#include "haptic/daemon/daemon_core.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "allocation_counter.hpp"
+
+namespace haptic::daemon {
+namespace {
+
+using ::testing::DoubleNear;
+using ::testing::Eq;
+using ::testing::Gt;
+
+constexpr std::int64_t kMs = 1'000'000;
+
+msgs::ConstraintSet validConstraintSet(std::string_view device) {
+    msgs::ConstraintSet message;
+    message.header.source_id.assign(device);
+    message.dof = 3;
+    message.q_sim_rad = {0.1, 0.2, 0.3};
+    msgs::LinearConstraint constraint;
+    constraint.a = {0.0, -0.05, -0.02};
+    constraint.b = -0.01;
+    message.constraints.push_back(constraint);
+    return message;
+}
+
+msgs::ContactSurface validContactSurface(std::string_view device) {
+    msgs::ContactSurface message;
+    message.header.source_id.assign(device);
+    msgs::ContactSample sample;
+    sample.normal_device = {0.0, 0.0, -1.0};
+    sample.weight = 1.0;
+    message.samples.push_back(sample);
+    return message;
+}
+
+class DaemonCoreTest : public ::testing::Test {
+  protected:
+    DaemonCoreTest()
+        : sut(CoreSettings{1000.0, 20 * kMs, 100 * kMs, 50 * kMs, "subspace",
+                           msgs::SimTransport::kIceoryx},
+              {DeviceDescriptor{"exo_index", msgs::DeviceKind::kExoskeleton, 3, 1},
+               DeviceDescriptor{"thimble_index", msgs::DeviceKind::kThimble, 3, 3}}) {
+        sut.markStarted(0);
+    }
+
+    // Runs ticks at 1 kHz from `from` for `count` ticks and returns the next time.
+    std::int64_t runTicks(std::int64_t from, int count) {
+        std::int64_t t = from;
+        for (int i = 0; i < count; ++i) {
+            t += kMs;
+            sut.update(t, TickTiming{5.0, 1000.0, 1.0, 2.0, 1.0});
+        }
+        return t;
+    }
+
+    DaemonCore sut;
+};
+
+TEST_F(DaemonCoreTest, StartsIdleWithNoSimInputAndZeroFade) {
+    EXPECT_THAT(sut.state(), Eq(msgs::DaemonState::kIdle));
+    runTicks(0, 5);
+    EXPECT_THAT(sut.simFade(0), Eq(0.0));
+}
+
+TEST_F(DaemonCoreTest, FreshInputRampsForceUpWithoutAStep) {
+    std::int64_t t = 0;
+    double previous = sut.simFade(0);
+    for (int i = 0; i < 200; ++i) {
+        ASSERT_THAT(sut.offerConstraintSet(0, validConstraintSet("exo_index"), t),
+                    Eq(InputRejection::kNone));
+        t = runTicks(t, 1);
+        const double fade = sut.simFade(0);
+        EXPECT_LE(fade - previous, 1.0 / 100.0 + 1e-12) << "rose faster than the fade-in ramp";
+        previous = fade;
+    }
+    EXPECT_THAT(sut.simFade(0), DoubleNear(1.0, 1e-12));
+}
+
+TEST_F(DaemonCoreTest, StaleInputFadesToZeroWithinTheTimeoutAndNeverRises) {
+    std::int64_t t = 0;
+    for (int i = 0; i < 200; ++i) {
+        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), t);
+        t = runTicks(t, 1);
+    }
+    const std::int64_t last_input = t - kMs;
+    double previous = sut.simFade(0);
+    for (int i = 0; i < 30; ++i) {
+        t = runTicks(t, 1);
+        EXPECT_LE(sut.simFade(0), previous);
+        previous = sut.simFade(0);
+        if (t - last_input >= 20 * kMs) {
+            EXPECT_THAT(sut.simFade(0), Eq(0.0)) << "force left after the 20 ms timeout";
+        }
+    }
+}
+
+TEST_F(DaemonCoreTest, RejectsNonFiniteAndWrongDeviceInputAndCountsThem) {
+    auto nan_q = validConstraintSet("exo_index");
+    nan_q.q_sim_rad[1] = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THAT(sut.offerConstraintSet(0, nan_q, 0), Eq(InputRejection::kNonFinite));
+
+    auto inf_b = validConstraintSet("exo_index");
+    inf_b.constraints[0].b = std::numeric_limits<double>::infinity();
+    EXPECT_THAT(sut.offerConstraintSet(0, inf_b, 0), Eq(InputRejection::kNonFinite));
+
+    EXPECT_THAT(sut.offerConstraintSet(0, validConstraintSet("someone_else"), 0),
+                Eq(InputRejection::kWrongDevice));
+
+    auto wrong_dof = validConstraintSet("exo_index");
+    wrong_dof.dof = 5;
+    EXPECT_THAT(sut.offerConstraintSet(0, wrong_dof, 0), Eq(InputRejection::kDofMismatch));
+
+    auto zero_normal = validConstraintSet("exo_index");
+    zero_normal.constraints[0].a.fill(0.0);
+    EXPECT_THAT(sut.offerConstraintSet(0, zero_normal, 0),
+                Eq(InputRejection::kDegenerateConstraint));
+
+    auto corrupt_count = validConstraintSet("exo_index");
+    corrupt_count.constraints.count = 1000;
+    EXPECT_THAT(sut.offerConstraintSet(0, corrupt_count, 0),
+                Eq(InputRejection::kCountOverCapacity));
+
+    auto nan_sample = validContactSurface("thimble_index");
+    nan_sample.samples[0].signed_distance_m = std::nan("");
+    EXPECT_THAT(sut.offerContactSurface(1, nan_sample, 0), Eq(InputRejection::kNonFinite));
+
+    auto bad_normal = validContactSurface("thimble_index");
+    bad_normal.samples[0].normal_device = {0.0, 0.0, 2.0};
+    EXPECT_THAT(sut.offerContactSurface(1, bad_normal, 0), Eq(InputRejection::kBadNormal));
+
+    EXPECT_THAT(sut.rejectedCount(0, InputRejection::kNonFinite), Eq(2U));
+    EXPECT_THAT(sut.simFade(0), Eq(0.0)) << "a rejected message must not count as fresh input";
+
+    msgs::HapticStatus status;
+    sut.fillStatus(kMs, status);
+    EXPECT_THAT(status.sim_link.rejected, Eq(8U));
+    EXPECT_THAT(status.sim_link.received, Eq(0U));
+    EXPECT_FALSE(status.sim_link.connected);
+}
+
+TEST_F(DaemonCoreTest, StatusReportsDevicesLinkRateAndLoopWindow) {
+    std::int64_t t = 0;
+    for (int i = 0; i < 1000; ++i) {
+        if (i % 10 == 0) {
+            (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), t);
+        }
+        t = runTicks(t, 1);
+    }
+    msgs::HapticStatus status;
+    ASSERT_TRUE(sut.snapshotDue(t));
+    sut.fillStatus(t, status);
+    EXPECT_THAT(status.state, Eq(msgs::DaemonState::kIdle));
+    ASSERT_THAT(status.devices.size(), Eq(2U));
+    EXPECT_THAT(status.devices[0].device_id.view(), Eq("exo_index"));
+    EXPECT_THAT(status.devices[1].kind, Eq(msgs::DeviceKind::kThimble));
+    EXPECT_TRUE(status.sim_link.connected);
+    EXPECT_THAT(status.sim_link.rate_hz, DoubleNear(100.0, 1.0));
+    EXPECT_THAT(status.loop.ticks, Eq(1000U));
+    EXPECT_THAT(status.loop.period_us.p50, DoubleNear(1000.0, 1.0));
+    EXPECT_THAT(status.loop.overruns, Eq(0U));
+    EXPECT_THAT(status.rendering_method.view(), Eq("subspace"));
+}
+
+TEST_F(DaemonCoreTest, TicksDoNotAllocate) {
+    const auto constraint_set = validConstraintSet("exo_index");
+    const auto contact_surface = validContactSurface("thimble_index");
+    msgs::DeviceState state;
+    msgs::HapticStatus status;
+    std::int64_t t = 0;
+    testing::ScopedAllocationCounter counter;
+    for (int i = 0; i < 5000; ++i) {
+        (void)sut.offerConstraintSet(0, constraint_set, t);
+        (void)sut.offerContactSurface(1, contact_surface, t);
+        t = runTicks(t, 1);
+        sut.fillDeviceState(0, t, state);
+        sut.fillDeviceState(1, t, state);
+        if (sut.snapshotDue(t)) {
+            sut.fillStatus(t, status);
+        }
+    }
+    EXPECT_THAT(counter.allocations(), Eq(0U));
+    EXPECT_THAT(status.header.seq, Gt(50U));
+}
+
+TEST(LoopStatistics, OverrunCauseIsTheLargestShare) {
+    LoopStatisticsCollector sut(1000.0);
+    sut.add(TickTiming{0, 1000, 900, 50, 100});   // 1050 us, read dominates
+    sut.add(TickTiming{0, 1000, 10, 1200, 100});  // compute dominates
+    sut.add(TickTiming{0, 1000, 10, 20, 1500});   // write dominates
+    sut.add(TickTiming{0, 1000, 10, 20, 30});     // within budget
+    msgs::LoopStatistics out;
+    sut.closeWindow(out);
+    EXPECT_THAT(out.overruns, Eq(3U));
+    EXPECT_THAT(out.overruns_read, Eq(1U));
+    EXPECT_THAT(out.overruns_compute, Eq(1U));
+    EXPECT_THAT(out.overruns_write, Eq(1U));
+}
+
+TEST(MicrosecondHistogram, PercentilesBracketTheSamples) {
+    MicrosecondHistogram sut;
+    for (int i = 1; i <= 1000; ++i) {
+        sut.add(static_cast<double>(i) * 0.999);
+    }
+    sut.add(12000.0);  // past the last bin: only max sees it exactly
+    const auto p = sut.percentiles();
+    EXPECT_THAT(p.p50, DoubleNear(500.0, 1.5));
+    EXPECT_THAT(p.p99, DoubleNear(990.0, 2.0));
+    EXPECT_THAT(p.max, Eq(12000.0));
+}
+
+}  // namespace
+}  // namespace haptic::daemon

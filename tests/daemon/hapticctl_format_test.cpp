@@ -1,0 +1,58 @@
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "status_format.hpp"
+
+namespace haptic::ctl {
+namespace {
+
+using ::testing::HasSubstr;
+
+TEST(StatusFormat, ShowsStateLoopSimLinkDevicesAndFaults) {
+    msgs::HapticStatus status;
+    status.state = msgs::DaemonState::kIdle;
+    status.rendering_method.assign("subspace");
+    status.uptime_s = 12.5;
+    status.loop.rate_hz = 1000;
+    status.loop.ticks = 12500;
+    status.loop.overruns = 3;
+    status.loop.overruns_compute = 2;
+    status.loop.overruns_write = 1;
+    status.loop.wakeup_latency_us = {11.0, 52.0, 700.0};
+    status.sim_link.connected = true;
+    status.sim_link.age_ms = 4.5;
+    status.sim_link.rate_hz = 99.8;
+    msgs::DeviceStatus device;
+    device.device_id.assign("exo_index");
+    device.kind = msgs::DeviceKind::kExoskeleton;
+    device.can.bus_state = msgs::BusState::kBusOff;
+    device.last_frame_age_ms = -1.0;
+    status.devices.push_back(device);
+    msgs::Fault fault;
+    fault.code = 7;
+    fault.device_id.assign("exo_index");
+    fault.message.assign("heartbeat missing for 50 ms");
+    status.faults.push_back(fault);
+
+    const std::string text = formatStatus(status, 0.05);
+    EXPECT_THAT(text, HasSubstr("State: IDLE"));
+    EXPECT_THAT(text, HasSubstr("rendering method: subspace"));
+    EXPECT_THAT(text, HasSubstr("1000 Hz, 12500 ticks, 3 overruns (read 0 / compute 2 / write 1)"));
+    EXPECT_THAT(text, HasSubstr("wake-up  p50    11.0 us   p99    52.0 us   max   700.0 us"));
+    EXPECT_THAT(text, HasSubstr("iceoryx, connected, last input 4.5 ms ago, 99.8 Hz"));
+    EXPECT_THAT(text, HasSubstr("exo_index"));
+    EXPECT_THAT(text, HasSubstr("bus-off"));
+    EXPECT_THAT(text, HasSubstr("last frame never"));
+    EXPECT_THAT(text, HasSubstr("[7] exo_index: heartbeat missing for 50 ms"));
+}
+
+TEST(StatusFormat, SaysWhenTheSimIsNotConnected) {
+    msgs::HapticStatus status;
+    status.sim_link.age_ms = -1.0;
+    const std::string text = formatStatus(status, 0.0);
+    EXPECT_THAT(text, HasSubstr("NOT CONNECTED, last input never"));
+    EXPECT_THAT(text, HasSubstr("Faults: none"));
+}
+
+}  // namespace
+}  // namespace haptic::ctl
