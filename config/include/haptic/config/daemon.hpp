@@ -1,0 +1,53 @@
+#pragma once
+
+// hapticd's configuration (config/daemon.yaml). Loading it also loads and validates every
+// device file it lists, so a daemon that starts has a complete, checked set of devices.
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+#include "haptic/config/common.hpp"
+#include "haptic/config/device.hpp"
+#include "haptic/config/enums.hpp"
+
+namespace haptic::config {
+
+// libfranka's kEnforce/kIgnore: production refuses to start without SCHED_FIFO, mlockall and
+// affinity; tests and CI opt out explicitly.
+enum class RealtimeMode { kEnforce, kIgnore };
+
+template <>
+struct EnumTraits<RealtimeMode> {
+    static constexpr std::array<EnumEntry<RealtimeMode>, 2> kEntries{{
+        {"enforce", RealtimeMode::kEnforce},
+        {"ignore", RealtimeMode::kIgnore},
+    }};
+};
+
+// YAML: loop: {...}
+struct LoopConfig {
+    int rate_hz{1000};  // 100..4000
+    RealtimeMode realtime{RealtimeMode::kEnforce};
+    int priority{80};              // SCHED_FIFO priority, 1..99
+    int cpu_affinity{-1};          // core index for the RT thread, -1 = no pinning
+    int sim_timeout_ms{20};        // older sim input fades the force out
+    int status_rate_hz{20};        // haptic/status publication rate, 1..100
+    int telemetry_decimation{10};  // haptic/telemetry every N ticks
+};
+
+struct DaemonConfig {
+    std::filesystem::path source;
+    LogLevel log_level{LogLevel::kInfo};
+    LoopConfig loop;
+    std::vector<DeviceConfig> devices;  // 1..4, names unique, CAN ids disjoint per interface
+    SimLinkConfig sim_link;
+    DdsConfig dds;
+    std::optional<IceoryxConfig> iceoryx;
+};
+
+// Loads daemon.yaml and every device file it names. Throws ConfigError.
+[[nodiscard]] DaemonConfig loadDaemonConfig(const std::filesystem::path& path);
+
+}  // namespace haptic::config

@@ -1,0 +1,187 @@
+#pragma once
+
+// One YAML file per physical device (config/devices/*.yaml). The common part (name, CAN,
+// safety limits) is the same for every device; the rest depends on `type`.
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <variant>
+
+#include "haptic/config/enums.hpp"
+#include "haptic/config/types.hpp"
+
+namespace haptic::config {
+
+enum class DeviceType { kExoskeleton, kThimble };
+
+template <>
+struct EnumTraits<DeviceType> {
+    static constexpr std::array<EnumEntry<DeviceType>, 2> kEntries{{
+        {"exoskeleton", DeviceType::kExoskeleton},
+        {"thimble", DeviceType::kThimble},
+    }};
+};
+
+// Kinesthetic rendering methods (ALGORITHMS §5.1-5.5, §6.5). The names are also what
+// haptic/command's set-method argument carries.
+enum class RenderingMethod {
+    kStandard,
+    kNaive,
+    kNullspace,
+    kSubspace,
+    kLinearizedSubspace,
+    kAnisotropic
+};
+
+template <>
+struct EnumTraits<RenderingMethod> {
+    static constexpr std::array<EnumEntry<RenderingMethod>, 6> kEntries{{
+        {"standard", RenderingMethod::kStandard},
+        {"naive", RenderingMethod::kNaive},
+        {"nullspace", RenderingMethod::kNullspace},
+        {"subspace", RenderingMethod::kSubspace},
+        {"linearized_subspace", RenderingMethod::kLinearizedSubspace},
+        {"anisotropic", RenderingMethod::kAnisotropic},
+    }};
+};
+
+// YAML: can: {...}. Ids are 11-bit standard ids, pairwise distinct within a device; the
+// daemon and sim loaders also reject two devices on one interface sharing an id.
+struct CanConfig {
+    std::string interface;        // SocketCAN interface name (1-15 chars), e.g. "can0"
+    std::uint32_t bitrate{0};     // nominal bit/s; the interface is configured outside us
+    bool fd{false};               // CAN FD frames (needs an FD-capable interface, MTU 72)
+    std::uint32_t command_id{0};  // host -> device setpoints
+    std::uint32_t state_id{0};    // device -> host sensed state
+    std::uint32_t heartbeat_id{0};
+    std::uint32_t fault_id{0};
+    int heartbeat_timeout_ms{0};  // no heartbeat for this long: device goes to safe state
+    int state_timeout_ms{0};      // no state frame for this long: device goes to safe state
+};
+
+// YAML: safety: {...}. Hard limits enforced by hapticd after rendering, whatever the method.
+struct SafetyLimits {
+    double max_force_n{0.0};             // at the device's interaction point
+    double max_stiffness_n_per_m{0.0};   // largest rendered stiffness at 1 kHz
+    double max_velocity_m_per_s{0.0};    // exo: actuator rod; thimble: contact plate
+    double max_force_rate_n_per_s{0.0};  // slew limit on the commanded force
+    int fade_out_ms{0};                  // ramp to zero force on stale input or disable
+};
+
+// --- exoskeleton (ALGORITHMS §5.8) ---------------------------------------------------------
+
+// YAML: actuator: {...}. The single linear actuator.
+struct ActuatorConfig {
+    double stroke_min_m{0.0};
+    double stroke_max_m{0.0};
+    double max_force_n{0.0};
+    double max_speed_m_per_s{0.0};
+    double lag_time_constant_s{0.0};  // first-order force response, used by the emulator
+};
+
+// YAML: finger: {phalanx_lengths_m: [l1, l2, l3], joint_limits_deg: [[min, max] x 3]}.
+// Planar 3R chain MCP, PIP, DIP; flexion positive. Frame F: origin on the MCP axis, x along
+// the straight finger towards the tip, y towards the palm (so dorsal points have y < 0).
+struct FingerConfig {
+    Vec3 phalanx_lengths_m{};
+    std::array<Interval, 3> joint_limits_rad{};
+};
+
+// YAML: linkage: {...}. Assumed closure model ell = sigma(q) for the dorsal linkage, used
+// until a lab replaces it with its CAD values or a fitted table (ALGORITHMS §5.8):
+//
+//   sigma(q) = |R(theta1) * proximal_attachment_m - actuator_base_m| - rod_length_m
+//              + distal_coupling_m_per_rad[0] * theta2 + distal_coupling_m_per_rad[1] * theta3
+//
+// i.e. the actuator spans from a pivot on the back of the hand to a pivot on the proximal
+// phalanx link, and the passive links to the middle and distal phalanges add stroke in
+// proportion to PIP and DIP flexion.
+struct LinkageConfig {
+    Vec2 actuator_base_m{};        // rear pivot of the actuator, in frame F
+    Vec2 proximal_attachment_m{};  // rod-end pivot, in the proximal phalanx frame
+    double rod_length_m{0.0};      // pivot-to-pivot length at zero stroke
+    Vec2 distal_coupling_m_per_rad{};
+};
+
+// YAML: rendering: {method, max_constraints}
+struct ExoskeletonRenderingConfig {
+    RenderingMethod method{RenderingMethod::kLinearizedSubspace};
+    int max_constraints{8};  // linearised constraints used per tick (<= msgs kMaxConstraints)
+};
+
+struct ExoskeletonConfig {
+    ActuatorConfig actuator;
+    FingerConfig finger;
+    LinkageConfig linkage;
+    ExoskeletonRenderingConfig rendering;
+};
+
+// --- thimble (ALGORITHMS §3.6) -------------------------------------------------------------
+
+// YAML: geometry: {...}. 3-RRS platform; base frame origin at the static body centre, z
+// from nail towards pad.
+struct ThimbleGeometry {
+    double base_radius_m{0.0};      // r_b, servo-axis circle
+    double platform_radius_m{0.0};  // r_p, spherical-joint circle on the platform
+    double crank_length_m{0.0};     // l_1, servo link
+    double link_length_m{0.0};      // l_2, distal link
+    Vec3 leg_angles_rad{};          // gamma_i, angular placement of each leg
+};
+
+// YAML: servos: {min_deg, max_deg, max_rate_deg_per_s, lag_time_constant_s}
+struct ServoConfig {
+    double min_rad{0.0};
+    double max_rad{0.0};
+    double max_rate_rad_per_s{0.0};
+    double lag_time_constant_s{0.0};  // first-order position response
+};
+
+// YAML: finger_calibration: {...}. Per user: where the pad is and how far it may be pressed.
+struct FingerCalibration {
+    double contact_height_m{0.0};   // plate height where the undeformed pad is first touched
+    double max_indentation_m{0.0};  // the plate never goes past contact_height + this
+    Transform T_finger_device;      // device base frame in the finger frame
+};
+
+// YAML: optimiser: {max_iterations, pad_samples}. Bounds fix the worst-case tick cost.
+struct OptimiserConfig {
+    int max_iterations{0};
+    int pad_samples{0};  // <= msgs kMaxContactSamples
+};
+
+struct ThimbleConfig {
+    ThimbleGeometry geometry;
+    ServoConfig servos;
+    double plate_radius_m{0.0};  // r_d
+    double max_tilt_rad{0.0};
+    FingerCalibration finger_calibration;
+    OptimiserConfig optimiser;
+};
+
+// -------------------------------------------------------------------------------------------
+
+struct DeviceConfig {
+    std::filesystem::path source;  // the file it was loaded from
+    std::string name;              // [a-z0-9_]{1,31}, unique among the devices in use
+    CanConfig can;
+    SafetyLimits safety;
+    std::variant<ExoskeletonConfig, ThimbleConfig> params;
+
+    [[nodiscard]] DeviceType type() const noexcept {
+        return params.index() == 0 ? DeviceType::kExoskeleton : DeviceType::kThimble;
+    }
+    [[nodiscard]] bool isExoskeleton() const noexcept { return params.index() == 0; }
+    [[nodiscard]] bool isThimble() const noexcept { return params.index() == 1; }
+    // Throw std::bad_variant_access on the wrong type.
+    [[nodiscard]] const ExoskeletonConfig& exoskeleton() const {
+        return std::get<ExoskeletonConfig>(params);
+    }
+    [[nodiscard]] const ThimbleConfig& thimble() const { return std::get<ThimbleConfig>(params); }
+};
+
+// Loads and validates one device file. Throws ConfigError.
+[[nodiscard]] DeviceConfig loadDeviceConfig(const std::filesystem::path& path);
+
+}  // namespace haptic::config

@@ -1,0 +1,38 @@
+#include "haptic/config/daemon.hpp"
+#include "schema.hpp"
+
+namespace haptic::config {
+namespace {
+
+LoopConfig readLoop(MapReader map) {
+    using spec::Integer;
+    LoopConfig out;
+    out.rate_hz = map.required("rate_hz", Integer<int>::closed(100, 4000));
+    out.realtime = map.optional("realtime", RealtimeMode::kEnforce, spec::Enum<RealtimeMode>{});
+    out.priority = map.optional("priority", 80, Integer<int>::closed(1, 99));
+    out.cpu_affinity = map.optional("cpu_affinity", -1, Integer<int>::closed(-1, 1023));
+    out.sim_timeout_ms = map.required("sim_timeout_ms", Integer<int>::closed(1, 1000));
+    out.status_rate_hz = map.optional("status_rate_hz", 20, Integer<int>::closed(1, 100));
+    out.telemetry_decimation =
+        map.optional("telemetry_decimation", 10, Integer<int>::closed(1, 1000));
+    map.finish();
+    return out;
+}
+
+}  // namespace
+
+DaemonConfig loadDaemonConfig(const std::filesystem::path& path) {
+    MapReader root = MapReader::openFile(path);
+    DaemonConfig out;
+    out.source = path;
+    out.log_level = detail::readLogLevel(root);
+    out.loop = readLoop(root.requiredMap("loop"));
+    out.devices = detail::readDeviceList(detail::requiredDeviceList(root));
+    out.sim_link = detail::readSimLink(root);
+    out.dds = detail::readDds(root);
+    out.iceoryx = detail::readIceoryx(root);
+    root.finish();
+    return out;
+}
+
+}  // namespace haptic::config

@@ -1,0 +1,270 @@
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "haptic/config/device.hpp"
+#include "schema.hpp"
+
+namespace haptic::config {
+namespace detail {
+namespace {
+
+using spec::Real;
+
+// Standard CAN nominal bit rates; anything else is almost certainly a typo.
+constexpr std::array<std::uint32_t, 9> kBitrates{10'000,  20'000,  50'000,  100'000,  125'000,
+                                                 250'000, 500'000, 800'000, 1'000'000};
+// Matches msgs kMaxConstraints and kMaxContactSamples: the RT path has fixed capacities.
+constexpr int kMaxConstraints = 16;
+constexpr int kMaxPadSamples = 128;
+
+std::string hexId(std::uint32_t id) {
+    char buffer[16];
+    std::snprintf(buffer, sizeof(buffer), "0x%03x", id);
+    return buffer;
+}
+
+// Linux interface names: IFNAMSIZ - 1 characters, no '/', ':' or whitespace.
+std::string readInterface(MapReader& can) {
+    auto [name, field] = can.requiredWithField("interface", spec::Text{});
+    const bool valid = name.size() <= 15 && std::none_of(name.begin(), name.end(), [](char c) {
+                           return c == '/' || c == ':' || c == ' ' || c == '\t';
+                       });
+    if (!valid) {
+        field.fail("a network interface name of 1 to 15 characters without '/', ':' or spaces");
+    }
+    return name;
+}
+
+CanConfig readCan(MapReader can) {
+    CanConfig out;
+    out.interface = readInterface(can);
+
+    auto [bitrate, bitrate_field] =
+        can.requiredWithField("bitrate", spec::Integer<std::uint32_t>::closed(10'000, 1'000'000));
+    if (std::find(kBitrates.begin(), kBitrates.end(), bitrate) == kBitrates.end()) {
+        bitrate_field.fail(
+            "a standard CAN bit rate (10000, 20000, 50000, 100000, 125000, 250000, 500000, "
+            "800000 or 1000000)");
+    }
+    out.bitrate = bitrate;
+    out.fd = can.optional("fd", false, spec::Boolean{});
+
+    // 11-bit standard ids; each must be distinct or frames of one kind would be parsed as
+    // another.
+    const auto id_spec = spec::Integer<std::uint32_t>::hexClosed(0, 0x7FF);
+    const std::array<const char*, 4> names{"command_id", "state_id", "heartbeat_id", "fault_id"};
+    std::array<std::uint32_t*, 4> targets{&out.command_id, &out.state_id, &out.heartbeat_id,
+                                          &out.fault_id};
+    for (std::size_t i = 0; i < names.size(); ++i) {
+        auto [id, field] = can.requiredWithField(names[i], id_spec);
+        for (std::size_t j = 0; j < i; ++j) {
+            if (*targets[j] == id) {
+                field.fail(
+                    std::string("a CAN id different from can.") + names[j] + " (" + hexId(id) + ")",
+                    hexId(id));
+            }
+        }
+        *targets[i] = id;
+    }
+    out.heartbeat_timeout_ms =
+        can.required("heartbeat_timeout_ms", spec::Integer<int>::closed(1, 1000));
+    out.state_timeout_ms = can.required("state_timeout_ms", spec::Integer<int>::closed(1, 1000));
+    can.finish();
+    return out;
+}
+
+struct Safety {
+    SafetyLimits limits;
+    std::optional<Field> max_force_field;  // for the check against the actuator
+};
+
+Safety readSafety(MapReader safety) {
+    SafetyLimits out;
+    auto [max_force, max_force_field] =
+        safety.requiredWithField("max_force_n", Real::positive(100.0));
+    out.max_force_n = max_force;
+    out.max_stiffness_n_per_m = safety.required("max_stiffness_n_per_m", Real::positive(20'000.0));
+    out.max_velocity_m_per_s = safety.required("max_velocity_m_per_s", Real::positive(5.0));
+    out.max_force_rate_n_per_s =
+        safety.required("max_force_rate_n_per_s", Real::positive(100'000.0));
+    out.fade_out_ms = safety.required("fade_out_ms", spec::Integer<int>::closed(1, 2000));
+    safety.finish();
+    return Safety{out, std::move(max_force_field)};
+}
+
+// --- exoskeleton ---
+
+ActuatorConfig readActuator(MapReader map) {
+    ActuatorConfig out;
+    out.stroke_min_m = map.required("stroke_min_m", Real::closed(-0.2, 0.2));
+    auto [stroke_max, stroke_max_field] =
+        map.requiredWithField("stroke_max_m", Real::closed(-0.2, 0.2));
+    if (!(stroke_max > out.stroke_min_m)) {
+        stroke_max_field.fail("a number greater than actuator.stroke_min_m (" +
+                              formatNumber(out.stroke_min_m) + ")");
+    }
+    out.stroke_max_m = stroke_max;
+    out.max_force_n = map.required("max_force_n", Real::positive(500.0));
+    out.max_speed_m_per_s = map.required("max_speed_m_per_s", Real::positive(5.0));
+    out.lag_time_constant_s = map.required("lag_time_constant_s", Real::closed(0.0, 1.0));
+    map.finish();
+    return out;
+}
+
+FingerConfig readFinger(MapReader map) {
+    FingerConfig out;
+    // Human phalanges are 5-80 mm; metres typed as millimetres fail here.
+    out.phalanx_lengths_m =
+        map.required("phalanx_lengths_m", spec::Reals<3>{Real::closed(0.005, 0.08)});
+    const auto limits_deg = map.required(
+        "joint_limits_deg", spec::Array<spec::Range, 3>{spec::Range{Real::closed(-90.0, 135.0)}});
+    for (std::size_t i = 0; i < limits_deg.size(); ++i) {
+        out.joint_limits_rad[i] = degToRad(limits_deg[i]);
+    }
+    map.finish();
+    return out;
+}
+
+LinkageConfig readLinkage(MapReader map) {
+    const auto point = spec::Reals<2>{Real::closed(-0.2, 0.2)};
+    LinkageConfig out;
+    out.actuator_base_m = map.required("actuator_base_m", point);
+    out.proximal_attachment_m = map.required("proximal_attachment_m", point);
+    out.rod_length_m = map.required("rod_length_m", Real::positive(0.3));
+    out.distal_coupling_m_per_rad =
+        map.required("distal_coupling_m_per_rad", spec::Reals<2>{Real::closed(-0.05, 0.05)});
+    map.finish();
+    return out;
+}
+
+ExoskeletonRenderingConfig readExoRendering(MapReader map) {
+    ExoskeletonRenderingConfig out;
+    out.method = map.required("method", spec::Enum<RenderingMethod>{});
+    out.max_constraints =
+        map.optional("max_constraints", 8, spec::Integer<int>::closed(1, kMaxConstraints));
+    map.finish();
+    return out;
+}
+
+ExoskeletonConfig readExoskeleton(MapReader& root, const Safety& safety) {
+    ExoskeletonConfig out;
+    out.actuator = readActuator(root.requiredMap("actuator"));
+    out.finger = readFinger(root.requiredMap("finger"));
+    out.linkage = readLinkage(root.requiredMap("linkage"));
+    out.rendering = readExoRendering(root.requiredMap("rendering"));
+    // The safety limit is a promise the actuator must be able to keep.
+    if (safety.limits.max_force_n > out.actuator.max_force_n) {
+        safety.max_force_field->fail("a number no greater than actuator.max_force_n (" +
+                                     formatNumber(out.actuator.max_force_n) + ")");
+    }
+    return out;
+}
+
+// --- thimble ---
+
+ThimbleGeometry readGeometry(MapReader map) {
+    // A fingertip device: every dimension is millimetres to a few centimetres.
+    const Real length = Real::positive(0.1);
+    ThimbleGeometry out;
+    out.base_radius_m = map.required("base_radius_m", length);
+    out.platform_radius_m = map.required("platform_radius_m", length);
+    out.crank_length_m = map.required("crank_length_m", length);
+    out.link_length_m = map.required("link_length_m", length);
+    auto [angles_deg, angles_field] =
+        map.requiredWithField("leg_angles_deg", spec::Reals<3>{Real::closed(-360.0, 360.0)});
+    // Coincident legs make the platform singular; real designs are ~120 degrees apart.
+    for (std::size_t i = 0; i < 3; ++i) {
+        for (std::size_t j = i + 1; j < 3; ++j) {
+            const double gap = std::fabs(std::remainder(angles_deg[i] - angles_deg[j], 360.0));
+            if (gap < 30.0) {
+                angles_field.fail("three leg angles at least 30 degrees apart",
+                                  "[" + formatNumber(angles_deg[0]) + ", " +
+                                      formatNumber(angles_deg[1]) + ", " +
+                                      formatNumber(angles_deg[2]) + "]");
+            }
+        }
+    }
+    out.leg_angles_rad = degToRad(angles_deg);
+    map.finish();
+    return out;
+}
+
+ServoConfig readServos(MapReader map) {
+    ServoConfig out;
+    const double min_deg = map.required("min_deg", Real::closed(-180.0, 180.0));
+    auto [max_deg, max_field] = map.requiredWithField("max_deg", Real::closed(-180.0, 180.0));
+    if (!(max_deg > min_deg)) {
+        max_field.fail("a number greater than servos.min_deg (" + formatNumber(min_deg) + ")");
+    }
+    out.min_rad = degToRad(min_deg);
+    out.max_rad = degToRad(max_deg);
+    out.max_rate_rad_per_s = degToRad(map.required("max_rate_deg_per_s", Real::positive(2000.0)));
+    out.lag_time_constant_s = map.required("lag_time_constant_s", Real::closed(0.0, 1.0));
+    map.finish();
+    return out;
+}
+
+FingerCalibration readCalibration(MapReader map) {
+    FingerCalibration out;
+    out.contact_height_m = map.required("contact_height_m", Real::closed(-0.1, 0.1));
+    out.max_indentation_m = map.required("max_indentation_m", Real::positive(0.01));
+    out.T_finger_device = readTransform(map.requiredMap("T_finger_device"));
+    map.finish();
+    return out;
+}
+
+OptimiserConfig readOptimiser(MapReader map) {
+    OptimiserConfig out;
+    out.max_iterations = map.required("max_iterations", spec::Integer<int>::closed(1, 1000));
+    out.pad_samples =
+        map.optional("pad_samples", 64, spec::Integer<int>::closed(1, kMaxPadSamples));
+    map.finish();
+    return out;
+}
+
+ThimbleConfig readThimble(MapReader& root) {
+    ThimbleConfig out;
+    out.geometry = readGeometry(root.requiredMap("geometry"));
+    out.servos = readServos(root.requiredMap("servos"));
+    out.plate_radius_m = root.required("plate_radius_m", Real::positive(0.05));
+    // The cable-driven predecessor reached 30 degrees; beyond 60 the legs fold.
+    out.max_tilt_rad = degToRad(root.required("max_tilt_deg", Real::closed(0.0, 60.0)));
+    out.finger_calibration = readCalibration(root.requiredMap("finger_calibration"));
+    out.optimiser = readOptimiser(root.requiredMap("optimiser"));
+    return out;
+}
+
+}  // namespace
+
+DeviceConfig readDevice(MapReader root, const std::filesystem::path& source) {
+    DeviceConfig out;
+    out.source = source;
+    out.name = root.required("name", spec::Identifier{});
+    const DeviceType type = root.required("type", spec::Enum<DeviceType>{});
+    out.can = readCan(root.requiredMap("can"));
+    const Safety safety = readSafety(root.requiredMap("safety"));
+    out.safety = safety.limits;
+    switch (type) {
+        case DeviceType::kExoskeleton:
+            out.params = readExoskeleton(root, safety);
+            break;
+        case DeviceType::kThimble:
+            out.params = readThimble(root);
+            break;
+    }
+    root.finish();
+    return out;
+}
+
+}  // namespace detail
+
+DeviceConfig loadDeviceConfig(const std::filesystem::path& path) {
+    return detail::readDevice(MapReader::openFile(path), path);
+}
+
+}  // namespace haptic::config

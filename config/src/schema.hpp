@@ -1,0 +1,41 @@
+#pragma once
+
+// Schema pieces shared by the loaders. Private to the library.
+
+#include <filesystem>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "haptic/config/common.hpp"
+#include "haptic/config/device.hpp"
+#include "haptic/config/reader.hpp"
+#include "haptic/config/types.hpp"
+
+namespace haptic::config::detail {
+
+// Workspace bound for positions in scenes and calibrations: generous for a tabletop, tight
+// enough to catch millimetres typed as metres.
+inline constexpr double kMaxPositionM = 10.0;
+// Upper bound on devices per process; matches the status message capacity.
+inline constexpr std::size_t kMaxDevices = 4;
+
+LogLevel readLogLevel(MapReader& root);
+SimLinkConfig readSimLink(MapReader& root);
+DdsConfig readDds(MapReader& root);
+std::optional<IceoryxConfig> readIceoryx(MapReader& root);
+
+// {position_m: [x, y, z], rpy_deg: [r, p, y]}; rpy_deg is optional and defaults to zero.
+Pose readPose(MapReader map);
+// {translation_m: [x, y, z], rpy_deg: [r, p, y]}; both required.
+Transform readTransform(MapReader map);
+
+// Reads one device file's root map (the body of loadDeviceConfig).
+DeviceConfig readDevice(MapReader root, const std::filesystem::path& source);
+
+// The `devices: [paths]` list of daemon and sim files.
+ListReader requiredDeviceList(MapReader& root);
+// Loads every listed file and checks names and CAN ids across devices.
+std::vector<DeviceConfig> readDeviceList(const ListReader& list);
+
+}  // namespace haptic::config::detail

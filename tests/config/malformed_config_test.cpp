@@ -1,0 +1,440 @@
+// One real malformed file per class of mistake. Each test pins the file, line, key and the
+// expectation the message states, because that message is the whole user interface of a
+// config error.
+
+#include <gtest/gtest.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <string>
+
+#include "haptic/config/config.hpp"
+#include "test_support.hpp"
+
+namespace haptic::config {
+namespace {
+
+using test::configErrorOf;
+using test::kDataDir;
+using test::lineOf;
+using test::resolved;
+
+struct Expected {
+    std::string file;
+    int line;
+    int column;  // -1: not checked
+    std::string key;
+    std::string substring;
+};
+
+void expectError(const std::optional<ConfigError>& error, const Expected& expected) {
+    ASSERT_TRUE(error.has_value());
+    const std::string what = error->what();
+    EXPECT_EQ(error->file(), expected.file) << what;
+    EXPECT_EQ(error->line(), expected.line) << what;
+    if (expected.column >= 0) {
+        EXPECT_EQ(error->column(), expected.column) << what;
+    }
+    EXPECT_EQ(error->key(), expected.key) << what;
+    EXPECT_NE(what.find(expected.substring), std::string::npos)
+        << "'" << expected.substring << "' not in: " << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << "what() must be one line: " << what;
+
+    // "<file>:<line>[:<col>]: <message>"
+    std::string prefix = expected.file;
+    if (error->line() > 0) {
+        prefix += ":" + std::to_string(error->line());
+        if (error->column() > 0) {
+            prefix += ":" + std::to_string(error->column());
+        }
+    }
+    EXPECT_EQ(what.rfind(prefix + ": ", 0), 0U) << what;
+    EXPECT_EQ(what, prefix + ": " + error->message());
+}
+
+std::optional<ConfigError> daemonError(const std::string& name) {
+    return configErrorOf([&] { (void)loadDaemonConfig(kDataDir / name); });
+}
+std::optional<ConfigError> deviceError(const std::string& name) {
+    return configErrorOf([&] { (void)loadDeviceConfig(kDataDir / "devices" / name); });
+}
+std::optional<ConfigError> sceneError(const std::string& name) {
+    return configErrorOf([&] { (void)loadSceneConfig(kDataDir / "scenes" / name); });
+}
+std::optional<ConfigError> simError(const std::string& name) {
+    return configErrorOf([&] { (void)loadSimConfig(kDataDir / name); });
+}
+std::string data(const std::string& name) {
+    return (kDataDir / name).string();
+}
+
+// --- file level ----------------------------------------------------------------------------
+
+TEST(ConfigFileErrors, MissingFileNamesPathAndErrno) {
+    expectError(daemonError("no_such_daemon.yaml"),
+                {data("no_such_daemon.yaml"), 0, 0, "", std::strerror(ENOENT)});
+}
+
+TEST(ConfigFileErrors, DirectoryIsNotAFile) {
+    expectError(configErrorOf([] { (void)loadDaemonConfig(kDataDir / "devices"); }),
+                {data("devices"), 0, 0, "", std::strerror(EISDIR)});
+}
+
+TEST(ConfigFileErrors, YamlSyntaxErrorHasPositionAndParserMessage) {
+    // The flow list opened on the devices line is never closed; yaml-cpp notices on the
+    // next line, where the block map continues.
+    expectError(daemonError("syntax_error.yaml"),
+                {data("syntax_error.yaml"), lineOf(kDataDir / "syntax_error.yaml", "sim_link:"), -1,
+                 "", "YAML syntax error: end of sequence flow not found"});
+}
+
+TEST(ConfigFileErrors, EmptyFile) {
+    expectError(daemonError("empty.yaml"), {data("empty.yaml"), 0, 0, "", "empty file"});
+}
+
+TEST(ConfigFileErrors, RootMustBeAMap) {
+    expectError(
+        daemonError("root_is_list.yaml"),
+        {data("root_is_list.yaml"), 1, 1, "", "expected a map of settings, got a list of 2 items"});
+}
+
+TEST(ConfigFileErrors, OnlyOneDocument) {
+    expectError(daemonError("multi_document.yaml"),
+                {data("multi_document.yaml"), 3, 1, "", "expected a single YAML document, got 2"});
+}
+
+TEST(ConfigFileErrors, DuplicateKeyIsRejected) {
+    const auto file = kDataDir / "duplicate_key.yaml";
+    expectError(daemonError("duplicate_key.yaml"),
+                {data("duplicate_key.yaml"), lineOf(file, "rate_hz: 500"), 3, "loop.rate_hz",
+                 "loop.rate_hz: expected each key once, got it again (first at line " +
+                     std::to_string(lineOf(file, "rate_hz: 1000")) + ")"});
+}
+
+// --- unknown keys ----------------------------------------------------------------------------
+
+TEST(ConfigUnknownKeys, TopLevelTypoListsAllowedKeys) {
+    expectError(daemonError("unknown_key_top_level.yaml"),
+                {data("unknown_key_top_level.yaml"), 1, 1, "log_levle",
+                 "unknown key 'log_levle' (allowed: log_level, loop, devices, sim_link, dds, "
+                 "iceoryx)"});
+}
+
+TEST(ConfigUnknownKeys, NestedTypoHasDottedPath) {
+    expectError(daemonError("unknown_key_nested.yaml"),
+                {data("unknown_key_nested.yaml"),
+                 lineOf(kDataDir / "unknown_key_nested.yaml", "rate_hx"), 3, "loop.rate_hx",
+                 "unknown key 'loop.rate_hx' (allowed: rate_hz, realtime, priority, "
+                 "cpu_affinity, sim_timeout_ms, status_rate_hz, telemetry_decimation)"});
+}
+
+TEST(ConfigUnknownKeys, ThimbleKeyInExoskeletonFile) {
+    const auto file = kDataDir / "devices/thimble_key_on_exoskeleton.yaml";
+    expectError(deviceError("thimble_key_on_exoskeleton.yaml"),
+                {file.string(), lineOf(file, "geometry:"), 1, "geometry",
+                 "allowed: name, type, can, safety, actuator, finger, linkage, rendering)"});
+}
+
+TEST(ConfigUnknownKeys, SizeKeyOfAnotherShape) {
+    const auto file = kDataDir / "scenes/shape_unknown_key.yaml";
+    expectError(
+        sceneError("shape_unknown_key.yaml"),
+        {file.string(), lineOf(file, "half_extents_m: [0.01"), 5, "objects[2].half_extents_m",
+         "unknown key 'objects[2].half_extents_m' (allowed: name, shape, pose, radius_m, "
+         "mass_kg, friction)"});
+}
+
+TEST(ConfigUnknownKeys, PlanesHaveNoMass) {
+    const auto file = kDataDir / "scenes/plane_with_mass.yaml";
+    expectError(sceneError("plane_with_mass.yaml"),
+                {file.string(), lineOf(file, "mass_kg: 1.0"), 5, "objects[0].mass_kg",
+                 "(allowed: name, shape, pose, friction)"});
+}
+
+TEST(ConfigUnknownKeys, WholeHandModelTakesNoFinger) {
+    const auto file = kDataDir / "scenes/finger_on_hand_model.yaml";
+    expectError(sceneError("finger_on_hand_model.yaml"),
+                {file.string(), lineOf(file, "finger: index"), 3, "hand.finger",
+                 "unknown key 'hand.finger' (allowed: model, resolution, anthropometry)"});
+}
+
+// --- wrong types -----------------------------------------------------------------------------
+
+TEST(ConfigWrongTypes, StringWhereIntegerExpected) {
+    expectError(daemonError("wrong_type_string_for_int.yaml"),
+                {data("wrong_type_string_for_int.yaml"), 3, 12, "loop.rate_hz",
+                 "loop.rate_hz: expected an integer in [100, 4000], got the string 'fast'"});
+}
+
+TEST(ConfigWrongTypes, FloatWhereIntegerExpected) {
+    const auto file = kDataDir / "wrong_type_float_for_int.yaml";
+    expectError(daemonError("wrong_type_float_for_int.yaml"),
+                {file.string(), lineOf(file, "priority:"), 13, "loop.priority",
+                 "expected an integer in [1, 99], got 80.5"});
+}
+
+TEST(ConfigWrongTypes, QuotedNumberIsAString) {
+    expectError(
+        daemonError("wrong_type_quoted_number.yaml"),
+        {data("wrong_type_quoted_number.yaml"), 3, 12, "loop.rate_hz", "got the string '1000'"});
+}
+
+TEST(ConfigWrongTypes, ListWhereScalarExpected) {
+    const auto file = kDataDir / "wrong_type_list_for_scalar.yaml";
+    expectError(daemonError("wrong_type_list_for_scalar.yaml"),
+                {file.string(), lineOf(file, "transport:"), 14, "sim_link.transport",
+                 "expected one of iceoryx|dds, got a list of 1 item"});
+}
+
+TEST(ConfigWrongTypes, YesIsNotABoolean) {
+    const auto file = kDataDir / "devices/wrong_type_bool.yaml";
+    expectError(deviceError("wrong_type_bool.yaml"),
+                {file.string(), lineOf(file, "fd: yes"), 7, "can.fd",
+                 "can.fd: expected true or false, got the string 'yes'"});
+}
+
+TEST(ConfigWrongTypes, StringWhereNumberExpected) {
+    const auto file = kDataDir / "devices/wrong_type_string_for_number.yaml";
+    expectError(deviceError("wrong_type_string_for_number.yaml"),
+                {file.string(), lineOf(file, "strong"), 16, "safety.max_force_n",
+                 "expected a number in (0, 100], got the string 'strong'"});
+}
+
+// --- ranges and non-finite values -----------------------------------------------------------
+
+TEST(ConfigOutOfRange, IntegerAboveMaximum) {
+    expectError(daemonError("out_of_range.yaml"),
+                {data("out_of_range.yaml"), 3, 12, "loop.rate_hz",
+                 "loop.rate_hz: expected an integer in [100, 4000], got 50000"});
+}
+
+TEST(ConfigOutOfRange, MillimetresWrittenWhereMetresExpected) {
+    const auto file = kDataDir / "devices/out_of_range_mm_for_m.yaml";
+    expectError(deviceError("out_of_range_mm_for_m.yaml"),
+                {file.string(), lineOf(file, "crank_length_m"), 19, "geometry.crank_length_m",
+                 "expected a number in (0, 0.1], got 10"});
+}
+
+TEST(ConfigOutOfRange, CanIdBeyondElevenBits) {
+    const auto file = kDataDir / "devices/can_id_out_of_range.yaml";
+    expectError(deviceError("can_id_out_of_range.yaml"),
+                {file.string(), lineOf(file, "command_id"), 15, "can.command_id",
+                 "expected an integer in [0x0, 0x7ff], got 0x801"});
+}
+
+TEST(ConfigOutOfRange, NonStandardBitrate) {
+    const auto file = kDataDir / "devices/bad_bitrate.yaml";
+    expectError(deviceError("bad_bitrate.yaml"),
+                {file.string(), lineOf(file, "bitrate"), 12, "can.bitrate",
+                 "expected a standard CAN bit rate"});
+}
+
+TEST(ConfigOutOfRange, ReversedJointLimits) {
+    const auto file = kDataDir / "devices/reversed_joint_limits.yaml";
+    expectError(deviceError("reversed_joint_limits.yaml"),
+                {file.string(), lineOf(file, "[110.0, 0.0]"), 7, "finger.joint_limits_deg[1]",
+                 "with min < max, each a number in [-90, 135], got [110, 0]"});
+}
+
+TEST(ConfigOutOfRange, SafetyLimitAboveActuatorCapability) {
+    const auto file = kDataDir / "devices/safety_above_actuator.yaml";
+    expectError(deviceError("safety_above_actuator.yaml"),
+                {file.string(), lineOf(file, "max_force_n: 50.0"), 16, "safety.max_force_n",
+                 "expected a number no greater than actuator.max_force_n (40), got 50.0"});
+}
+
+TEST(ConfigOutOfRange, ThimbleLegsTooClose) {
+    const auto file = kDataDir / "devices/legs_too_close.yaml";
+    expectError(deviceError("legs_too_close.yaml"),
+                {file.string(), lineOf(file, "leg_angles_deg"), 19, "geometry.leg_angles_deg",
+                 "expected three leg angles at least 30 degrees apart, got [90, 100, 330]"});
+}
+
+TEST(ConfigNonFinite, NanIsRejected) {
+    const auto file = kDataDir / "devices/nan.yaml";
+    expectError(deviceError("nan.yaml"), {file.string(), lineOf(file, ".nan"), 16,
+                                          "safety.max_force_n", "got .nan (not a finite number)"});
+}
+
+TEST(ConfigNonFinite, InfIsRejected) {
+    const auto file = kDataDir / "devices/inf.yaml";
+    expectError(deviceError("inf.yaml"),
+                {file.string(), lineOf(file, ".inf"), 19, "geometry.crank_length_m",
+                 "expected a number in (0, 0.1], got .inf (not a finite number)"});
+}
+
+// --- missing keys ----------------------------------------------------------------------------
+
+TEST(ConfigMissingKeys, NestedRequiredKeyPointsAtItsMap) {
+    // Line of the `loop` map (its first key), no column: the key is not there to point at.
+    const auto file = kDataDir / "missing_required_key.yaml";
+    const auto error = daemonError("missing_required_key.yaml");
+    expectError(error, {file.string(), lineOf(file, "rate_hz"), 0, "loop.sim_timeout_ms",
+                        "missing required key 'loop.sim_timeout_ms' (an integer in [1, 1000])"});
+    EXPECT_EQ(std::string(error->what()),
+              file.string() + ":" + std::to_string(lineOf(file, "rate_hz")) +
+                  ": missing required key 'loop.sim_timeout_ms' (an integer in [1, 1000])");
+}
+
+TEST(ConfigMissingKeys, DeviceSafetyLimit) {
+    const auto file = kDataDir / "devices/missing_required_key.yaml";
+    expectError(deviceError("missing_required_key.yaml"),
+                {file.string(), lineOf(file, "max_force_n: 1.5"), 0, "safety.max_stiffness_n_per_m",
+                 "missing required key 'safety.max_stiffness_n_per_m' (a number in (0, 20000])"});
+}
+
+TEST(ConfigMissingKeys, ReplayNeedsAFile) {
+    const auto file = kDataDir / "scenes/script_keys_on_replay.yaml";
+    expectError(
+        sceneError("script_keys_on_replay.yaml"),
+        {file.string(), lineOf(file, "source: replay"), 0, "tracking.replay_file",
+         "missing required key 'tracking.replay_file' (a path to a readable file, relative to this "
+         "file's directory)"});
+}
+
+// --- enums -----------------------------------------------------------------------------------
+
+TEST(ConfigBadEnums, DaemonRealtimeMode) {
+    expectError(daemonError("bad_enum.yaml"),
+                {data("bad_enum.yaml"), 4, 13, "loop.realtime",
+                 "loop.realtime: expected one of enforce|ignore, got the string 'sometimes'"});
+}
+
+TEST(ConfigBadEnums, RenderingMethod) {
+    const auto file = kDataDir / "devices/bad_enum.yaml";
+    expectError(deviceError("bad_enum.yaml"),
+                {file.string(), lineOf(file, "method: magic"), 11, "rendering.method",
+                 "expected one of standard|naive|nullspace|subspace|linearized_subspace|"
+                 "anisotropic, got the string 'magic'"});
+}
+
+TEST(ConfigBadEnums, ShapeType) {
+    const auto file = kDataDir / "scenes/bad_shape.yaml";
+    expectError(sceneError("bad_shape.yaml"),
+                {file.string(), lineOf(file, "shape: cone"), 12, "objects[2].shape",
+                 "expected one of plane|box|sphere|capsule, got the string 'cone'"});
+}
+
+// --- lists -----------------------------------------------------------------------------------
+
+TEST(ConfigListLengths, VectorWithTooFewItems) {
+    const auto file = kDataDir / "devices/wrong_list_length.yaml";
+    expectError(deviceError("wrong_list_length.yaml"),
+                {file.string(), lineOf(file, "phalanx_lengths_m"), 22, "finger.phalanx_lengths_m",
+                 "expected a list of 3 items, each a number in [0.005, 0.08], got a list of 2 "
+                 "items"});
+}
+
+// --- names and CAN ids -----------------------------------------------------------------------
+
+TEST(ConfigNames, DeviceNameCharacters) {
+    const auto file = kDataDir / "devices/bad_name.yaml";
+    expectError(deviceError("bad_name.yaml"),
+                {file.string(), 1, 7, "name",
+                 "expected a name of 1 to 31 characters from [a-z0-9_], got 'Exo-1'"});
+}
+
+TEST(ConfigNames, DuplicateObjectName) {
+    const auto file = kDataDir / "scenes/duplicate_object.yaml";
+    // The second "block" is the third object.
+    int line = lineOf(file, "name: block");
+    std::ifstream in(file);
+    std::string text;
+    for (int n = 1; std::getline(in, text); ++n) {
+        if (n > line && text.find("name: block") != std::string::npos) {
+            line = n;
+            break;
+        }
+    }
+    expectError(sceneError("duplicate_object.yaml"),
+                {file.string(), line, 11, "objects[2].name",
+                 "expected a unique object name, got 'block', already used by objects[1]"});
+}
+
+TEST(ConfigCanIds, DuplicateIdWithinDevice) {
+    const auto file = kDataDir / "devices/duplicate_can_id.yaml";
+    expectError(deviceError("duplicate_can_id.yaml"),
+                {file.string(), lineOf(file, "state_id"), 13, "can.state_id",
+                 "can.state_id: expected a CAN id different from can.command_id (0x101), got "
+                 "0x101"});
+}
+
+// --- references between files ----------------------------------------------------------------
+
+TEST(ConfigReferences, MissingDeviceFileIsReportedWhereItIsNamed) {
+    const auto file = kDataDir / "missing_device_file.yaml";
+    expectError(daemonError("missing_device_file.yaml"),
+                {file.string(), lineOf(file, "no_such_device"), 5, "devices[1]",
+                 "got 'devices/no_such_device.yaml' (" +
+                     resolved(kDataDir / "devices/no_such_device.yaml") + ": " +
+                     std::strerror(ENOENT) + ")"});
+}
+
+TEST(ConfigReferences, ErrorInsideDeviceFileNamesThatFile) {
+    const std::string device = resolved(kDataDir / "devices/nan.yaml");
+    expectError(daemonError("bad_device_file.yaml"),
+                {device, lineOf(device, ".nan"), 16, "safety.max_force_n", "not a finite number"});
+}
+
+TEST(ConfigReferences, DuplicateDeviceNames) {
+    const auto file = kDataDir / "duplicate_device_names.yaml";
+    expectError(daemonError("duplicate_device_names.yaml"),
+                {file.string(), lineOf(file, "exo_same_name"), 5, "devices[1]",
+                 "expected a device with a unique name, got another device named 'exo' "
+                 "(devices[0])"});
+}
+
+TEST(ConfigReferences, CanIdsSharedAcrossDevicesOnOneBus) {
+    const auto file = kDataDir / "duplicate_device_ids_across_files.yaml";
+    expectError(daemonError("duplicate_device_ids_across_files.yaml"),
+                {file.string(), lineOf(file, "exo_renamed_copy"), 5, "devices[1]",
+                 "expected a device whose CAN ids on can0 differ from those of 'exo' "
+                 "(devices[0]), got 'exo_two' also using 0x101"});
+}
+
+TEST(ConfigReferences, UnknownDdsParticipantProfile) {
+    const auto file = kDataDir / "unknown_dds_profile.yaml";
+    expectError(daemonError("unknown_dds_profile.yaml"),
+                {file.string(), lineOf(file, "no_such_profile"), 24, "dds.participant_profile",
+                 "(declared: test_participant), got the string 'no_such_profile'"});
+}
+
+TEST(ConfigReferences, TrackingTargetMustBeAnObject) {
+    const auto file = kDataDir / "scenes/unknown_target.yaml";
+    expectError(sceneError("unknown_target.yaml"),
+                {file.string(), lineOf(file, "crate"), 18, "tracking.target_object",
+                 "expected the name of an object in this scene, got the string 'crate'"});
+}
+
+TEST(ConfigReferences, BindingToAFingerThatIsNotSimulated) {
+    const auto file = kDataDir / "scenes/wrong_finger_binding.yaml";
+    expectError(sceneError("wrong_finger_binding.yaml"),
+                {file.string(), lineOf(file, "finger: middle"), 21, "devices.thimble.finger",
+                 "expected the simulated finger 'index' (hand.model is finger), got the string "
+                 "'middle'"});
+}
+
+TEST(ConfigReferences, SimMissingScene) {
+    const auto file = kDataDir / "sim_missing_scene.yaml";
+    expectError(simError("sim_missing_scene.yaml"),
+                {file.string(), 2, 8, "scene", std::strerror(ENOENT)});
+}
+
+TEST(ConfigReferences, SimDeviceNotBoundInScene) {
+    const auto file = kDataDir / "sim_unbound_device.yaml";
+    expectError(simError("sim_unbound_device.yaml"),
+                {file.string(), lineOf(file, "exo_on_can1"), 5, "devices[1]",
+                 "expected a device bound in scene 'test_scene' (bound: exo, thimble), got "
+                 "'exo_two'"});
+}
+
+TEST(ConfigReferences, ExoskeletonNeedsFingerJoints) {
+    const auto file = kDataDir / "sim_exoskeleton_on_fingertip.yaml";
+    expectError(simError("sim_exoskeleton_on_fingertip.yaml"),
+                {file.string(), lineOf(file, "exo_ok"), 5, "devices[0]",
+                 "got exoskeleton 'exo' with hand.model fingertip (no joints)"});
+}
+
+}  // namespace
+}  // namespace haptic::config
