@@ -106,7 +106,7 @@ std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s) 
                        toString(link.transport), link.connected ? "connected" : "NOT CONNECTED",
                        age, link.rate_hz, link.received, link.rejected);
 
-    out += fmt::format("   Devices: {}\n", status.devices.empty() ? "none configured" : "");
+    out += status.devices.empty() ? "   Devices: none configured\n" : "   Devices:\n";
     for (const auto& device : status.devices) {
         const std::string frame_age = device.last_frame_age_ms < 0.0
                                           ? std::string("never")

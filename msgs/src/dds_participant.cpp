@@ -85,6 +85,7 @@ dds::DataWriter* DdsParticipant::createRawWriter(const std::string& topic,
     qos.durability().kind = dds::VOLATILE_DURABILITY_QOS;
     qos.history().kind = dds::KEEP_LAST_HISTORY_QOS;
     qos.history().depth = kind == TopicKind::kLatestState ? 1 : 64;
+    qos.data_sharing().off();
     auto* writer = publisher_->create_datawriter(topicFor(topic, type_name), qos);
     if (writer == nullptr) {
         throw IpcError("could not create a DDS writer for '" + topic + "'");
@@ -99,6 +100,7 @@ dds::DataReader* DdsParticipant::createRawReader(const std::string& topic,
     qos.durability().kind = dds::VOLATILE_DURABILITY_QOS;
     qos.history().kind = dds::KEEP_LAST_HISTORY_QOS;
     qos.history().depth = kind == TopicKind::kLatestState ? 1 : 64;
+    qos.data_sharing().off();
     auto* reader = subscriber_->create_datareader(topicFor(topic, type_name), qos);
     if (reader == nullptr) {
         throw IpcError("could not create a DDS reader for '" + topic + "'");

@@ -14,7 +14,8 @@ void initIceoryxRuntime(std::string_view app_name) {
         throw IpcError(probe.reason);
     }
     // iceoryx logs at verbose by default, which would drown our own log.
-    iox::log::LogManager::GetLogManager().SetDefaultLogLevel(iox::log::LogLevel::kWarn);
+    iox::log::LogManager::GetLogManager().SetDefaultLogLevel(
+        iox::log::LogLevel::kWarn, iox::log::LogLevelOutput::kHideLogLevel);
     const std::string name(app_name);
     iox::runtime::PoshRuntime::initRuntime(
         iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name.c_str(), name.size()));

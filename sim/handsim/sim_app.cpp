@@ -48,7 +48,6 @@ struct DeviceLink {
 
 sim::PlaceholderFingerParameters placeholderParameters(const config::SimConfig& cfg) {
     sim::PlaceholderFingerParameters parameters;
-    parameters.plane_z_m = cfg.scene.placeholder_contact->plane_height_m;
     for (const auto& device : cfg.devices) {
         if (device.isExoskeleton()) {
             parameters.phalanx_lengths_m = device.exoskeleton().finger.phalanx_lengths_m;

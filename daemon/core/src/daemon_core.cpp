@@ -112,7 +112,9 @@ void DaemonCore::fillStatus(std::int64_t now_ns, msgs::HapticStatus& out) noexce
     out.state = state_;
     out.rendering_method.assign(settings_.rendering_method);
     out.uptime_s = static_cast<double>(now_ns - started_ns_) * 1e-9;
+    // Percentiles cover the last full one-second window; counters are live.
     out.loop = last_window_;
+    statistics_.fillCounters(out.loop);
 
     std::uint64_t received = 0;
     std::uint64_t rejected = 0;

@@ -64,13 +64,17 @@ void LoopStatisticsCollector::add(const TickTiming& timing) noexcept {
     }
 }
 
-void LoopStatisticsCollector::closeWindow(msgs::LoopStatistics& out) noexcept {
+void LoopStatisticsCollector::fillCounters(msgs::LoopStatistics& out) const noexcept {
     out.rate_hz = rate_hz_;
     out.ticks = ticks_;
     out.overruns = overruns_;
     out.overruns_read = overruns_read_;
     out.overruns_compute = overruns_compute_;
     out.overruns_write = overruns_write_;
+}
+
+void LoopStatisticsCollector::closeWindow(msgs::LoopStatistics& out) noexcept {
+    fillCounters(out);
     out.period_us = period_.percentiles();
     out.wakeup_latency_us = wakeup_.percentiles();
     out.compute_us = compute_.percentiles();

@@ -9,6 +9,10 @@ namespace haptic::sim {
 PlaceholderFingertipPlane::PlaceholderFingertipPlane(const PlaceholderFingerParameters& parameters)
     : parameters_(parameters),
       q_rad_(parameters.rest_rad[0], parameters.rest_rad[1], parameters.rest_rad[2]) {
+    // At full press (half a period) the tip must sit press_depth_m below the plane.
+    setTime(0.5 * parameters_.press_period_s);
+    plane_z_m_ = fingertipPosition().z() + parameters_.press_depth_m;
+    setTime(0.0);
     pad_samples_D_.push_back(Eigen::Vector3d(0.0, 0.0, parameters_.pad_depth_m));
     for (int ring = 1; ring <= parameters_.pad_rings; ++ring) {
         const double radius = parameters_.pad_radius_m * ring / parameters_.pad_rings;
@@ -42,7 +46,7 @@ Eigen::Vector3d PlaceholderFingertipPlane::fingertipPosition() const noexcept {
 }
 
 double PlaceholderFingertipPlane::fingertipDistance() const noexcept {
-    return fingertipPosition().z() - parameters_.plane_z_m;
+    return fingertipPosition().z() - plane_z_m_;
 }
 
 Eigen::Vector3d PlaceholderFingertipPlane::distanceGradient() const noexcept {
@@ -121,7 +125,7 @@ void PlaceholderFingertipPlane::fillContactSurface(msgs::ContactSurface& out) co
             sample.p_device_m[static_cast<std::size_t>(i)] = p_D[i];
             sample.normal_device[static_cast<std::size_t>(i)] = normal_D[i];
         }
-        sample.signed_distance_m = p_W.z() - parameters_.plane_z_m;
+        sample.signed_distance_m = p_W.z() - plane_z_m_;
         sample.weight = 1.0 / static_cast<double>(pad_samples_D_.size());
         out.samples.push_back(sample);
     }

@@ -46,6 +46,9 @@ class LoopStatisticsCollector {
     void add(const TickTiming& timing) noexcept;
     // Fills `out` from the current window and starts a new one.
     void closeWindow(msgs::LoopStatistics& out) noexcept;
+    // Fills only the lifetime counters (rate, ticks, overruns), which are live between
+    // windows; leaves the percentiles alone.
+    void fillCounters(msgs::LoopStatistics& out) const noexcept;
     [[nodiscard]] std::uint64_t windowCount() const noexcept { return period_.count(); }
 
   private:

@@ -6,7 +6,9 @@
 // and tested, but it models no tissue, no friction and no Bullet world.
 //
 // Frames: W (world/finger base): x along the extended finger, z up; the finger flexes in the
-// x-z plane, a positive joint angle bends it downward. The table plane is z_W = plane_z_m.
+// x-z plane, a positive joint angle bends it downward. The plane is horizontal; the model
+// places it so that the scripted press indents it by press_depth_m at full flexion (the
+// caller puts the finger base in its world accordingly).
 // D (thimble device base): rides on the distal phalanx, origin on the nail side at its
 // middle, z_D pointing from nail toward pad (down when the finger is straight).
 
@@ -20,7 +22,7 @@ namespace haptic::sim {
 
 struct PlaceholderFingerParameters {
     std::array<double, 3> phalanx_lengths_m{0.045, 0.025, 0.020};
-    double plane_z_m{-0.030};        // table height in W
+    double press_depth_m{0.004};     // fingertip penetration at full press
     double contact_margin_m{0.005};  // constraints are sent once closer than this
     // Scripted press: joints flex from rest_rad by up to press_amplitude_rad and back.
     std::array<double, 3> rest_rad{0.10, 0.10, 0.05};
@@ -54,6 +56,8 @@ class PlaceholderFingertipPlane {
     void fillContactSurface(msgs::ContactSurface& out) const noexcept;
 
     [[nodiscard]] std::size_t padSampleCount() const noexcept { return pad_samples_D_.size(); }
+    // Height of the plane in W (the finger base frame).
+    [[nodiscard]] double planeZ() const noexcept { return plane_z_m_; }
 
   private:
     [[nodiscard]] Eigen::Matrix3d rotationWorldFromDevice() const noexcept;
@@ -61,6 +65,7 @@ class PlaceholderFingertipPlane {
 
     PlaceholderFingerParameters parameters_;
     Eigen::Vector3d q_rad_;
+    double plane_z_m_{0.0};
     msgs::BoundedArray<Eigen::Vector3d, msgs::kMaxContactSamples> pad_samples_D_;
 };
 

@@ -1,0 +1,99 @@
+#!/usr/bin/env bash
+# The README's main command: builds if needed, starts the real iox-roudi with our memory
+# pools, then hapticd and handsim, and shows `hapticctl status` live. Stops everything on
+# Ctrl-C or after --duration and checks that no shared memory is left behind.
+#
+#   scripts/demo.sh [--duration SECONDS] [--realtime enforce|ignore]
+set -euo pipefail
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+DURATION=0
+REALTIME=ignore   # this VM has no PREEMPT_RT kernel; use 'enforce' on a lab PC
+while (($#)); do
+  case "$1" in
+    --duration) DURATION=$2; shift 2 ;;
+    --realtime) REALTIME=$2; shift 2 ;;
+    -h|--help) sed -n '2,7p' "$0"; exit 0 ;;
+    *) echo "demo.sh: unknown argument '$1'" >&2; exit 2 ;;
+  esac
+done
+
+"$ROOT/scripts/install-deps.sh"
+BUILD="$ROOT/build/release"
+if [[ ! -x "$BUILD/daemon/hapticd/hapticd" ]] || [[ -n "$(find "$ROOT" -newer "$BUILD/daemon/hapticd/hapticd" \
+      \( -name '*.cpp' -o -name '*.hpp' -o -name '*.idl' -o -name CMakeLists.txt \) -not -path "$ROOT/build/*" -print -quit)" ]]; then
+  echo "demo: building (Release) in $BUILD"
+  cmake -S "$ROOT" -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+  ninja -C "$BUILD" -j2 hapticd handsim hapticctl hapticemu
+fi
+
+HAPTICD="$BUILD/daemon/hapticd/hapticd"
+HANDSIM="$BUILD/sim/handsim/handsim"
+HAPTICCTL="$BUILD/daemon/hapticctl/hapticctl"
+LOGS=$(mktemp -d /tmp/haptic-demo.XXXXXX)
+PIDS=()
+
+if [[ -S /tmp/roudi ]] && pgrep -x iox-roudi >/dev/null; then
+  echo "demo: an iox-roudi is already running (pid $(pgrep -x iox-roudi)); stop it first" >&2
+  exit 1
+fi
+
+stop() {
+  local pid=$1 name=$2
+  if kill -0 "$pid" 2>/dev/null; then
+    kill -TERM "$pid" 2>/dev/null || true
+    for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+    if kill -0 "$pid" 2>/dev/null; then
+      echo "demo: $name did not stop within 10 s; killing it" >&2
+      kill -KILL "$pid" 2>/dev/null || true
+    fi
+  fi
+  wait "$pid" 2>/dev/null || true
+}
+
+cleanup() {
+  trap - EXIT INT TERM
+  echo
+  echo "demo: shutting down"
+  [[ -n "${SIM_PID:-}" ]] && stop "$SIM_PID" handsim
+  [[ -n "${DAEMON_PID:-}" ]] && stop "$DAEMON_PID" hapticd
+  [[ -n "${ROUDI_PID:-}" ]] && stop "$ROUDI_PID" iox-roudi
+  local stale
+  stale=$(ls /dev/shm/iceoryx_mgmt /tmp/roudi /tmp/roudi.lock /tmp/hapticd /tmp/handsim 2>/dev/null || true)
+  if [[ -n "$stale" ]]; then
+    echo "demo: WARNING stale iceoryx files left behind: $stale" >&2
+  else
+    echo "demo: clean shutdown, no stale shared memory (logs in $LOGS)"
+  fi
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+
+echo "demo: starting iox-roudi with config/roudi.toml"
+iox-roudi -c "$ROOT/config/roudi.toml" -l warning >"$LOGS/roudi.log" 2>&1 &
+ROUDI_PID=$!
+for _ in $(seq 100); do [[ -S /tmp/roudi ]] && break; sleep 0.05; done
+
+echo "demo: starting hapticd (--realtime $REALTIME) and handsim"
+"$HAPTICD" --realtime "$REALTIME" >"$LOGS/hapticd.log" 2>&1 &
+DAEMON_PID=$!
+"$HANDSIM" >"$LOGS/handsim.log" 2>&1 &
+SIM_PID=$!
+
+start=$SECONDS
+while :; do
+  sleep 2
+  for pid_name in "$DAEMON_PID:hapticd" "$SIM_PID:handsim"; do
+    if ! kill -0 "${pid_name%%:*}" 2>/dev/null; then
+      echo "demo: ${pid_name#*:} exited; its log:" >&2
+      tail -n 20 "$LOGS/${pid_name#*:}.log" >&2
+      exit 1
+    fi
+  done
+  [[ -t 1 ]] && clear
+  echo "--- hapticctl status ($((SECONDS - start)) s; Ctrl-C to stop) ---"
+  "$HAPTICCTL" status || true
+  if ((DURATION > 0 && SECONDS - start >= DURATION)); then
+    break
+  fi
+done

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# The README's test command. On a fresh machine it installs the Debian packages, then builds
+# and runs every test twice: a Release build and an ASan+UBSan build.
+#
+#   scripts/test.sh              both builds (what CI runs)
+#   scripts/test.sh release      only the Release build
+#   scripts/test.sh asan         only the sanitizer build
+#   scripts/test.sh tsan         the TSan build (threaded parts; not in CI)
+set -euo pipefail
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+"$ROOT/scripts/install-deps.sh"
+
+variants=("$@")
+if ((${#variants[@]} == 0)); then
+  variants=(release asan)
+fi
+
+run_variant() {
+  local variant=$1 build_type sanitize
+  case "$variant" in
+    release) build_type=Release; sanitize="" ;;
+    asan) build_type=Debug; sanitize=address ;;
+    tsan) build_type=Debug; sanitize=thread ;;
+    *) echo "test.sh: unknown variant '$variant' (release, asan, tsan)" >&2; exit 2 ;;
+  esac
+  local build="$ROOT/build/$variant"
+  echo "=== $variant: configure and build in $build"
+  local start=$SECONDS
+  cmake -S "$ROOT" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=$build_type -DHAPTIC_SANITIZE=$sanitize >/dev/null
+  ninja -C "$build" -j2
+  echo "=== $variant: built in $((SECONDS - start)) s; running tests"
+  start=$SECONDS
+  # Leak checking stays on; the suppressions name only third-party singletons.
+  ASAN_OPTIONS="detect_leaks=1:abort_on_error=0" \
+  LSAN_OPTIONS="suppressions=$ROOT/tests/sanitizer/lsan.supp:print_suppressions=0" \
+  UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
+  TSAN_OPTIONS="suppressions=$ROOT/tests/sanitizer/tsan.supp" \
+    ctest --test-dir "$build" --output-on-failure -j2 --timeout 300
+  echo "=== $variant: tests passed in $((SECONDS - start)) s"
+}
+
+for variant in "${variants[@]}"; do
+  run_variant "$variant"
+done

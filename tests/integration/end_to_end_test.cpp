@@ -1,0 +1,188 @@
+// End-to-end tests of the foundation path with the real parts: iox-roudi started with our
+// config/roudi.toml, Fast DDS on a test-only domain, and the shipped hapticd, handsim and
+// hapticctl executables. They share RouDi's fixed socket (/tmp/roudi), so ctest runs them
+// under one RESOURCE_LOCK.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <memory>
+#include <regex>
+#include <thread>
+
+#include "child_process.hpp"
+#include "haptic/ipc/iceoryx_runtime.hpp"
+
+namespace haptic::testing {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::Not;
+using namespace std::chrono_literals;
+
+const std::string kConfigDir = HAPTIC_CONFIG_DIR;
+const std::string kDataDir = HAPTIC_TEST_DATA_DIR;
+
+std::string domainArgument() {
+    // A test-only DDS domain, so a demo running on the same host cannot answer for the daemon
+    // under test.
+    return std::to_string(100 + ::getpid() % 100);
+}
+
+std::size_t lineCount(const std::string& text) {
+    return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+void expectNoIceoryxLeftovers() {
+    EXPECT_FALSE(std::filesystem::exists("/dev/shm/iceoryx_mgmt")) << "RouDi left its segment";
+    EXPECT_FALSE(std::filesystem::exists("/tmp/roudi")) << "RouDi left its socket";
+}
+
+class RoudiTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        ASSERT_FALSE(ipc::probeRoudi().reachable)
+            << "an iox-roudi is already running on this host; stop it (and the demo) before the "
+               "integration tests";
+    }
+
+    void startRoudi() {
+        roudi_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l",
+                                     "warning"},
+            "roudi");
+        const auto deadline = std::chrono::steady_clock::now() + 10s;
+        while (!ipc::probeRoudi().reachable) {
+            ASSERT_TRUE(roudi_->running()) << "iox-roudi exited: " << roudi_->stderrText();
+            ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
+            std::this_thread::sleep_for(20ms);
+        }
+    }
+
+    CommandResult hapticctlStatus() {
+        return runCommand({HAPTICCTL_PATH, "--dds-domain", domainArgument(), "status"}, 10s);
+    }
+
+    std::unique_ptr<ChildProcess> roudi_;
+};
+
+TEST_F(RoudiTest, DaemonAndSimExchangeMessagesAndStatusIsLive) {
+    startRoudi();
+    ChildProcess daemon({HAPTICD_PATH, "--realtime", "ignore", "--dds-domain", domainArgument()},
+                        "hapticd");
+    ChildProcess sim({HANDSIM_PATH, "--dds-domain", domainArgument()}, "handsim");
+
+    // Poll until the status shows the sim link connected (discovery and the first window take
+    // a moment), but never longer than 20 s.
+    CommandResult status;
+    const auto deadline = std::chrono::steady_clock::now() + 20s;
+    do {
+        ASSERT_TRUE(daemon.running()) << daemon.stderrText();
+        ASSERT_TRUE(sim.running()) << sim.stderrText();
+        status = hapticctlStatus();
+        // Wait for one full statistics window (1000 ticks) and a connected sim.
+        std::smatch ticks;
+        if (status.exit_code == 0 && status.out.find(", connected") != std::string::npos &&
+            std::regex_search(status.out, ticks, std::regex(R"(Hz, (\d+) ticks)")) &&
+            std::stoul(ticks[1]) > 1100) {
+            break;
+        }
+        std::this_thread::sleep_for(200ms);
+    } while (std::chrono::steady_clock::now() < deadline);
+
+    ASSERT_EQ(status.exit_code, 0) << status.err;
+    EXPECT_LT(status.seconds, 2.5) << "hapticctl must answer within 2 s of starting";
+    EXPECT_THAT(status.out, HasSubstr("State: IDLE"));
+    EXPECT_THAT(status.out, HasSubstr("Loop: 1000 Hz"));
+    EXPECT_THAT(status.out, Not(HasSubstr("period   p50     0.0 us")))
+        << "no statistics window yet";
+    EXPECT_THAT(status.out, HasSubstr("Sim link: iceoryx, connected"));
+    EXPECT_THAT(status.out, HasSubstr("exo "));
+    EXPECT_THAT(status.out, HasSubstr("thimble "));
+    // Both devices publish at the scene rate (100 Hz each in the default scene).
+    std::smatch rate;
+    ASSERT_TRUE(std::regex_search(status.out, rate,
+                                  std::regex(R"(([0-9.]+) Hz, (\d+) received, (\d+) rejected)")))
+        << status.out;
+    EXPECT_GT(std::stod(rate[1]), 150.0) << status.out;
+    EXPECT_EQ(rate[3], "0") << "the placeholder sim must produce only valid messages";
+
+    // Let the sim run a little, then kill it without warning: the daemon must notice.
+    std::this_thread::sleep_for(1s);
+    ASSERT_TRUE(sim.running());
+    ::kill(sim.pid(), SIGKILL);
+    ASSERT_TRUE(sim.waitFor(5s).has_value());
+    std::this_thread::sleep_for(500ms);
+    status = hapticctlStatus();
+    ASSERT_EQ(status.exit_code, 0) << status.err;
+    EXPECT_THAT(status.out, HasSubstr("Sim link: iceoryx, NOT CONNECTED")) << status.out;
+    ASSERT_TRUE(daemon.running()) << "a dead sim must not take the daemon down";
+
+    // A fresh sim reconnects and receives the daemon's DeviceState stream at 1 kHz.
+    ChildProcess sim2({HANDSIM_PATH, "--dds-domain", domainArgument(), "--duration", "2"},
+                      "handsim2");
+    ASSERT_EQ(sim2.waitFor(15s), std::optional<int>(0)) << sim2.stderrText();
+    std::smatch received;
+    const std::string sim_log = sim2.stderrText();
+    ASSERT_TRUE(std::regex_search(
+        sim_log, received,
+        std::regex(R"(device 'exo': published (\d+) targets, received (\d+) device states)")))
+        << sim_log;
+    EXPECT_GT(std::stoul(received[1]), 150U) << sim_log;
+    EXPECT_GT(std::stoul(received[2]), 150U) << "DeviceState did not come back to the sim";
+
+    EXPECT_EQ(daemon.terminate(), std::optional<int>(0)) << daemon.stderrText();
+    EXPECT_EQ(roudi_->terminate(), std::optional<int>(0)) << roudi_->stderrText();
+    expectNoIceoryxLeftovers();
+}
+
+TEST_F(RoudiTest, MissingRoudiIsAOneLineErrorNotAHang) {
+    const std::vector<std::vector<std::string>> commands{{HAPTICD_PATH, "--realtime", "ignore"},
+                                                         {HANDSIM_PATH}};
+    for (const auto& command : commands) {
+        const auto result = runCommand(command, 10s);
+        EXPECT_NE(result.exit_code, 0) << command[0];
+        EXPECT_NE(result.exit_code, -1) << command[0] << " hung";
+        EXPECT_LT(result.seconds, 5.0) << command[0];
+        EXPECT_THAT(result.err, HasSubstr("RouDi is not running")) << command[0];
+        EXPECT_EQ(lineCount(result.err), 1U) << command[0] << ":\n" << result.err;
+    }
+}
+
+TEST(FailFast, MissingDaemonIsAOneLineErrorWithinTheTimeout) {
+    const auto result =
+        runCommand({HAPTICCTL_PATH, "--dds-domain", domainArgument(), "status"}, 10s);
+    EXPECT_EQ(result.exit_code, 3);
+    EXPECT_LT(result.seconds, 4.0);
+    EXPECT_THAT(result.err, HasSubstr("no hapticd status on DDS topic 'haptic/status'"));
+    EXPECT_EQ(lineCount(result.err), 1U) << result.err;
+    EXPECT_THAT(result.out, Not(HasSubstr("State:")));
+}
+
+TEST(FailFast, MalformedConfigIsAOneLineErrorNamingFileLineAndKey) {
+    const std::string syntax_error = kDataDir + "/daemon_syntax_error.yaml";
+    for (const char* program : {HAPTICD_PATH, HAPTICCTL_PATH}) {
+        std::vector<std::string> argv{program, "--config", syntax_error};
+        if (std::string(program) == HAPTICCTL_PATH) {
+            argv.push_back("status");
+        }
+        const auto result = runCommand(argv, 10s);
+        EXPECT_EQ(result.exit_code, 1) << program;
+        EXPECT_THAT(result.err, HasSubstr("daemon_syntax_error.yaml:5:8: YAML syntax error"))
+            << program << ": " << result.err;
+        EXPECT_EQ(lineCount(result.err), 1U) << program << ":\n" << result.err;
+    }
+
+    const std::string out_of_range = HAPTIC_CONFIG_TEST_DATA_DIR "/out_of_range.yaml";
+    const auto result = runCommand({HAPTICD_PATH, "--config", out_of_range}, 10s);
+    EXPECT_EQ(result.exit_code, 1);
+    EXPECT_THAT(result.err, HasSubstr("out_of_range.yaml:3:"));
+    EXPECT_THAT(result.err, HasSubstr("loop.rate_hz"));
+    EXPECT_EQ(lineCount(result.err), 1U) << result.err;
+}
+
+}  // namespace
+}  // namespace haptic::testing
