@@ -59,9 +59,11 @@ cleanup() {
   [[ -n "${DAEMON_PID:-}" ]] && stop "$DAEMON_PID" hapticd
   [[ -n "${ROUDI_PID:-}" ]] && stop "$ROUDI_PID" iox-roudi
   local stale
-  stale=$(ls /dev/shm/iceoryx_mgmt /tmp/roudi /tmp/roudi.lock /tmp/hapticd /tmp/handsim 2>/dev/null || true)
+  stale=$(ls /dev/shm/iceoryx_mgmt /dev/shm/"$(id -gn)" /tmp/roudi /tmp/roudi.lock \
+    /tmp/iox-unique-roudi.lock /tmp/hapticd /tmp/hapticd.lock /tmp/handsim /tmp/handsim.lock 2>/dev/null || true)
   if [[ -n "$stale" ]]; then
-    echo "demo: WARNING stale iceoryx files left behind: $stale" >&2
+    echo "demo: ERROR stale iceoryx files left behind:" $stale >&2
+    exit 1
   else
     echo "demo: clean shutdown, no stale shared memory (logs in $LOGS)"
   fi
@@ -70,14 +72,22 @@ trap cleanup EXIT
 trap 'exit 130' INT TERM
 
 echo "demo: starting iox-roudi with config/roudi.toml"
-iox-roudi -c "$ROOT/config/roudi.toml" -l warning >"$LOGS/roudi.log" 2>&1 &
+# setsid: Ctrl-C reaches only this script, which then stops the children in order
+# (sim, daemon, RouDi) instead of all of them at once.
+touch "$LOGS/started"
+setsid iox-roudi -c "$ROOT/config/roudi.toml" -l warning >"$LOGS/roudi.log" 2>&1 &
 ROUDI_PID=$!
-for _ in $(seq 100); do [[ -S /tmp/roudi ]] && break; sleep 0.05; done
+# A killed RouDi leaves a stale /tmp/roudi behind: wait for a socket newer than our start.
+for _ in $(seq 200); do
+  kill -0 "$ROUDI_PID" 2>/dev/null || { echo "demo: iox-roudi exited:" >&2; cat "$LOGS/roudi.log" >&2; exit 1; }
+  [[ -S /tmp/roudi && /tmp/roudi -nt "$LOGS/started" ]] && break
+  sleep 0.05
+done
 
 echo "demo: starting hapticd (--realtime $REALTIME) and handsim"
-"$HAPTICD" --realtime "$REALTIME" >"$LOGS/hapticd.log" 2>&1 &
+setsid "$HAPTICD" --realtime "$REALTIME" >"$LOGS/hapticd.log" 2>&1 &
 DAEMON_PID=$!
-"$HANDSIM" >"$LOGS/handsim.log" 2>&1 &
+setsid "$HANDSIM" >"$LOGS/handsim.log" 2>&1 &
 SIM_PID=$!
 
 start=$SECONDS

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <exception>
 #include <iostream>
 
@@ -44,7 +45,15 @@ int printStatus(const haptic::config::DaemonConfig& cfg, double timeout_s) {
         std::fprintf(stderr, "hapticctl: malformed status sample: %s\n", result.error.c_str());
         return kExitError;
     }
-    std::cout << haptic::ctl::formatStatus(status, 0.0) << std::flush;
+    // Stamps are CLOCK_MONOTONIC of the daemon's host; over DDS from another host the age is
+    // meaningless, so it is shown only when it is plausible.
+    timespec now{};
+    ::clock_gettime(CLOCK_MONOTONIC, &now);
+    const double age_s =
+        static_cast<double>(now.tv_sec * 1'000'000'000LL + now.tv_nsec - status.header.stamp_ns) *
+        1e-9;
+    std::cout << haptic::ctl::formatStatus(status, age_s >= 0.0 && age_s < 3600.0 ? age_s : -1.0)
+              << std::flush;
     return EXIT_SUCCESS;
 }
 

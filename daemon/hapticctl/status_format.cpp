@@ -87,8 +87,10 @@ std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s) 
     out += fmt::format("     State: {}   rendering method: {}\n", toString(status.state),
                        status.rendering_method.empty() ? std::string_view("(none)")
                                                        : status.rendering_method.view());
-    out += fmt::format("    Uptime: {:.1f} s   (status #{}, received {:.2f} s ago)\n",
-                       status.uptime_s, status.header.seq, sample_age_s);
+    out += sample_age_s < 0.0 ? fmt::format("    Uptime: {:.1f} s   (status #{})\n",
+                                            status.uptime_s, status.header.seq)
+                              : fmt::format("    Uptime: {:.1f} s   (status #{}, {:.2f} s old)\n",
+                                            status.uptime_s, status.header.seq, sample_age_s);
 
     const auto& loop = status.loop;
     out += fmt::format(

@@ -15,7 +15,7 @@ std::string_view toString(msgs::BusState state) noexcept;
 std::string_view toString(msgs::SimTransport transport) noexcept;
 
 // One screen in the style of `systemctl status`: state, loop statistics, sim link, devices
-// and faults. `sample_age_s` is how long ago hapticctl received the snapshot.
+// and faults. `sample_age_s` is the snapshot's age (negative: unknown, not shown).
 std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s);
 
 }  // namespace haptic::ctl

@@ -102,6 +102,12 @@ class RealtimeLoop {
     void start() {
         thread_ = std::thread([this] { run(); });
     }
+    // Never leave a joinable thread behind: an exception on the non-RT side must still stop
+    // the loop cleanly instead of std::terminate.
+    ~RealtimeLoop() { stop(); }
+    RealtimeLoop(const RealtimeLoop&) = delete;
+    RealtimeLoop& operator=(const RealtimeLoop&) = delete;
+
     void stop() {
         stop_requested_.store(true);
         if (thread_.joinable()) {
@@ -266,7 +272,14 @@ int runDaemon(const DaemonOptions& options) {
     std::uint64_t last_ticks = 0;
     auto last_watchdog = started;
     msgs::HapticStatus status;
-    while (process::sleepUnlessShutdown(status_period)) {
+    // Wake often enough for both jobs: publishing status and, under systemd, pinging the
+    // watchdog at least twice per WatchdogSec however low status_rate_hz is.
+    auto wake_period = std::chrono::duration_cast<std::chrono::nanoseconds>(status_period);
+    if (watchdog) {
+        wake_period = std::min(wake_period, std::chrono::nanoseconds(watchdog_usec * 1000 / 4));
+    }
+    while (process::sleepUnlessShutdown(wake_period)) {
+        // The RT thread produces a snapshot per status period; publish each one once.
         const auto& snapshots = loop.status();
         if (snapshots.version() != last_version && snapshots.load(status)) {
             last_version = snapshots.version();

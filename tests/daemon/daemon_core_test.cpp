@@ -100,6 +100,31 @@ TEST_F(DaemonCoreTest, StaleInputFadesToZeroWithinTheTimeoutAndNeverRises) {
     }
 }
 
+TEST_F(DaemonCoreTest, AStalledTickDoesNotStepForceUp) {
+    (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), 0);
+    sut.update(kMs, TickTiming{});
+    const double before = sut.simFade(0);
+    // The thread stalls for 150 ms and wakes to fresh input.
+    (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), 151 * kMs);
+    sut.update(151 * kMs, TickTiming{});
+    EXPECT_LE(sut.simFade(0) - before, 1.0 / 100.0 + 1e-12);
+}
+
+TEST_F(DaemonCoreTest, ASimAt100HzWithJitterKeepsFullForce) {
+    std::int64_t t = 0;
+    for (int frame = 0; frame < 100; ++frame) {
+        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), t);
+        t = runTicks(t, frame % 2 == 0 ? 8 : 12);  // 10 ms on average, +-2 ms jitter
+    }
+    for (int frame = 0; frame < 20; ++frame) {
+        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), t);
+        for (int tick = 0; tick < 12; ++tick) {
+            t = runTicks(t, 1);
+            EXPECT_THAT(sut.simFade(0), Eq(1.0)) << "force modulated by normal sim jitter";
+        }
+    }
+}
+
 TEST_F(DaemonCoreTest, RejectsNonFiniteAndWrongDeviceInputAndCountsThem) {
     auto nan_q = validConstraintSet("exo_index");
     nan_q.q_sim_rad[1] = std::numeric_limits<double>::quiet_NaN();

@@ -7,6 +7,7 @@ namespace haptic::ctl {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 TEST(StatusFormat, ShowsStateLoopSimLinkDevicesAndFaults) {
     msgs::HapticStatus status;
@@ -36,6 +37,7 @@ TEST(StatusFormat, ShowsStateLoopSimLinkDevicesAndFaults) {
 
     const std::string text = formatStatus(status, 0.05);
     EXPECT_THAT(text, HasSubstr("State: IDLE"));
+    EXPECT_THAT(text, HasSubstr("Uptime: 12.5 s   (status #0, 0.05 s old)"));
     EXPECT_THAT(text, HasSubstr("rendering method: subspace"));
     EXPECT_THAT(text, HasSubstr("1000 Hz, 12500 ticks, 3 overruns (read 0 / compute 2 / write 1)"));
     EXPECT_THAT(text, HasSubstr("wake-up  p50    11.0 us   p99    52.0 us   max   700.0 us"));
@@ -49,7 +51,8 @@ TEST(StatusFormat, ShowsStateLoopSimLinkDevicesAndFaults) {
 TEST(StatusFormat, SaysWhenTheSimIsNotConnected) {
     msgs::HapticStatus status;
     status.sim_link.age_ms = -1.0;
-    const std::string text = formatStatus(status, 0.0);
+    const std::string text = formatStatus(status, -1.0);
+    EXPECT_THAT(text, Not(HasSubstr(" old)"))) << "an unknown age is not shown";
     EXPECT_THAT(text, HasSubstr("NOT CONNECTED, last input never"));
     EXPECT_THAT(text, HasSubstr("Faults: none"));
 }

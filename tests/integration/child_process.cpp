@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -45,6 +46,9 @@ ChildProcess::ChildProcess(std::vector<std::string> argv, const std::string& log
         throw std::runtime_error("fork failed");
     }
     if (pid_ == 0) {
+        // If the test binary dies (ctest timeout, crash), its RouDi and daemons must not
+        // outlive it and block every later test on RouDi's fixed socket.
+        ::prctl(PR_SET_PDEATHSIG, SIGKILL);
         const int out = ::open(stdout_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
         const int err = ::open(stderr_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
         ::dup2(out, STDOUT_FILENO);

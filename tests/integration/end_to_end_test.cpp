@@ -107,7 +107,9 @@ TEST_F(RoudiTest, DaemonAndSimExchangeMessagesAndStatusIsLive) {
     ASSERT_TRUE(std::regex_search(status.out, rate,
                                   std::regex(R"(([0-9.]+) Hz, (\d+) received, (\d+) rejected)")))
         << status.out;
-    EXPECT_GT(std::stod(rate[1]), 150.0) << status.out;
+    // Two devices at 100 Hz; the rate is measured over one 50 ms status window, so allow
+    // for a late frame on a loaded machine.
+    EXPECT_GT(std::stod(rate[1]), 100.0) << status.out;
     EXPECT_EQ(rate[3], "0") << "the placeholder sim must produce only valid messages";
 
     // Let the sim run a little, then kill it without warning: the daemon must notice.
@@ -121,7 +123,8 @@ TEST_F(RoudiTest, DaemonAndSimExchangeMessagesAndStatusIsLive) {
     EXPECT_THAT(status.out, HasSubstr("Sim link: iceoryx, NOT CONNECTED")) << status.out;
     ASSERT_TRUE(daemon.running()) << "a dead sim must not take the daemon down";
 
-    // A fresh sim reconnects and receives the daemon's DeviceState stream at 1 kHz.
+    // A fresh sim reconnects, and the daemon's DeviceState stream reaches it (handsim takes
+    // the newest state once per 100 Hz step, so ~200 in 2 s).
     ChildProcess sim2({HANDSIM_PATH, "--dds-domain", domainArgument(), "--duration", "2"},
                       "handsim2");
     ASSERT_EQ(sim2.waitFor(15s), std::optional<int>(0)) << sim2.stderrText();

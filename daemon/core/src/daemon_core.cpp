@@ -5,6 +5,10 @@
 #include <limits>
 
 namespace haptic::daemon {
+namespace {
+// The last quarter of the sim timeout is the fade-out window.
+constexpr double kFadeFraction = 0.25;
+}  // namespace
 
 DaemonCore::DaemonCore(CoreSettings settings, std::vector<DeviceDescriptor> devices)
     : settings_(std::move(settings)),
@@ -58,16 +62,22 @@ double DaemonCore::ageMs(const DeviceSlot& slot, std::int64_t now_ns) const noex
 }
 
 void DaemonCore::update(std::int64_t now_ns, const TickTiming& timing) noexcept {
+    // A stalled thread (debugger, VM hiccup) must not turn into one big ramp step: the ramp
+    // advances at most one nominal period per tick.
+    const double period_s = 1.0 / settings_.rate_hz;
     const double dt_s =
-        static_cast<double>(std::max<std::int64_t>(0, now_ns - last_tick_ns_)) * 1e-9;
+        std::clamp(static_cast<double>(now_ns - last_tick_ns_) * 1e-9, 0.0, period_s);
     last_tick_ns_ = now_ns;
     const double timeout_ms = static_cast<double>(settings_.sim_timeout_ns) * 1e-6;
     const double fade_in_s = std::max(1e-9, static_cast<double>(settings_.fade_in_ns) * 1e-9);
 
     for (auto& slot : devices_) {
         const double age_ms = ageMs(slot, now_ns);
-        // Full force up to half the timeout, zero at the timeout.
-        const double target = std::clamp(2.0 * (1.0 - age_ms / timeout_ms), 0.0, 1.0);
+        // Full force up to 3/4 of the timeout, zero at the timeout. Starting the fade late
+        // keeps normal sim jitter (a 100 Hz sim delivers every ~10 ms) from modulating force.
+        const double fade_start_ms = (1.0 - kFadeFraction) * timeout_ms;
+        const double target =
+            std::clamp(1.0 - (age_ms - fade_start_ms) / (kFadeFraction * timeout_ms), 0.0, 1.0);
         // Falling follows the target at once; rising is rate limited so force never steps up.
         slot.fade = std::min(target, slot.fade + dt_s / fade_in_s);
     }

@@ -33,7 +33,8 @@ double MicrosecondHistogram::quantile(double q) const noexcept {
     for (std::size_t bin = 0; bin < kBins; ++bin) {
         cumulative += bins_[bin];
         if (cumulative >= std::max<std::uint64_t>(target, 1)) {
-            return std::min(static_cast<double>(bin + 1), max_);
+            // The last bin also holds everything beyond it: only the exact max is honest there.
+            return bin + 1 == kBins ? max_ : std::min(static_cast<double>(bin + 1), max_);
         }
     }
     return max_;

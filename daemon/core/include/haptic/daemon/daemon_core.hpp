@@ -61,8 +61,9 @@ class DaemonCore {
 
     void fillDeviceState(std::size_t device, std::int64_t now_ns, msgs::DeviceState& out) noexcept;
 
-    // 1 while the device's sim input is fresh, falling linearly to 0 between half the timeout
-    // and the timeout, so rendered force reaches zero no later than the timeout.
+    // 1 while the device's sim input is fresh, falling linearly to 0 over the last quarter of
+    // the timeout, so rendered force reaches zero no later than the timeout. sim_timeout_ms
+    // must therefore exceed about 1.5 sim periods (the 20 ms default suits sims >= 75 Hz).
     [[nodiscard]] double simFade(std::size_t device) const noexcept {
         return devices_[device].fade;
     }
