@@ -61,7 +61,9 @@ cleanup() {
   local stale
   stale=$(ls /dev/shm/iceoryx_mgmt /dev/shm/"$(id -gn)" /tmp/roudi /tmp/roudi.lock \
     /tmp/iox-unique-roudi.lock /tmp/hapticd /tmp/hapticd.lock /tmp/handsim /tmp/handsim.lock 2>/dev/null || true)
-  if [[ -n "$stale" ]]; then
+  # Fast DDS segments (data sharing, SHM transport ports) created during this run count too.
+  stale+=" $(find /dev/shm -maxdepth 1 -name 'fast*' -newer "$LOGS" 2>/dev/null || true)"
+  if [[ -n "${stale// /}" ]]; then
     echo "demo: ERROR stale iceoryx files left behind:" $stale >&2
     exit 1
   else
