@@ -156,7 +156,7 @@ chmod +x "$initrd_dir/init"
 log "booting $kernel_package under qemu (TCG) to run $(basename "$test_binary")"
 start=$SECONDS
 timeout --kill-after=10 "$GUEST_TIMEOUT_S" qemu-system-x86_64 \
-  -accel tcg -cpu max -m 1024 -smp 2 \
+  -accel tcg -cpu max -m 1024 -smp ${HAPTIC_GUEST_CPUS:-1} \
   -kernel "$kdir/vmlinux" -initrd "$out/initrd.gz" \
   -append "console=ttyS0 quiet loglevel=3 panic=-1 haptic.out=$out haptic.results=$results" \
   -display none -nodefaults -no-user-config -no-reboot -serial stdio -monitor none \
