@@ -10,6 +10,7 @@ PACKAGES=(
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libcli11-dev libsystemd-dev libbullet-dev
   can-utils rt-tests gnuplot-nox procps
+  qemu-system-x86 busybox-static iproute2 xz-utils clang
 )
 
 missing=()

@@ -1,0 +1,66 @@
+#pragma once
+
+// CAN frames in UDP datagrams on loopback, for machines whose kernel has no SocketCAN.
+// A "bus" is a block of `slots` consecutive UDP ports starting at `base_port`; each party
+// binds the first free port of the block and sends every frame to all other ports of the
+// block, so every party sees every frame but its own, as on a real bus. Ports without a
+// listener simply drop the datagram (unconnected UDP reports no error).
+//
+// Wire format (one frame per datagram, little-endian, exactly 12 + length bytes):
+//   0  u8[4] magic "HCAN"
+//   4  u8    version (1)
+//   5  u8    flags (FrameFlags: 1 extended id, 2 FD, 4 BRS, 8 RTR, 16 error frame)
+//   6  u8    payload length (0-8 classic, FD lengths up to 64)
+//   7  u8    sender slot (index of the sender's port in the block)
+//   8  u32   CAN id (11 or 29 bits; for error frames the CAN_ERR_* class bits)
+//   12 u8[length] payload
+// Datagrams that do not match are counted in rx_dropped and never reach the caller.
+// Receive time is CLOCK_MONOTONIC when read() takes the datagram.
+//
+// Unlike CAN there is no arbitration and no guaranteed order between different senders.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "haptic/can/bus.hpp"
+
+namespace haptic::can {
+
+struct UdpBusConfig {
+    std::uint16_t base_port{47000};
+    std::uint16_t slots{8};  // parties per bus, at most kMaxSlots
+    RecoveryPolicy recovery{};
+};
+
+class UdpBus final : public CanBus {
+  public:
+    static constexpr std::uint16_t kMaxSlots = 32;
+    static constexpr std::size_t kHeaderSize = 12;
+    static constexpr std::uint8_t kVersion = 1;
+
+    // Binds the first free port of the block. Throws std::runtime_error when none is free.
+    explicit UdpBus(const UdpBusConfig& config);
+    ~UdpBus() override;
+
+    [[nodiscard]] IoResult read(CanFrame& frame) noexcept override;
+    [[nodiscard]] IoResult write(const CanFrame& frame) noexcept override;
+    [[nodiscard]] int pollFd() const noexcept override { return socket_; }
+    [[nodiscard]] bool supportsFd() const noexcept override { return true; }
+    [[nodiscard]] std::uint16_t slot() const noexcept { return slot_; }
+
+    // Wire codec, public so that the fuzz target and tests reach it.
+    [[nodiscard]] static std::size_t encode(const CanFrame& frame, std::uint8_t sender_slot,
+                                            std::uint8_t* out, std::size_t capacity) noexcept;
+    [[nodiscard]] static bool decode(const std::uint8_t* datagram, std::size_t size,
+                                     CanFrame& frame) noexcept;
+
+  private:
+    UdpBusConfig config_;
+    int socket_{-1};
+    std::uint16_t slot_{0};
+};
+
+[[nodiscard]] std::string describe(const UdpBusConfig& config);
+
+}  // namespace haptic::can

@@ -1,0 +1,74 @@
+#pragma once
+
+// Device dynamics and the user model that hapticemu runs. Deterministic: the same commands
+// and time steps give bit-identical states, which is what lets the round-trip tests predict
+// every state frame the emulator sends.
+
+#include <array>
+
+#include "haptic/config/device.hpp"
+
+namespace haptic::emu {
+
+// Exoskeleton: the actuator force follows the command through a first-order lag and is
+// limited to actuator.max_force_n; it is zero while disabled. The finger (MCP, PIP, DIP)
+// follows the user's intent through a hand impedance (per-joint inertia, stiffness, damping)
+// and feels the actuator through the linkage: tau = J^T F with J = d(stroke)/dq, so a
+// positive force (extending the actuator) flexes the finger. Joints stop at their limits.
+class ExoskeletonModel {
+  public:
+    struct HandImpedance {
+        std::array<double, 3> inertia_kg_m2{2.0e-5, 8.0e-6, 3.0e-6};
+        std::array<double, 3> stiffness_nm_per_rad{0.30, 0.15, 0.08};
+        std::array<double, 3> damping_nms_per_rad{0.004, 0.0015, 0.0008};
+    };
+    // Intent: joint_mid + amplitude * sin(2 pi f t), a slow open-close movement.
+    struct Intent {
+        double frequency_hz{0.5};
+        double amplitude_fraction{0.35};  // of each joint's range, about its middle
+    };
+
+    explicit ExoskeletonModel(const config::DeviceConfig& device);
+    ExoskeletonModel(const config::DeviceConfig& device, HandImpedance hand, Intent intent);
+
+    void step(double dt_s, double force_command_n, bool enable) noexcept;
+
+    [[nodiscard]] double forceN() const noexcept { return force_n_; }
+    [[nodiscard]] double strokeM() const noexcept;
+    [[nodiscard]] const std::array<double, 3>& jointRad() const noexcept { return q_rad_; }
+    [[nodiscard]] bool enabled() const noexcept { return enabled_; }
+    [[nodiscard]] bool atStrokeMin() const noexcept;
+    [[nodiscard]] bool atStrokeMax() const noexcept;
+    [[nodiscard]] double timeS() const noexcept { return time_s_; }
+    // stroke(q) of the linkage and its gradient d(stroke)/dq (config LinkageConfig).
+    [[nodiscard]] double linkageStrokeM(const std::array<double, 3>& q_rad,
+                                        std::array<double, 3>* gradient) const noexcept;
+
+  private:
+    config::ActuatorConfig actuator_;
+    config::FingerConfig finger_;
+    config::LinkageConfig linkage_;
+    HandImpedance hand_;
+    Intent intent_;
+    double force_n_{0.0};
+    bool enabled_{false};
+    double time_s_{0.0};
+    std::array<double, 3> q_rad_{};
+    std::array<double, 3> qd_rad_per_s_{};
+};
+
+// Thimble: each servo moves towards its target with a first-order lag whose speed is capped
+// at servos.max_rate; targets are clamped to the servo range.
+class ThimbleModel {
+  public:
+    explicit ThimbleModel(const config::DeviceConfig& device);
+
+    void step(double dt_s, const std::array<double, 3>& target_rad) noexcept;
+    [[nodiscard]] const std::array<double, 3>& angleRad() const noexcept { return angle_rad_; }
+
+  private:
+    config::ServoConfig servos_;
+    std::array<double, 3> angle_rad_{};
+};
+
+}  // namespace haptic::emu

@@ -1,0 +1,325 @@
+// Drivers against the in-process emulator on a loopback bus, with time driven by the test:
+// state flow, heartbeat loss and staleness at the configured timeouts, device faults,
+// bus-off, corrupted and dropped frames, back-pressure, and no allocation on the loop path.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include "allocation_counter.hpp"
+#include "device_files.hpp"
+#include "haptic/can/loopback_bus.hpp"
+#include "haptic/devices/exoskeleton_driver.hpp"
+#include "haptic/devices/thimble_driver.hpp"
+#include "haptic/emu/device_emulator.hpp"
+
+namespace haptic::devices {
+namespace {
+
+using testing::exoskeletonDevice;
+using testing::thimbleDevice;
+constexpr std::int64_t kMs = 1'000'000;
+
+// Host and device ends of one loopback bus with the emulator on the device end.
+struct Rig {
+    explicit Rig(const config::DeviceConfig& device, emu::EmulatorMode mode) {
+        host.connect(target);
+        emu::EmulatorOptions options;
+        options.mode = mode;
+        emulator = emu::makeEmulator(device, target, options);
+    }
+    // Moves time forward and lets the emulator do its periodic work and answer commands.
+    void advance(std::int64_t dt_ns) {
+        now += dt_ns;
+        host.setTime(now);
+        target.setTime(now);
+        can::CanFrame frame;
+        while (target.read(frame) == can::IoResult::kOk) {
+            emulator->handleFrame(frame, now);
+        }
+        emulator->tick(now);
+    }
+    void fault(const char* command) {
+        std::string error;
+        ASSERT_TRUE(emulator->faults().command(command, error)) << error;
+    }
+
+    can::LoopbackBus host;
+    can::LoopbackBus target;
+    std::unique_ptr<emu::DeviceEmulator> emulator;
+    std::int64_t now{1'000 * kMs};
+};
+
+// One 1 kHz loop tick of the daemon side.
+std::uint32_t tick(Rig& rig, ExoskeletonDriver& driver, double force_n) {
+    rig.advance(kMs);
+    driver.poll(rig.now);
+    const std::uint32_t faults = driver.faults(rig.now);
+    (void)driver.sendCommand({force_n, true});
+    rig.advance(0);  // the emulator answers within the tick
+    driver.poll(rig.now);
+    return faults;
+}
+
+TEST(ExoskeletonDriver, ReportsNoHeartbeatUntilTheFirstOneArrives) {
+    const auto device = exoskeletonDevice();
+    Rig rig(device, emu::EmulatorMode::kLockstep);
+    ExoskeletonDriver driver(device, rig.host);
+    EXPECT_NE(driver.faults(rig.now) & kNoHeartbeatYet, 0U);
+    rig.advance(0);  // first heartbeat
+    driver.poll(rig.now);
+    EXPECT_EQ(driver.faults(rig.now) & kNoHeartbeatYet, 0U);
+    EXPECT_NE(driver.faults(rig.now) & kStateStale, 0U);  // no state yet
+    tick(rig, driver, 1.0);
+    EXPECT_EQ(driver.faults(rig.now), 0U);
+    EXPECT_EQ(driver.state().heartbeat.mode, protocol::DeviceMode::kOperational);
+}
+
+TEST(ExoskeletonDriver, ForceFollowsTheCommandThroughTheActuatorLag) {
+    const auto device = exoskeletonDevice();
+    Rig rig(device, emu::EmulatorMode::kLockstep);
+    ExoskeletonDriver driver(device, rig.host);
+    double previous = 0.0;
+    for (int i = 0; i < 100; ++i) {
+        ASSERT_EQ(tick(rig, driver, 5.0) & ~kNoHeartbeatYet & ~kStateStale, 0U);
+        const double force = driver.state().actuator.force_n;
+        ASSERT_GE(force, previous);  // first-order lag: monotone rise
+        previous = force;
+    }
+    EXPECT_NEAR(driver.state().actuator.force_n, 5.0, 0.01);  // 20 time constants
+    EXPECT_NE(driver.state().actuator.status & protocol::kExoEnabled, 0);
+    EXPECT_EQ(driver.state().actuator_updates, 100U);
+    EXPECT_EQ(driver.codec().rejects().total(), 0U);
+}
+
+TEST(ExoskeletonDriver, DetectsAStoppedHeartbeatAtTheConfiguredTimeout) {
+    const auto device = exoskeletonDevice();
+    Rig rig(device, emu::EmulatorMode::kLockstep);
+    ExoskeletonDriver driver(device, rig.host);
+    for (int i = 0; i < 20; ++i) {
+        tick(rig, driver, 0.0);
+    }
+    rig.fault("heartbeat stop");
+    const std::int64_t last_heartbeat = driver.link().lastHeartbeatNs();
+    const std::int64_t timeout_ns = device.can.heartbeat_timeout_ms * kMs;
+    while (rig.now + kMs - last_heartbeat <= timeout_ns) {
+        ASSERT_EQ(tick(rig, driver, 0.0) & kHeartbeatLost, 0U) << "raised early";
+    }
+    ASSERT_EQ(rig.now - last_heartbeat, timeout_ns);
+    EXPECT_NE(tick(rig, driver, 0.0) & kHeartbeatLost, 0U);  // one tick past the timeout
+    EXPECT_EQ(driver.faults(rig.now) & kStateStale, 0U);     // state still flows
+    rig.fault("heartbeat start");
+    for (int i = 0; i < 12; ++i) {
+        tick(rig, driver, 0.0);
+    }
+    EXPECT_EQ(driver.faults(rig.now), 0U);
+    EXPECT_EQ(driver.link().heartbeatLossCount(), 1U);
+}
+
+TEST(ExoskeletonDriver, DetectsStaleStateWhenTheDeviceStopsAnswering) {
+    const auto device = exoskeletonDevice();
+    Rig rig(device, emu::EmulatorMode::kLockstep);
+    ExoskeletonDriver driver(device, rig.host);
+    tick(rig, driver, 0.0);
+    ASSERT_EQ(driver.faults(rig.now), 0U);
+    // Lockstep: without commands there are no state frames; heartbeats keep coming.
+    for (int i = 0; i < device.can.state_timeout_ms; ++i) {
+        rig.advance(kMs);
+        driver.poll(rig.now);
+        ASSERT_EQ(driver.faults(rig.now), 0U) << "stale after " << i + 1 << " ms";
+    }
+    rig.advance(kMs);
+    driver.poll(rig.now);
+    EXPECT_EQ(driver.faults(rig.now), static_cast<std::uint32_t>(kStateStale));
+    EXPECT_EQ(driver.link().staleCount(), 1U);
+}
+
+TEST(ExoskeletonDriver, ReportsDeviceFaultsAndTheirClearing) {
+    const auto device = exoskeletonDevice();
+    Rig rig(device, emu::EmulatorMode::kLockstep);
+    ExoskeletonDriver driver(device, rig.host);
+    tick(rig, driver, 2.0);
+    rig.fault("fault 1");
+    tick(rig, driver, 2.0);
+    EXPECT_NE(driver.faults(rig.now) & kDeviceFault, 0U);
+    EXPECT_EQ(driver.state().last_fault.code, protocol::FaultCode::kOvercurrent);
+    EXPECT_TRUE(driver.state().last_fault.active);
+    EXPECT_NE(driver.state().actuator.status & protocol::kExoFaulted, 0);
+    rig.fault("fault 0");
+    for (int i = 0; i < 12; ++i) {  // until the next heartbeat says operational
+        tick(rig, driver, 2.0);
+    }
+    EXPECT_EQ(driver.faults(rig.now) & kDeviceFault, 0U);
+}
+
+TEST(ExoskeletonDriver, BusOffRefusesCommandsUntilTheControllerRecovers) {
+    const auto device = exoskeletonDevice();
+    Rig rig(device, emu::EmulatorMode::kLockstep);
+    ExoskeletonDriver driver(device, rig.host);
+    tick(rig, driver, 0.0);
+    rig.fault("busoff");
+    rig.advance(kMs);
+    driver.poll(rig.now);
+    EXPECT_NE(driver.faults(rig.now) & kBusOff, 0U);
+    EXPECT_EQ(driver.sendCommand({0.0, true}), can::IoResult::kBusOff);
+    EXPECT_NE(driver.faults(rig.now) & kTransmitFailed, 0U);
+    rig.fault("recover");
+    rig.advance(kMs);
+    driver.poll(rig.now);
+    EXPECT_EQ(driver.faults(rig.now) & kBusOff, 0U);
+    EXPECT_EQ(driver.sendCommand({0.0, true}), can::IoResult::kOk);
+}
+
+TEST(ExoskeletonDriver, CountsCorruptedAndLostFramesAndKeepsGoing) {
+    const auto device = exoskeletonDevice();
+    Rig rig(device, emu::EmulatorMode::kLockstep);
+    ExoskeletonDriver driver(device, rig.host);
+    tick(rig, driver, 0.0);
+    rig.fault("corrupt 2");  // the next actuator and encoder frames
+    tick(rig, driver, 0.0);
+    EXPECT_EQ(driver.codec().rejects().of(protocol::RejectReason::kBadCrc), 2U);
+    tick(rig, driver, 0.0);
+    EXPECT_EQ(driver.codec().lostFrames(), 2U);  // the corrupted pair shows up as a gap
+    rig.fault("drop 2");
+    tick(rig, driver, 0.0);
+    tick(rig, driver, 0.0);
+    EXPECT_EQ(driver.codec().lostFrames(), 4U);
+    EXPECT_EQ(driver.codec().rejects().of(protocol::RejectReason::kCounterJump), 0U);
+    EXPECT_EQ(driver.faults(rig.now), 0U);
+    // More than kMaxCounterGap missing in a row is a sequence break: rejected, resynchronised.
+    rig.fault("drop 6");
+    for (int i = 0; i < 4; ++i) {
+        tick(rig, driver, 0.0);
+    }
+    EXPECT_EQ(driver.codec().rejects().of(protocol::RejectReason::kCounterJump), 1U);
+}
+
+TEST(ExoskeletonDriver, BackpressureIsReportedNotFatal) {
+    const auto device = exoskeletonDevice();
+    Rig rig(device, emu::EmulatorMode::kLockstep);
+    ExoskeletonDriver driver(device, rig.host);
+    tick(rig, driver, 0.0);
+    rig.host.injectBackpressure(1);
+    EXPECT_EQ(driver.sendCommand({1.0, true}), can::IoResult::kWouldBlock);
+    EXPECT_NE(driver.faults(rig.now) & kTransmitFailed, 0U);
+    EXPECT_EQ(driver.sendCommand({1.0, true}), can::IoResult::kOk);
+    EXPECT_EQ(driver.faults(rig.now) & kTransmitFailed, 0U);
+}
+
+TEST(ExoskeletonDriver, RefusesNanCommandsWithoutSending) {
+    const auto device = exoskeletonDevice();
+    Rig rig(device, emu::EmulatorMode::kLockstep);
+    ExoskeletonDriver driver(device, rig.host);
+    EXPECT_EQ(driver.sendCommand({std::nan(""), true}), can::IoResult::kInvalid);
+    EXPECT_EQ(rig.target.pending(), 0U);
+    EXPECT_EQ(driver.codec().encodeRejects(), 1U);
+}
+
+TEST(ThimbleDriver, ServosFollowTargetsAtTheRateLimitAndHeartbeatLossIsDetected) {
+    const auto device = thimbleDevice();
+    Rig rig(device, emu::EmulatorMode::kLockstep);
+    ThimbleDriver driver(device, rig.host);
+    const double rate = device.thimble().servos.max_rate_rad_per_s;
+    protocol::ThimbleCommand command{{1.2, 1.2, 1.2}};
+    double previous = 0.0;
+    for (int i = 0; i < 20; ++i) {
+        rig.advance(kMs);
+        driver.poll(rig.now);
+        ASSERT_EQ(driver.sendCommand(command), can::IoResult::kOk);
+        rig.advance(0);
+        driver.poll(rig.now);
+        const double angle = driver.state().servos.servo_angle_rad[0];
+        ASSERT_LE(angle - previous, rate * 1e-3 + 1e-4) << "faster than the rate limit";
+        ASSERT_GT(angle, previous);
+        previous = angle;
+    }
+    EXPECT_EQ(driver.faults(rig.now), 0U);
+    rig.fault("heartbeat stop");
+    for (int i = 0; i < device.can.heartbeat_timeout_ms + 10; ++i) {
+        rig.advance(kMs);
+        (void)driver.sendCommand(command);
+        rig.advance(0);
+        driver.poll(rig.now);
+    }
+    EXPECT_EQ(driver.faults(rig.now), static_cast<std::uint32_t>(kHeartbeatLost));
+    EXPECT_EQ(driver.codec().rejects().total(), 0U);
+}
+
+TEST(Drivers, ShareOneBusThroughHandleFrame) {
+    const auto exo_device = exoskeletonDevice();
+    const auto thimble_device = thimbleDevice();
+    can::LoopbackBus host, exo_end, thimble_end;
+    host.connect(exo_end);
+    host.connect(thimble_end);
+    exo_end.connect(thimble_end);
+    emu::EmulatorOptions options;
+    options.mode = emu::EmulatorMode::kStream;
+    auto exo = emu::makeEmulator(exo_device, exo_end, options);
+    auto thimble = emu::makeEmulator(thimble_device, thimble_end, options);
+    ExoskeletonDriver exo_driver(exo_device, host);
+    ThimbleDriver thimble_driver(thimble_device, host);
+    std::int64_t now = 5'000 * kMs;
+    for (int i = 0; i < 30; ++i) {
+        now += kMs;
+        for (can::LoopbackBus* bus : {&host, &exo_end, &thimble_end}) {
+            bus->setTime(now);
+        }
+        exo->tick(now);
+        thimble->tick(now);
+        can::CanFrame frame;
+        while (exo_end.read(frame) == can::IoResult::kOk) {
+            exo->handleFrame(frame, now);
+        }
+        while (thimble_end.read(frame) == can::IoResult::kOk) {
+            thimble->handleFrame(frame, now);
+        }
+        while (host.read(frame) == can::IoResult::kOk) {
+            const bool claimed =
+                exo_driver.handleFrame(frame, now) || thimble_driver.handleFrame(frame, now);
+            ASSERT_TRUE(claimed) << "frame 0x" << std::hex << frame.id << " unclaimed";
+        }
+        (void)exo_driver.sendCommand({1.0, true});
+        (void)thimble_driver.sendCommand({{0.5, 0.5, 0.5}});
+    }
+    EXPECT_EQ(exo_driver.faults(now), 0U);
+    EXPECT_EQ(thimble_driver.faults(now), 0U);
+    EXPECT_EQ(exo_driver.codec().rejects().total(), 0U);
+    EXPECT_EQ(thimble_driver.codec().rejects().total(), 0U);
+    EXPECT_GT(exo->commandsAccepted(), 25U);
+    EXPECT_GT(thimble->commandsAccepted(), 25U);
+}
+
+TEST(Drivers, LoopPathDoesNotAllocate) {
+    const auto exo_device = exoskeletonDevice();
+    const auto thimble_device = thimbleDevice();
+    Rig exo_rig(exo_device, emu::EmulatorMode::kStream);
+    Rig thimble_rig(thimble_device, emu::EmulatorMode::kStream);
+    ExoskeletonDriver exo(exo_device, exo_rig.host);
+    ThimbleDriver thimble(thimble_device, thimble_rig.host);
+    exo_rig.fault("drop-every 7");  // exercise the reject and loss paths too
+    thimble_rig.fault("corrupt 1000");
+    std::uint64_t allocations = 0;
+    {
+        haptic::testing::ScopedAllocationCounter counter;
+        for (int i = 0; i < 5000; ++i) {
+            exo_rig.advance(kMs);
+            thimble_rig.advance(kMs);
+            exo.poll(exo_rig.now);
+            thimble.poll(thimble_rig.now);
+            (void)exo.faults(exo_rig.now);
+            (void)thimble.faults(thimble_rig.now);
+            (void)exo.sendCommand({std::sin(i * 0.01), true});
+            (void)thimble.sendCommand({{0.3, 0.4, 0.5}});
+            (void)exo.sendCommand({std::nan(""), true});
+        }
+        allocations = counter.allocations();
+    }
+    EXPECT_EQ(allocations, 0U);
+    EXPECT_GT(exo.state().actuator_updates, 4000U);
+    EXPECT_GT(exo.codec().lostFrames(), 0U);
+    EXPECT_GT(thimble.codec().rejects().of(protocol::RejectReason::kBadCrc), 900U);
+}
+
+}  // namespace
+}  // namespace haptic::devices

@@ -1,0 +1,108 @@
+// hapticemu's models and fault commands.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "device_files.hpp"
+#include "haptic/emu/device_models.hpp"
+#include "haptic/emu/fault_injector.hpp"
+
+namespace haptic::emu {
+namespace {
+
+using testing::exoskeletonDevice;
+using testing::thimbleDevice;
+
+TEST(ExoskeletonModel, ActuatorForceIsAFirstOrderLagClampedToTheLimit) {
+    const auto device = exoskeletonDevice();
+    const auto& actuator = device.exoskeleton().actuator;
+    ExoskeletonModel model(device);
+    const double dt = 1e-4;
+    const int steps = static_cast<int>(std::lround(actuator.lag_time_constant_s / dt));
+    for (int i = 0; i < steps; ++i) {
+        model.step(dt, 10.0, true);
+    }
+    // After one time constant: 1 - 1/e of the step, within the discretisation error.
+    EXPECT_NEAR(model.forceN(), 10.0 * (1.0 - std::exp(-1.0)), 0.1);
+    for (int i = 0; i < 2000; ++i) {
+        model.step(1e-3, 1000.0, true);
+    }
+    EXPECT_NEAR(model.forceN(), actuator.max_force_n, 1e-6);
+    for (int i = 0; i < 200; ++i) {
+        model.step(1e-3, 1000.0, false);
+    }
+    EXPECT_NEAR(model.forceN(), 0.0, 1e-6);  // disabled: limp
+}
+
+TEST(ExoskeletonModel, TheFingerFollowsTheIntentAndYieldsToTheActuator) {
+    const auto device = exoskeletonDevice();
+    ExoskeletonModel free_finger(device), pushed_finger(device);
+    double min_q = 10.0, max_q = -10.0;
+    for (int i = 0; i < 2000; ++i) {  // one intent period at 0.5 Hz
+        free_finger.step(1e-3, 0.0, true);
+        pushed_finger.step(1e-3, 20.0, true);
+        min_q = std::min(min_q, free_finger.jointRad()[0]);
+        max_q = std::max(max_q, free_finger.jointRad()[0]);
+    }
+    EXPECT_GT(max_q - min_q, 0.5) << "the user moves the finger";
+    // A positive actuator force lengthens the actuator: more stroke than the free finger.
+    EXPECT_GT(pushed_finger.strokeM(), free_finger.strokeM());
+    const auto& limits = device.exoskeleton().finger.joint_limits_rad;
+    for (std::size_t j = 0; j < 3; ++j) {
+        EXPECT_GE(pushed_finger.jointRad()[j], limits[j].min);
+        EXPECT_LE(pushed_finger.jointRad()[j], limits[j].max);
+    }
+}
+
+TEST(ExoskeletonModel, LinkageGradientMatchesFiniteDifferences) {
+    const auto device = exoskeletonDevice();
+    ExoskeletonModel model(device);
+    const std::array<double, 3> q{0.4, 0.7, 0.3};
+    std::array<double, 3> gradient{};
+    const double stroke = model.linkageStrokeM(q, &gradient);
+    for (std::size_t j = 0; j < 3; ++j) {
+        std::array<double, 3> shifted = q;
+        shifted[j] += 1e-6;
+        EXPECT_NEAR((model.linkageStrokeM(shifted, nullptr) - stroke) / 1e-6, gradient[j], 1e-6);
+    }
+}
+
+TEST(ThimbleModel, ServosAreRateLimitedAndClampedToTheirRange) {
+    const auto device = thimbleDevice();
+    const auto& servos = device.thimble().servos;
+    ThimbleModel model(device);
+    model.step(1e-3, {10.0, -10.0, 0.0});
+    EXPECT_NEAR(model.angleRad()[0], servos.max_rate_rad_per_s * 1e-3, 1e-12);
+    EXPECT_NEAR(model.angleRad()[1], -servos.max_rate_rad_per_s * 1e-3, 1e-12);
+    for (int i = 0; i < 5000; ++i) {
+        model.step(1e-3, {10.0, -10.0, std::nan("")});
+    }
+    EXPECT_NEAR(model.angleRad()[0], servos.max_rad, 1e-9);
+    EXPECT_NEAR(model.angleRad()[1], servos.min_rad, 1e-9);
+    EXPECT_EQ(model.angleRad()[2], 0.0);  // NaN target: hold
+}
+
+TEST(FaultInjector, ParsesCommandsAndExplainsBadOnes) {
+    FaultInjector faults;
+    std::string error;
+    EXPECT_TRUE(faults.command("heartbeat stop", error));
+    EXPECT_TRUE(faults.heartbeatStopped());
+    EXPECT_TRUE(faults.command("  fault 2 \n", error));
+    EXPECT_EQ(faults.deviceFault(), 2);
+    EXPECT_TRUE(faults.takeFaultChange());
+    EXPECT_FALSE(faults.takeFaultChange());
+    EXPECT_TRUE(faults.command("busoff", error));
+    EXPECT_TRUE(faults.busOff());
+    EXPECT_TRUE(faults.command("clear", error));
+    EXPECT_FALSE(faults.heartbeatStopped());
+    EXPECT_FALSE(faults.busOff());
+    EXPECT_EQ(faults.deviceFault(), 0);
+    EXPECT_FALSE(faults.command("drop many", error));
+    EXPECT_THAT(error, ::testing::HasSubstr("unknown fault command 'drop many'"));
+    EXPECT_FALSE(faults.command("fault 7", error));
+}
+
+}  // namespace
+}  // namespace haptic::emu

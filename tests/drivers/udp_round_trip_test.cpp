@@ -1,0 +1,122 @@
+// The round-trip scenario over the UDP bus between this process and hapticemu.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <unistd.h>
+
+#include <string>
+
+#include "emulator_process.hpp"
+#include "haptic/can/clock.hpp"
+#include "haptic/can/udp_bus.hpp"
+#include "haptic/config/device.hpp"
+#include "haptic/devices/exoskeleton_driver.hpp"
+#include "round_trip.hpp"
+
+namespace haptic::testing {
+namespace {
+
+constexpr std::uint16_t kSlots = 4;
+
+// Each test process gets its own port block, so parallel ctest runs never share a bus.
+can::UdpBusConfig busForThisProcess() {
+    can::UdpBusConfig config;
+    config.slots = kSlots;
+    config.base_port = static_cast<std::uint16_t>(30000 + (::getpid() % 2000) * kSlots);
+    return config;
+}
+
+std::vector<std::string> emulatorArgs(const std::string& device_file, const can::UdpBusConfig& bus,
+                                      const std::string& mode = "lockstep") {
+    return {HAPTICEMU_PATH,
+            "-d",
+            std::string(HAPTIC_CONFIG_DIR) + "/devices/" + device_file,
+            "--bus",
+            "udp",
+            "--udp-port",
+            std::to_string(bus.base_port),
+            "--udp-slots",
+            std::to_string(bus.slots),
+            "--mode",
+            mode,
+            "--log-level",
+            "warn"};
+}
+
+TEST(UdpRoundTrip, ExoskeletonDriverAgainstHapticemuProcess) {
+    const auto device =
+        config::loadDeviceConfig(std::string(HAPTIC_CONFIG_DIR) + "/devices/exoskeleton.yaml");
+    const can::UdpBusConfig bus_config = busForThisProcess();
+    can::UdpBus bus(bus_config);  // binds first, so the emulator takes another slot
+    EmulatorProcess emulator(emulatorArgs("exoskeleton.yaml", bus_config));
+    runExoskeletonScenario(bus, device, emulator, kRoundTrips);
+    EXPECT_EQ(emulator.stop(), 0) << emulator.output();
+}
+
+TEST(UdpRoundTrip, ThimbleDriverAgainstHapticemuProcess) {
+    const auto device =
+        config::loadDeviceConfig(std::string(HAPTIC_CONFIG_DIR) + "/devices/thimble.yaml");
+    const can::UdpBusConfig bus_config = busForThisProcess();
+    can::UdpBus bus(bus_config);
+    EmulatorProcess emulator(emulatorArgs("thimble.yaml", bus_config));
+    runThimbleScenario(bus, device, emulator, kRoundTrips);
+    EXPECT_EQ(emulator.stop(), 0) << emulator.output();
+}
+
+// Runs the driver's 1 kHz-ish loop against the streaming emulator until `done` holds.
+template <typename Done>
+bool loopUntil(can::UdpBus& bus, devices::ExoskeletonDriver& driver, Done done) {
+    const std::int64_t deadline = can::monotonicNowNs() + 5'000'000'000;
+    while (can::monotonicNowNs() < deadline) {
+        pollfd fd{bus.pollFd(), POLLIN, 0};
+        ::poll(&fd, 1, 1);
+        const std::int64_t now = can::monotonicNowNs();
+        driver.poll(now);
+        const std::uint32_t faults = driver.faults(now);
+        (void)driver.sendCommand({2.0, true});
+        if (done(faults)) {
+            return true;
+        }
+    }
+    return false;
+}
+
+TEST(UdpEmulator, StreamsStateAndAppliesFaultCommandsFromStdin) {
+    const auto device =
+        config::loadDeviceConfig(std::string(HAPTIC_CONFIG_DIR) + "/devices/exoskeleton.yaml");
+    const can::UdpBusConfig bus_config = busForThisProcess();
+    can::UdpBus bus(bus_config);
+    EmulatorProcess emulator(emulatorArgs("exoskeleton.yaml", bus_config, "stream"));
+    devices::ExoskeletonDriver driver(device, bus);
+    ASSERT_TRUE(loopUntil(bus, driver, [](std::uint32_t faults) { return faults == 0; }))
+        << emulator.output();
+    ASSERT_TRUE(loopUntil(bus, driver, [&](std::uint32_t) {
+        return driver.state().actuator.force_n > 1.9;  // the lag has settled on the command
+    }));
+
+    ASSERT_TRUE(emulator.sendCommand("corrupt 3"));
+    EXPECT_TRUE(loopUntil(bus, driver, [&](std::uint32_t) {
+        return driver.codec().rejects().of(protocol::RejectReason::kBadCrc) == 3;
+    }));
+    ASSERT_TRUE(emulator.sendCommand("fault 2"));
+    EXPECT_TRUE(loopUntil(bus, driver, [&](std::uint32_t faults) {
+        return (faults & devices::kDeviceFault) != 0 &&
+               driver.state().last_fault.code == protocol::FaultCode::kOvertemperature;
+    }));
+    ASSERT_TRUE(emulator.sendCommand("busoff"));
+    EXPECT_TRUE(loopUntil(bus, driver, [](std::uint32_t faults) {
+        return (faults & devices::kBusOff) != 0 && (faults & devices::kStateStale) != 0;
+    }));
+    ASSERT_TRUE(emulator.sendCommand("clear"));
+    EXPECT_TRUE(loopUntil(bus, driver, [](std::uint32_t faults) { return faults == 0; }));
+    ASSERT_TRUE(emulator.sendCommand("no such fault"));
+    EXPECT_TRUE(loopUntil(bus, driver, [&](std::uint32_t) {
+        return emulator.output().find("error: unknown fault command 'no such fault'") !=
+               std::string::npos;
+    }));
+    EXPECT_EQ(emulator.stop(), 0);
+}
+
+}  // namespace
+}  // namespace haptic::testing
