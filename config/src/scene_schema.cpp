@@ -107,8 +107,10 @@ TrackingConfig readTracking(MapReader map, const std::vector<SceneObject>& objec
             out.script = map.required("script", spec::Enum<TrackingScript>{});
             auto [target, target_field] =
                 map.requiredWithField("target_object", spec::Identifier{});
+            // Named copy: clang < 16 cannot capture a structured binding in a lambda.
+            const std::string& wanted = target;
             const bool exists = std::any_of(objects.begin(), objects.end(),
-                                            [&](const SceneObject& o) { return o.name == target; });
+                                            [&](const SceneObject& o) { return o.name == wanted; });
             if (!exists) {
                 target_field.fail("the name of an object in this scene");
             }
