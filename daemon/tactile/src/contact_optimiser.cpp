@@ -18,6 +18,8 @@ constexpr int kQpMaxIterations = 12;
 constexpr int kLineSearchMaxHalvings = 12;
 // Forward-difference steps in scaled coordinates (metres).
 constexpr double kDifferenceStepM = 1e-7;
+// Levenberg damping of the Gauss-Newton matrix (not part of E).
+constexpr double kDamping = 1e-9;
 
 using Matrix14x3 = Eigen::Matrix<double, kConstraintCount, 3>;
 using KktMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
@@ -218,7 +220,7 @@ ContactSurfaceOptimiser::Evaluation ContactSurfaceOptimiser::evaluate(
         }
     }
     const Eigen::Vector3d smooth = scaled(dofs) - scaled(warm_start_);
-    e.objective += settings_.smoothness_weight * smooth.squaredNorm();
+    e.objective += lambda_ * smooth.squaredNorm();
     return e;
 }
 
@@ -261,7 +263,7 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
         (void)kinematics_.constraints(dofs, values, &pose);
     }
     Evaluation current = evaluate(dofs, pose);
-    const double sqrt_lambda = std::sqrt(settings_.smoothness_weight);
+    lambda_ = previous_matched_ ? settings_.smoothness_weight : 0.0;
 
     for (report.iterations = 0; report.iterations < settings_.max_iterations;) {
         ++report.iterations;
@@ -284,8 +286,9 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
         }
 
         // Gauss-Newton normal equations, accumulated per sample (no residual storage).
-        Eigen::Matrix3d H = settings_.smoothness_weight * Eigen::Matrix3d::Identity();
-        Eigen::Vector3d g = sqrt_lambda * sqrt_lambda * (z - scaled(warm_start_));
+        // kDamping keeps H definite with fewer than three independent contact points.
+        Eigen::Matrix3d H = (lambda_ + kDamping) * Eigen::Matrix3d::Identity();
+        Eigen::Vector3d g = lambda_ * (z - scaled(warm_start_));
         const Eigen::Vector3d normal = pose.plateNormal();
         for (int i = 0; i < target_count_; ++i) {
             const Target& t = targets_[static_cast<std::size_t>(i)];
@@ -367,6 +370,7 @@ TactileCommand ContactSurfaceOptimiser::finish(const PlatformDofs& dofs,
     command.pose = safe.pose;
     command.report = report;
     warm_start_ = command.dofs;
+    previous_matched_ = report.outcome == SolveOutcome::kMatched && ik.ok();
     return command;
 }
 

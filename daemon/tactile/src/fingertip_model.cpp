@@ -95,6 +95,11 @@ double NonlinearPadModel::pressure(double depth_m) const {
                                 std::expm1(depth_m / parameters_.stiffening_depth_m);
 }
 
+double NonlinearPadModel::pressureSlope(double depth_m) const {
+    return parameters_.pressure_scale_pa / parameters_.stiffening_depth_m *
+           std::exp(std::max(depth_m, 0.0) / parameters_.stiffening_depth_m);
+}
+
 PadContact NonlinearPadModel::press(const Obstacle& obstacle) const {
     PadContact out;
     out.node_in_contact.assign(nodes_m_.size(), false);
@@ -114,8 +119,8 @@ PadContact NonlinearPadModel::press(const Obstacle& obstacle) const {
     return out;
 }
 
-msgs::ContactSurface NonlinearPadModel::contactSurface(const Obstacle& obstacle,
-                                                       int sample_count) const {
+msgs::ContactSurface NonlinearPadModel::contactSurface(const Obstacle& obstacle, int sample_count,
+                                                       SampleWeighting weighting) const {
     // Sunflower (Fibonacci) samples: equal projected area each, no grid alignment.
     msgs::ContactSurface surface;
     const double R = parameters_.pad_radius_m;
@@ -135,6 +140,26 @@ msgs::ContactSurface NonlinearPadModel::contactSurface(const Obstacle& obstacle,
         sample.normal_device = {normal.x(), normal.y(), normal.z()};
         sample.weight = area * R / std::sqrt(R * R - x * x - y * y);
         surface.samples.push_back(sample);
+    }
+    if (weighting == SampleWeighting::kContactStiffness) {
+        for (msgs::ContactSample& s : surface.samples.used()) {
+            s.weight *= pressureSlope(-s.signed_distance_m);
+        }
+    }
+    if (weighting == SampleWeighting::kContactForce) {
+        double contact_area = 0.0;
+        double contact_force = 0.0;
+        for (const msgs::ContactSample& s : surface.samples) {
+            if (s.signed_distance_m < 0.0) {
+                contact_area += s.weight;
+                contact_force += s.weight * pressure(-s.signed_distance_m);
+            }
+        }
+        for (msgs::ContactSample& s : surface.samples.used()) {
+            if (s.signed_distance_m < 0.0 && contact_force > 0.0) {
+                s.weight *= pressure(-s.signed_distance_m) * contact_area / contact_force;
+            }
+        }
     }
     return surface;
 }

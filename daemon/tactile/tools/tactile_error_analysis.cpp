@@ -153,6 +153,12 @@ int main(int argc, char** argv) {
     std::string out_dir = ".";
     app.add_option("--config", config_path, "thimble device YAML")->check(CLI::ExistingFile);
     app.add_option("--out", out_dir, "folder for error_analysis.md and .dat");
+    std::string weighting_name = "stiffness";
+    int sample_override = 0;
+    app.add_option("--samples", sample_override, "pad samples (default optimiser.pad_samples)")
+        ->check(CLI::Range(1, static_cast<int>(haptic::msgs::kMaxContactSamples)));
+    app.add_option("--weighting", weighting_name, "sample weights the simulation sends")
+        ->check(CLI::IsMember({"area", "force", "stiffness"}));
     CLI11_PARSE(app, argc, argv);
     try {
         const auto device = haptic::config::loadDeviceConfig(config_path);
@@ -163,9 +169,17 @@ int main(int argc, char** argv) {
         // Linear finger stiffness for the force baseline: the secant of the pad model at the
         // cases' indentation, the most favourable single value for that baseline.
         const double stiffness = pad.flatPlateForce(kIndentationM) / kIndentationM;
-        ContactSurfaceOptimiser optimiser(
-            kinematics, haptic::tactile::OptimiserSettings::fromConfig(device.thimble()));
-        const int samples = device.thimble().optimiser.pad_samples;
+        auto settings = haptic::tactile::OptimiserSettings::fromConfig(device.thimble());
+        settings.max_samples = std::max(settings.max_samples, sample_override);
+        ContactSurfaceOptimiser optimiser(kinematics, settings);
+        int samples = device.thimble().optimiser.pad_samples;
+        if (sample_override > 0) {
+            samples = sample_override;
+        }
+        const auto weighting = weighting_name == "area" ? haptic::tactile::SampleWeighting::kArea
+                               : weighting_name == "force"
+                                   ? haptic::tactile::SampleWeighting::kContactForce
+                                   : haptic::tactile::SampleWeighting::kContactStiffness;
 
         std::ostringstream table;
         std::ostringstream data;
@@ -175,12 +189,15 @@ int main(int argc, char** argv) {
         int index = 0;
         for (const Case& c : makeCases(pad)) {
             const auto reference = pad.press(*c.object);
-            const auto surface = pad.contactSurface(*c.object, samples);
+            const auto surface = pad.contactSurface(*c.object, samples, weighting);
             optimiser.reset();
             const auto command = optimiser.solve(surface);
             const Metrics ours = measure(kinematics, pad, reference, command.dofs);
+            // The plane-fit baseline is defined on area weights: centroid and average normal.
+            const auto area_surface =
+                pad.contactSurface(*c.object, samples, haptic::tactile::SampleWeighting::kArea);
             const Metrics geometric =
-                measure(kinematics, pad, reference, geometricPlaneFit(kinematics, surface));
+                measure(kinematics, pad, reference, geometricPlaneFit(kinematics, area_surface));
             const Metrics force =
                 measure(kinematics, pad, reference,
                         forceNormalDisplacement(kinematics, surface, reference.force_on_finger_n,

@@ -28,7 +28,7 @@ struct OptimiserSettings {
     int max_iterations{20};
     int max_samples{64};             // optimiser.pad_samples; larger surfaces are rejected
     double non_contact_weight{1.0};  // eta
-    double smoothness_weight{1e-4};  // lambda, relative to a total sample weight of 1
+    double smoothness_weight{1e-6};  // lambda, relative to a total sample weight of 1
     double rim_blend_m{0.001};       // the rim weight falls from 1 to 0 over this width
     double step_tolerance_m{1e-7};   // converged when the scaled step is below this
     double match_tolerance_m{3e-4};  // contact RMS residual above this sets poor_match
@@ -97,7 +97,10 @@ class ContactSurfaceOptimiser {
     [[nodiscard]] TactileCommand solve(const msgs::ContactSurface& surface) noexcept;
 
     // Next solve starts from the retract pose (e.g. after the device was re-enabled).
-    void reset() noexcept { warm_start_ = kinematics_.retractPose(); }
+    void reset() noexcept {
+        warm_start_ = kinematics_.retractPose();
+        previous_matched_ = false;
+    }
     [[nodiscard]] const PlatformDofs& warmStart() const noexcept { return warm_start_; }
     [[nodiscard]] const OptimiserSettings& settings() const noexcept { return settings_; }
 
@@ -125,7 +128,11 @@ class ContactSurfaceOptimiser {
     OptimiserSettings settings_;
     std::array<Target, msgs::kMaxContactSamples> targets_{};
     int target_count_{0};
+    double lambda_{0.0};
     PlatformDofs warm_start_;
+    // The smoothness term only ties a solve to a previous matched pose; leaving the retract
+    // pose should not be slowed down.
+    bool previous_matched_{false};
 };
 
 }  // namespace haptic::tactile

@@ -93,13 +93,26 @@ struct PadContact {
     int contact_count{0};
 };
 
+// How the simulation weights the samples it sends (ALGORITHMS §3.2: area is the neutral
+// choice, contact force the alternative).
+//   kArea: the sample's share of skin area.
+//   kContactForce: contact samples share their total area in proportion to their pressure;
+//     non-contact samples keep their area.
+//   kContactStiffness [DER]: area times the local contact stiffness dp/d(delta), taken at the
+//     virtual indentation for contact samples and at zero for the others. With these weights
+//     the Gauss-Newton normal equation of the plate height, sum_i w_i r_i = 0, is the
+//     first-order condition that the device force equals the virtual one, so a geometric fit
+//     also matches force for curved objects.
+enum class SampleWeighting { kArea, kContactForce, kContactStiffness };
+
 class FingertipContactModel {
   public:
     virtual ~FingertipContactModel() = default;
     [[nodiscard]] virtual PadContact press(const Obstacle& obstacle) const = 0;
     // The finger-pad samples the simulation would send to the device for this obstacle.
     [[nodiscard]] virtual msgs::ContactSurface contactSurface(const Obstacle& obstacle,
-                                                              int sample_count) const = 0;
+                                                              int sample_count,
+                                                              SampleWeighting weighting) const = 0;
 };
 
 struct PadModelParameters {
@@ -115,9 +128,11 @@ class NonlinearPadModel final : public FingertipContactModel {
   public:
     explicit NonlinearPadModel(const PadModelParameters& parameters);
     PadContact press(const Obstacle& obstacle) const override;
-    msgs::ContactSurface contactSurface(const Obstacle& obstacle, int sample_count) const override;
+    msgs::ContactSurface contactSurface(const Obstacle& obstacle, int sample_count,
+                                        SampleWeighting weighting) const override;
 
     [[nodiscard]] double pressure(double depth_m) const;
+    [[nodiscard]] double pressureSlope(double depth_m) const;  // dp/d(delta), Pa/m
     [[nodiscard]] const PadModelParameters& parameters() const { return parameters_; }
     [[nodiscard]] std::size_t nodeCount() const { return nodes_m_.size(); }
     // Undeformed pad surface point above (x, y).
