@@ -100,8 +100,16 @@ TEST_F(ThimbleKinematicsTest, WorkspaceMatchesTheShippedAssumptions) {
     const auto& calib = sut.config().finger_calibration;
     EXPECT_DOUBLE_EQ(ws.min_height_m, calib.contact_height_m - calib.max_indentation_m);
     EXPECT_GT(ws.max_height_m, calib.contact_height_m);  // the retract pose clears the pad
-    EXPECT_GT(ws.max_tilt_all_directions_rad, 0.0);
-    EXPECT_LE(ws.max_tilt_all_directions_rad, sut.config().max_tilt_rad);
+    const TiltReach reach = sut.tiltReach();
+    EXPECT_GT(reach.max_tilt_rad, 0.0);
+    EXPECT_LE(reach.max_tilt_rad, sut.config().max_tilt_rad);
+    const double h = reach.best_height_m;
+    for (int d = 0; d < 8; ++d) {
+        const double a = 2.0 * 3.14159265358979323846 * (9 * d) / 72.0;  // sampled directions
+        EXPECT_TRUE(
+            sut.inverse({h, reach.max_tilt_rad * std::cos(a), reach.max_tilt_rad * std::sin(a)})
+                .ok());
+    }
     EXPECT_TRUE(sut.inverse(sut.retractPose()).ok());
     EXPECT_FALSE(sut.inverse({ws.max_height_m + 1e-4, 0.0, 0.0}).ok());
 }

@@ -13,7 +13,7 @@ namespace {
 constexpr double kActiveTolerance = 1e-3;
 // The QP aims this far inside linearised bounds so that curved bounds stay feasible after a
 // short backtrack.
-constexpr double kQpMargin = 1e-6;
+constexpr double kQpMargin = 1e-4;
 constexpr int kQpMaxIterations = 12;
 constexpr int kLineSearchMaxHalvings = 12;
 // Forward-difference steps in scaled coordinates (metres).
@@ -275,7 +275,7 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
             zk(k) += kDifferenceStepM;
             ConstraintValues shifted{};
             if (!kinematics_.constraints(unscaled(zk), shifted,
-                                         &shifted_pose[static_cast<std::size_t>(k)])) {
+                                         &shifted_pose[static_cast<std::size_t>(k)], &pose)) {
                 shifted_pose[static_cast<std::size_t>(k)] = pose;  // at the assembly limit
                 shifted = values;
             }
@@ -317,7 +317,7 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
             const PlatformDofs candidate = unscaled(z + alpha * step);
             ConstraintValues candidate_values{};
             PlatformPose candidate_pose;
-            if (!kinematics_.constraints(candidate, candidate_values, &candidate_pose) ||
+            if (!kinematics_.constraints(candidate, candidate_values, &candidate_pose, &pose) ||
                 !ThimbleKinematics::feasible(candidate_values)) {
                 continue;
             }

@@ -109,8 +109,8 @@ ThimbleKinematics::ThimbleKinematics(const config::ThimbleConfig& config) : conf
     computeWorkspace();
 }
 
-KinematicsError ThimbleKinematics::platformPose(const PlatformDofs& dofs,
-                                                PlatformPose& pose) const noexcept {
+KinematicsError ThimbleKinematics::platformPose(const PlatformDofs& dofs, PlatformPose& pose,
+                                                const PlatformPose* guess) const noexcept {
     if (!finite(dofs)) {
         return KinematicsError::kNonFinite;
     }
@@ -118,6 +118,9 @@ KinematicsError ThimbleKinematics::platformPose(const PlatformDofs& dofs,
     // Unknowns (p_x, p_y, yaw): each spherical joint must stay in its leg plane,
     // a_i . (p + R s_i) = 0 (a_i . B_i = 0 by construction).
     Eigen::Vector3d unknowns = Eigen::Vector3d::Zero();
+    if (guess != nullptr && guess->position_m.allFinite() && std::isfinite(guess->yaw_rad)) {
+        unknowns = Eigen::Vector3d(guess->position_m.x(), guess->position_m.y(), guess->yaw_rad);
+    }
     const double scale = config_.geometry.platform_radius_m;
     for (int iteration = 0; iteration < kParasiticMaxIterations; ++iteration) {
         const Eigen::Matrix3d rotation = tilt * yawRotation(unknowns.z());
@@ -188,9 +191,10 @@ bool ThimbleKinematics::rawServoAngles(const PlatformDofs& dofs, ServoAngles& ou
 }
 
 bool ThimbleKinematics::constraints(const PlatformDofs& dofs, ConstraintValues& values,
-                                    PlatformPose* pose_out) const noexcept {
+                                    PlatformPose* pose_out,
+                                    const PlatformPose* guess) const noexcept {
     PlatformPose pose;
-    if (platformPose(dofs, pose) != KinematicsError::kNone) {
+    if (platformPose(dofs, pose, guess) != KinematicsError::kNone) {
         return false;
     }
     const double length_scale = config_.plate_radius_m;
@@ -404,7 +408,7 @@ void ThimbleKinematics::computeWorkspace() {
     if (std::isnan(first)) {
         // No feasible pose at all: keep everything at the indentation limit so callers see
         // a degenerate workspace; the loader-side geometry checks should prevent this.
-        summary_ = WorkspaceSummary{lowest, lowest, lowest, 0.0};
+        summary_ = WorkspaceSummary{lowest, lowest};
         retract_ = centre_ = PlatformDofs{lowest, 0.0, 0.0};
         return;
     }
@@ -420,7 +424,10 @@ void ThimbleKinematics::computeWorkspace() {
     summary_.max_height_m = last < highest ? refine(last, last + dh) : last;
     retract_ = PlatformDofs{summary_.max_height_m, 0.0, 0.0};
     centre_ = PlatformDofs{0.5 * (summary_.min_height_m + summary_.max_height_m), 0.0, 0.0};
+}
 
+TiltReach ThimbleKinematics::tiltReach() const noexcept {
+    TiltReach reach;
     // Largest tilt reachable in all 72 directions, maximised over the height grid.
     constexpr int kDirections = 72;
     constexpr int kHeights = 40;
@@ -428,7 +435,7 @@ void ThimbleKinematics::computeWorkspace() {
         const double h =
             summary_.min_height_m + (summary_.max_height_m - summary_.min_height_m) * k / kHeights;
         double worst = config_.max_tilt_rad;
-        for (int d = 0; d < kDirections && worst > summary_.max_tilt_all_directions_rad; ++d) {
+        for (int d = 0; d < kDirections && worst > reach.max_tilt_rad; ++d) {
             const double angle = 2.0 * 3.14159265358979323846 * d / kDirections;
             double lo = 0.0;
             double hi = worst;
@@ -441,11 +448,12 @@ void ThimbleKinematics::computeWorkspace() {
             }
             worst = lo;
         }
-        if (worst > summary_.max_tilt_all_directions_rad) {
-            summary_.max_tilt_all_directions_rad = worst;
-            summary_.best_height_m = h;
+        if (worst > reach.max_tilt_rad) {
+            reach.max_tilt_rad = worst;
+            reach.best_height_m = h;
         }
     }
+    return reach;
 }
 
 }  // namespace haptic::tactile

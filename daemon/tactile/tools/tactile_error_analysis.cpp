@@ -91,8 +91,8 @@ std::vector<Case> makeCases(const NonlinearPadModel& pad) {
         cases.push_back({"edge 90 deg",
                          std::make_unique<haptic::tactile::RightAngleEdgeObstacle>(ridge, na, nb)});
     }
-    plane(45.0, kIndentationM, "plane 45 deg (tilt > max)");
-    plane(0.0, 0.006, "plane 0 deg, 6 mm deep (> max indentation)");
+    plane(45.0, kIndentationM, "plane 45 deg (> max tilt)");
+    plane(0.0, 0.006, "plane 6 mm deep (> max indent)");
     return cases;
 }
 
@@ -203,10 +203,17 @@ int main(int argc, char** argv) {
                         forceNormalDisplacement(kinematics, surface, reference.force_on_finger_n,
                                                 stiffness));
             const auto& r = command.report;
+            std::string active;
+            for (int j = 0; j < haptic::tactile::kConstraintCount; ++j) {
+                if (r.active_constraints & (1U << j)) {
+                    active +=
+                        std::string(active.empty() ? "" : "+") + haptic::tactile::constraintName(j);
+                }
+            }
             char report[160];
-            std::snprintf(report, sizeof report, "%s, %d it, rms %.3f mm, active 0x%x",
+            std::snprintf(report, sizeof report, "%s, %d it, rms %.3f mm, active: %s",
                           r.converged ? "converged" : "NOT converged", r.iterations,
-                          r.contact_rms_m * 1e3, r.active_constraints);
+                          r.contact_rms_m * 1e3, active.empty() ? "none" : active.c_str());
             table << "| " << c.name << " | " << (r.clamped ? "no" : "yes") << " | "
                   << std::to_string(reference.force_on_finger_n.norm()).substr(0, 5) << " |"
                   << cell(ours) << cell(geometric) << cell(force) << " " << report << " |\n";

@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
         const haptic::tactile::ThimbleKinematics kinematics(device.thimble());
         const auto& ws = kinematics.workspace();
         const auto& cfg = device.thimble();
+        const auto reach = kinematics.tiltReach();
         std::printf("thimble workspace from %s\n", path);
         std::printf(
             "  indentation limit: plate height >= %.2f mm (contact %.2f mm - max %.2f mm)\n",
@@ -61,7 +62,7 @@ int main(int argc, char** argv) {
         std::printf(
             "  tilt reachable in every direction: %.2f deg at height %.2f mm "
             "(max_tilt_deg %.1f)\n",
-            ws.max_tilt_all_directions_rad * kDegPerRad, ws.best_height_m * 1e3,
+            reach.max_tilt_rad * kDegPerRad, reach.best_height_m * 1e3,
             cfg.max_tilt_rad * kDegPerRad);
         std::printf("  height_mm  tilt_all_directions_deg  servo_deg_at_zero_tilt\n");
         for (int k = 0; k <= 10; ++k) {

@@ -91,13 +91,16 @@ struct ForwardResult {
     [[nodiscard]] bool ok() const noexcept { return error == KinematicsError::kNone; }
 };
 
-// Reachable height range at zero tilt and the largest tilt reachable in every direction at
-// the best height, found by bisection over the constraints.
+// Reachable height range at zero tilt, found by a scan and bisection over the constraints.
 struct WorkspaceSummary {
-    double min_height_m{0.0};  // zero tilt
-    double max_height_m{0.0};  // zero tilt
+    double min_height_m{0.0};
+    double max_height_m{0.0};
+};
+
+// The largest tilt reachable in every direction (72 directions), maximised over heights.
+struct TiltReach {
     double best_height_m{0.0};
-    double max_tilt_all_directions_rad{0.0};  // at best_height_m
+    double max_tilt_rad{0.0};
 };
 
 class ThimbleKinematics {
@@ -110,8 +113,9 @@ class ThimbleKinematics {
 
     // Platform pose of xi with the parasitic motion solved (Newton from yaw = 0; 2-4
     // iterations). Fails only on non-finite input or no convergence.
-    [[nodiscard]] KinematicsError platformPose(const PlatformDofs& dofs,
-                                               PlatformPose& pose) const noexcept;
+    // `guess` (a nearby pose) starts Newton from its parasitic motion instead of zero.
+    [[nodiscard]] KinematicsError platformPose(const PlatformDofs& dofs, PlatformPose& pose,
+                                               const PlatformPose* guess = nullptr) const noexcept;
 
     // Closed-form IK on the assembly branch theta = phi - acos(kappa / rho) (elbow outward).
     // With check_workspace the pose must also satisfy every workspace constraint.
@@ -128,7 +132,8 @@ class ThimbleKinematics {
 
     // c_w(xi); returns false if the legs cannot even be assembled (values then undefined).
     [[nodiscard]] bool constraints(const PlatformDofs& dofs, ConstraintValues& values,
-                                   PlatformPose* pose = nullptr) const noexcept;
+                                   PlatformPose* pose = nullptr,
+                                   const PlatformPose* guess = nullptr) const noexcept;
     [[nodiscard]] static bool feasible(const ConstraintValues& values) noexcept;
 
     // The pose farthest from the pad (zero tilt, largest reachable height): the no-contact pose.
@@ -136,6 +141,8 @@ class ThimbleKinematics {
     // Zero tilt, mid height: the default Newton start.
     [[nodiscard]] const PlatformDofs& centrePose() const noexcept { return centre_; }
     [[nodiscard]] const WorkspaceSummary& workspace() const noexcept { return summary_; }
+    // Thousands of IK evaluations: for tools and tests, not for the loop.
+    [[nodiscard]] TiltReach tiltReach() const noexcept;
     [[nodiscard]] const config::ThimbleConfig& config() const noexcept { return config_; }
     [[nodiscard]] double minHeightM() const noexcept { return min_height_m_; }
 
