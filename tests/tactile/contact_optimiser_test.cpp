@@ -46,6 +46,12 @@ class ContactOptimiserTest : public ::testing::Test {
         return pad.contactSurface(plane, config.optimiser.pad_samples, SampleWeighting::kArea);
     }
 
+    // A 6 mm sphere 1.5 mm into the pad, slightly off-centre: no plane matches it exactly.
+    msgs::ContactSurface sphereSurface() const {
+        return pad.contactSurface(SphereObstacle(Eigen::Vector3d(0.001, 0.0, 0.0225), 0.006),
+                                  config.optimiser.pad_samples, SampleWeighting::kContactStiffness);
+    }
+
     void expectInsideWorkspace(const TactileCommand& command) const {
         EXPECT_TRUE(allFinite(command));
         const InverseResult ik = kinematics.inverse(command.dofs);
@@ -69,7 +75,7 @@ TEST_F(ContactOptimiserTest, ReachablePlaneIsMatchedExactly) {
 }
 
 TEST_F(ContactOptimiserTest, WarmStartConvergesAtOnceOnAnUnchangedSurface) {
-    const auto surface = planeSurface(0.1, 0.001);
+    const auto surface = sphereSurface();
     const auto first = sut.solve(surface);
     const auto second = sut.solve(surface);
     EXPECT_LE(second.report.iterations, 2);
@@ -202,16 +208,14 @@ TEST_F(ContactOptimiserTest, IterationsNeverExceedTheConfiguredBound) {
     auto settings = OptimiserSettings::fromConfig(config);
     settings.max_iterations = 1;
     ContactSurfaceOptimiser one_step(kinematics, settings);
-    const auto command = one_step.solve(planeSurface(0.2, 0.002));
+    const auto command = one_step.solve(sphereSurface());
     EXPECT_EQ(command.report.iterations, 1);
     EXPECT_FALSE(command.report.converged);
     expectInsideWorkspace(command);
 }
 
 TEST_F(ContactOptimiserTest, SolveDoesNotAllocate) {
-    const auto sphere_surface =
-        pad.contactSurface(SphereObstacle(Eigen::Vector3d(0.0, 0.0, 0.0225), 0.006), 64,
-                           SampleWeighting::kContactStiffness);
+    const auto sphere_surface = sphereSurface();
     const auto plane_surface = planeSurface(0.2, 0.0015);
     const msgs::ContactSurface empty{};
     testing::ScopedAllocationCounter counter;

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "haptic/tactile/baselines.hpp"
+
 namespace haptic::tactile {
 
 namespace {
@@ -244,6 +246,8 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
         return finish(kinematics_.retractPose(), report);
     }
     target_count_ = 0;
+    Eigen::Vector3d contact_centroid = Eigen::Vector3d::Zero();
+    Eigen::Vector3d contact_normal = Eigen::Vector3d::Zero();
     for (const msgs::ContactSample& s : surface.samples) {
         Target& t = targets_[static_cast<std::size_t>(target_count_++)];
         const Eigen::Vector3d p(s.p_device_m[0], s.p_device_m[1], s.p_device_m[2]);
@@ -252,12 +256,27 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
         t.point_m = t.contact ? Eigen::Vector3d(p - s.signed_distance_m * n) : p;
         const double eta = t.contact ? 1.0 : settings_.non_contact_weight;
         t.sqrt_weight = std::sqrt(eta * s.weight / total_weight);
+        if (t.contact) {
+            contact_centroid += s.weight * t.point_m;
+            contact_normal += s.weight * n;
+        }
     }
     report.outcome = SolveOutcome::kMatched;
 
+    // A new contact starts from the plane through the contact centroid with the average
+    // normal (the geometric baseline) when that plane is reachable: fewer iterations. A
+    // projected start would sit exactly on a bound, where backtracking stalls; the retract
+    // pose is the better start then.
     PlatformDofs dofs = kinematics_.projectToWorkspace(warm_start_);
     ConstraintValues values{};
     PlatformPose pose;
+    if (!previous_matched_ && contact_normal.norm() > 1e-12) {
+        const PlatformDofs plane =
+            poseForPlane(kinematics_, contact_normal, contact_centroid / contact_weight);
+        if (kinematics_.constraints(plane, values) && ThimbleKinematics::feasible(values)) {
+            dofs = plane;
+        }
+    }
     if (!kinematics_.constraints(dofs, values, &pose) || !ThimbleKinematics::feasible(values)) {
         dofs = kinematics_.retractPose();
         (void)kinematics_.constraints(dofs, values, &pose);
