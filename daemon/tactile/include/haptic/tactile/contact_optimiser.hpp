@@ -30,7 +30,9 @@ struct OptimiserSettings {
     double non_contact_weight{1.0};  // eta
     double smoothness_weight{1e-6};  // lambda, relative to a total sample weight of 1
     double rim_blend_m{0.001};       // the rim weight falls from 1 to 0 over this width
-    double step_tolerance_m{1e-7};   // converged when the scaled step is below this
+    // Converged when the scaled step is below this: 1 um, far below what a hobby servo can
+    // resolve (0.1 degree on a 10 mm crank is ~17 um).
+    double step_tolerance_m{1e-6};
     double match_tolerance_m{3e-4};  // contact RMS residual above this sets poor_match
     double frame_limit_m{0.05};      // samples farther than this from the base origin are rejected
     double normal_tolerance{1e-2};   // | |n| - 1 | allowed for contact normals
