@@ -234,6 +234,8 @@ ThimbleConfig readThimble(MapReader& root) {
     out.plate_radius_m = root.required("plate_radius_m", Real::positive(0.05));
     // The cable-driven predecessor reached 30 degrees; beyond 60 the legs fold.
     out.max_tilt_rad = degToRad(root.required("max_tilt_deg", Real::closed(0.0, 60.0)));
+    out.spherical_joint_max_rad =
+        degToRad(root.optional("spherical_joint_max_deg", 70.0, Real::closed(10.0, 90.0)));
     out.finger_calibration = readCalibration(root.requiredMap("finger_calibration"));
     out.optimiser = readOptimiser(root.requiredMap("optimiser"));
     return out;

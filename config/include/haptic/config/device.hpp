@@ -156,6 +156,9 @@ struct ThimbleConfig {
     ServoConfig servos;
     double plate_radius_m{0.0};  // r_d
     double max_tilt_rad{0.0};
+    // Largest angle between a distal link and the plate normal that the spherical joints
+    // allow (optional key spherical_joint_max_deg, default 70).
+    double spherical_joint_max_rad{degToRad(70.0)};
     FingerCalibration finger_calibration;
     OptimiserConfig optimiser;
 };

@@ -1,0 +1,396 @@
+#include "haptic/tactile/contact_optimiser.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+#include "haptic/tactile/baselines.hpp"
+
+namespace haptic::tactile {
+
+namespace {
+
+// A constraint closer than this to its bound (dimensionless: rad, or lengths / plate radius)
+// is reported as active.
+constexpr double kActiveTolerance = 1e-3;
+// The QP aims this far inside linearised bounds so that curved bounds stay feasible after a
+// short backtrack.
+constexpr double kQpMargin = 1e-4;
+constexpr int kQpMaxIterations = 12;
+constexpr int kLineSearchMaxHalvings = 12;
+// Forward-difference steps in scaled coordinates (metres).
+constexpr double kDifferenceStepM = 1e-7;
+// Levenberg damping of the Gauss-Newton matrix (not part of E).
+constexpr double kDamping = 1e-9;
+
+using Matrix14x3 = Eigen::Matrix<double, kConstraintCount, 3>;
+using KktMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+using KktVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
+
+// min 1/2 D'HD + g'D  s.t.  c_j + G_j D >= margin, by a small active-set loop (at most three
+// constraints active in three variables). Falls back to the last solvable working set.
+Eigen::Vector3d solveStepQp(const Eigen::Matrix3d& H, const Eigen::Vector3d& g, const Matrix14x3& G,
+                            const ConstraintValues& c) noexcept {
+    std::array<int, 3> working{};
+    int working_count = 0;
+    Eigen::Vector3d step = H.ldlt().solve(-g);
+    for (int iteration = 0; iteration < kQpMaxIterations; ++iteration) {
+        const int n = 3 + working_count;
+        KktMatrix kkt = KktMatrix::Zero(n, n);
+        KktVector rhs = KktVector::Zero(n);
+        kkt.topLeftCorner<3, 3>() = H;
+        rhs.head<3>() = -g;
+        for (int k = 0; k < working_count; ++k) {
+            const auto j = static_cast<std::size_t>(working[static_cast<std::size_t>(k)]);
+            kkt.block<1, 3>(3 + k, 0) = G.row(static_cast<Eigen::Index>(j));
+            kkt.block<3, 1>(0, 3 + k) = -G.row(static_cast<Eigen::Index>(j)).transpose();
+            rhs(3 + k) = kQpMargin - c[j];
+        }
+        const Eigen::FullPivLU<KktMatrix> lu(kkt);
+        if (!lu.isInvertible()) {
+            --working_count;  // dependent bounds: keep the previous solution
+            break;
+        }
+        const KktVector solution = lu.solve(rhs);
+        step = solution.head<3>();
+
+        int most_violated = -1;
+        double worst = -1e-12;
+        for (int j = 0; j < kConstraintCount; ++j) {
+            const bool in_working = std::find(working.begin(), working.begin() + working_count,
+                                              j) != working.begin() + working_count;
+            const double value = c[static_cast<std::size_t>(j)] + G.row(j).dot(step) - kQpMargin;
+            if (!in_working && value < worst) {
+                worst = value;
+                most_violated = j;
+            }
+        }
+        if (most_violated >= 0 && working_count < 3) {
+            working[static_cast<std::size_t>(working_count++)] = most_violated;
+            continue;
+        }
+        int most_negative = -1;
+        double lowest = 0.0;
+        for (int k = 0; k < working_count; ++k) {
+            if (solution(3 + k) < lowest) {
+                lowest = solution(3 + k);
+                most_negative = k;
+            }
+        }
+        if (most_negative < 0) {
+            break;
+        }
+        working[static_cast<std::size_t>(most_negative)] =
+            working[static_cast<std::size_t>(--working_count)];
+    }
+    return step;
+}
+
+}  // namespace
+
+OptimiserSettings OptimiserSettings::fromConfig(const config::ThimbleConfig& config) {
+    OptimiserSettings settings;
+    settings.max_iterations = config.optimiser.max_iterations;
+    settings.max_samples = config.optimiser.pad_samples;
+    return settings;
+}
+
+const char* toString(InputError error) noexcept {
+    switch (error) {
+        case InputError::kNone:
+            return "ok";
+        case InputError::kTooManySamples:
+            return "more samples than optimiser.pad_samples";
+        case InputError::kNonFinitePosition:
+            return "sample position is NaN or infinite";
+        case InputError::kNonFiniteDistance:
+            return "sample signed distance is NaN or infinite";
+        case InputError::kNonFiniteNormal:
+            return "sample normal is NaN or infinite";
+        case InputError::kNonFiniteWeight:
+            return "sample weight is NaN or infinite";
+        case InputError::kNegativeWeight:
+            return "sample weight is negative";
+        case InputError::kNormalNotUnit:
+            return "contact sample normal is not unit length";
+        case InputError::kOutOfFrame:
+            return "sample outside the device frame bounds";
+    }
+    return "unknown";
+}
+
+const char* toString(SolveOutcome outcome) noexcept {
+    switch (outcome) {
+        case SolveOutcome::kMatched:
+            return "matched";
+        case SolveOutcome::kRetractedNoContact:
+            return "retracted (no contact)";
+        case SolveOutcome::kRejectedInput:
+            return "retracted (input rejected)";
+    }
+    return "unknown";
+}
+
+InputCheck checkContactSurface(const msgs::ContactSurface& surface,
+                               const OptimiserSettings& settings) noexcept {
+    if (surface.samples.count > static_cast<std::uint32_t>(settings.max_samples)) {
+        return {InputError::kTooManySamples, static_cast<int>(surface.samples.count)};
+    }
+    auto allFinite = [](const std::array<double, 3>& v) {
+        return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
+    };
+    for (std::uint32_t i = 0; i < surface.samples.count; ++i) {
+        const msgs::ContactSample& s = surface.samples[i];
+        const int index = static_cast<int>(i);
+        if (!allFinite(s.p_device_m)) {
+            return {InputError::kNonFinitePosition, index};
+        }
+        if (!std::isfinite(s.signed_distance_m)) {
+            return {InputError::kNonFiniteDistance, index};
+        }
+        if (!allFinite(s.normal_device)) {
+            return {InputError::kNonFiniteNormal, index};
+        }
+        if (!std::isfinite(s.weight)) {
+            return {InputError::kNonFiniteWeight, index};
+        }
+        if (s.weight < 0.0) {
+            return {InputError::kNegativeWeight, index};
+        }
+        const Eigen::Vector3d p(s.p_device_m[0], s.p_device_m[1], s.p_device_m[2]);
+        if (p.norm() > settings.frame_limit_m ||
+            std::fabs(s.signed_distance_m) > settings.frame_limit_m) {
+            return {InputError::kOutOfFrame, index};
+        }
+        const Eigen::Vector3d n(s.normal_device[0], s.normal_device[1], s.normal_device[2]);
+        if (s.signed_distance_m < 0.0 && std::fabs(n.norm() - 1.0) > settings.normal_tolerance) {
+            return {InputError::kNormalNotUnit, index};
+        }
+    }
+    return {};
+}
+
+ContactSurfaceOptimiser::ContactSurfaceOptimiser(const ThimbleKinematics& kinematics,
+                                                 const OptimiserSettings& settings)
+    : kinematics_(kinematics), settings_(settings), warm_start_(kinematics.retractPose()) {
+    settings_.max_samples =
+        std::clamp(settings_.max_samples, 0, static_cast<int>(msgs::kMaxContactSamples));
+    settings_.max_iterations = std::max(settings_.max_iterations, 1);
+}
+
+Eigen::Vector3d ContactSurfaceOptimiser::scaled(const PlatformDofs& dofs) const noexcept {
+    const double r = kinematics_.config().plate_radius_m;
+    return {dofs.height_m, r * dofs.tilt_x_rad, r * dofs.tilt_y_rad};
+}
+
+PlatformDofs ContactSurfaceOptimiser::unscaled(const Eigen::Vector3d& z) const noexcept {
+    const double r = kinematics_.config().plate_radius_m;
+    return {z.x(), z.y() / r, z.z() / r};
+}
+
+double ContactSurfaceOptimiser::rimWeight(double in_plane_radius_m) const noexcept {
+    const double outer = kinematics_.config().plate_radius_m;
+    const double inner = outer - settings_.rim_blend_m;
+    if (in_plane_radius_m <= inner) {
+        return 1.0;
+    }
+    if (in_plane_radius_m >= outer) {
+        return 0.0;
+    }
+    const double t = (outer - in_plane_radius_m) / settings_.rim_blend_m;
+    return t * t * (3.0 - 2.0 * t);  // smoothstep
+}
+
+ContactSurfaceOptimiser::Evaluation ContactSurfaceOptimiser::evaluate(
+    const PlatformDofs& dofs, const PlatformPose& pose) const noexcept {
+    Evaluation e;
+    const Eigen::Vector3d normal = pose.plateNormal();
+    for (int i = 0; i < target_count_; ++i) {
+        const Target& t = targets_[static_cast<std::size_t>(i)];
+        const Eigen::Vector3d rel = t.point_m - pose.position_m;
+        const double d = normal.dot(rel);
+        const double weight = rimWeight((rel - d * normal).norm());
+        if (t.contact) {
+            const double r = t.sqrt_weight * weight * d;
+            e.objective += r * r;
+            e.contact_sq_sum += r * r;
+            e.contact_weight += t.sqrt_weight * t.sqrt_weight * weight * weight;
+        } else if (d < 0.0 && weight > 0.0) {
+            const double r = t.sqrt_weight * weight * d;
+            e.objective += r * r;
+            e.overlap_m = std::max(e.overlap_m, -d);
+        }
+    }
+    const Eigen::Vector3d smooth = scaled(dofs) - scaled(warm_start_);
+    e.objective += lambda_ * smooth.squaredNorm();
+    return e;
+}
+
+TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surface) noexcept {
+    SolveReport report;
+    report.input = checkContactSurface(surface, settings_);
+    if (!report.input.ok()) {
+        report.outcome = SolveOutcome::kRejectedInput;
+        return finish(kinematics_.retractPose(), report);
+    }
+
+    double total_weight = 0.0;
+    double contact_weight = 0.0;
+    for (const msgs::ContactSample& s : surface.samples) {
+        total_weight += s.weight;
+        contact_weight += s.signed_distance_m < 0.0 ? s.weight : 0.0;
+    }
+    if (!(contact_weight > 0.0)) {
+        report.outcome = SolveOutcome::kRetractedNoContact;
+        report.converged = true;
+        return finish(kinematics_.retractPose(), report);
+    }
+    target_count_ = 0;
+    Eigen::Vector3d contact_centroid = Eigen::Vector3d::Zero();
+    Eigen::Vector3d contact_normal = Eigen::Vector3d::Zero();
+    for (const msgs::ContactSample& s : surface.samples) {
+        Target& t = targets_[static_cast<std::size_t>(target_count_++)];
+        const Eigen::Vector3d p(s.p_device_m[0], s.p_device_m[1], s.p_device_m[2]);
+        const Eigen::Vector3d n(s.normal_device[0], s.normal_device[1], s.normal_device[2]);
+        t.contact = s.signed_distance_m < 0.0;
+        t.point_m = t.contact ? Eigen::Vector3d(p - s.signed_distance_m * n) : p;
+        const double eta = t.contact ? 1.0 : settings_.non_contact_weight;
+        t.sqrt_weight = std::sqrt(eta * s.weight / total_weight);
+        if (t.contact) {
+            contact_centroid += s.weight * t.point_m;
+            contact_normal += s.weight * n;
+        }
+    }
+    report.outcome = SolveOutcome::kMatched;
+
+    // A new contact starts from the plane through the contact centroid with the average
+    // normal (the geometric baseline) when that plane is reachable: fewer iterations. A
+    // projected start would sit exactly on a bound, where backtracking stalls; the retract
+    // pose is the better start then.
+    PlatformDofs dofs = kinematics_.projectToWorkspace(warm_start_);
+    ConstraintValues values{};
+    PlatformPose pose;
+    if (!previous_matched_ && contact_normal.norm() > 1e-12) {
+        const PlatformDofs plane =
+            poseForPlane(kinematics_, contact_normal, contact_centroid / contact_weight);
+        if (kinematics_.constraints(plane, values) && ThimbleKinematics::feasible(values)) {
+            dofs = plane;
+        }
+    }
+    if (!kinematics_.constraints(dofs, values, &pose) || !ThimbleKinematics::feasible(values)) {
+        dofs = kinematics_.retractPose();
+        (void)kinematics_.constraints(dofs, values, &pose);
+    }
+    Evaluation current = evaluate(dofs, pose);
+    lambda_ = previous_matched_ ? settings_.smoothness_weight : 0.0;
+
+    for (report.iterations = 0; report.iterations < settings_.max_iterations;) {
+        ++report.iterations;
+        const Eigen::Vector3d z = scaled(dofs);
+        std::array<PlatformPose, 3> shifted_pose;
+        Matrix14x3 G;
+        for (int k = 0; k < 3; ++k) {
+            Eigen::Vector3d zk = z;
+            zk(k) += kDifferenceStepM;
+            ConstraintValues shifted{};
+            if (!kinematics_.constraints(unscaled(zk), shifted,
+                                         &shifted_pose[static_cast<std::size_t>(k)], &pose)) {
+                shifted_pose[static_cast<std::size_t>(k)] = pose;  // at the assembly limit
+                shifted = values;
+            }
+            for (int j = 0; j < kConstraintCount; ++j) {
+                const auto jj = static_cast<std::size_t>(j);
+                G(j, k) = (shifted[jj] - values[jj]) / kDifferenceStepM;
+            }
+        }
+
+        // Gauss-Newton normal equations, accumulated per sample (no residual storage).
+        // kDamping keeps H definite with fewer than three independent contact points.
+        Eigen::Matrix3d H = (lambda_ + kDamping) * Eigen::Matrix3d::Identity();
+        Eigen::Vector3d g = lambda_ * (z - scaled(warm_start_));
+        const Eigen::Vector3d normal = pose.plateNormal();
+        for (int i = 0; i < target_count_; ++i) {
+            const Target& t = targets_[static_cast<std::size_t>(i)];
+            const Eigen::Vector3d rel = t.point_m - pose.position_m;
+            const double d = normal.dot(rel);
+            const double weight = t.sqrt_weight * rimWeight((rel - d * normal).norm());
+            if (weight == 0.0 || (!t.contact && d >= 0.0)) {
+                continue;
+            }
+            Eigen::Vector3d row;
+            for (int k = 0; k < 3; ++k) {
+                const PlatformPose& pk = shifted_pose[static_cast<std::size_t>(k)];
+                row(k) = weight * (pk.plateNormal().dot(t.point_m - pk.position_m) - d) /
+                         kDifferenceStepM;
+            }
+            H.noalias() += row * row.transpose();
+            g += row * (weight * d);
+        }
+
+        const Eigen::Vector3d step = solveStepQp(H, g, G, values);
+        const double slope = g.dot(step);
+        const double predicted = -(slope + 0.5 * step.dot(H * step));
+        bool accepted = false;
+        double alpha = 1.0;
+        for (int halving = 0; halving < kLineSearchMaxHalvings; ++halving, alpha *= 0.5) {
+            const PlatformDofs candidate = unscaled(z + alpha * step);
+            ConstraintValues candidate_values{};
+            PlatformPose candidate_pose;
+            if (!kinematics_.constraints(candidate, candidate_values, &candidate_pose, &pose) ||
+                !ThimbleKinematics::feasible(candidate_values)) {
+                continue;
+            }
+            const Evaluation e = evaluate(candidate, candidate_pose);
+            if (e.objective <= current.objective + 1e-4 * alpha * std::min(slope, 0.0)) {
+                dofs = candidate;
+                values = candidate_values;
+                pose = candidate_pose;
+                current = e;
+                accepted = true;
+                break;
+            }
+        }
+        if (!accepted) {
+            // Nothing feasible lowers E along this step: stationary up to the model's accuracy.
+            report.converged = predicted <= 1e-12 * (1.0 + current.objective) ||
+                               step.norm() < settings_.step_tolerance_m;
+            break;
+        }
+        if (alpha * step.norm() < settings_.step_tolerance_m) {
+            report.converged = true;
+            break;
+        }
+    }
+
+    report.objective = current.objective;
+    report.contact_rms_m = current.contact_weight > 0.0
+                               ? std::sqrt(current.contact_sq_sum / current.contact_weight)
+                               : 0.0;
+    report.non_contact_overlap_m = current.overlap_m;
+    for (int j = 0; j < kConstraintCount; ++j) {
+        if (values[static_cast<std::size_t>(j)] < kActiveTolerance) {
+            report.active_constraints |= 1U << j;
+        }
+    }
+    report.clamped = report.active_constraints != 0;
+    report.poor_match = report.contact_rms_m > settings_.match_tolerance_m;
+    return finish(dofs, report);
+}
+
+TactileCommand ContactSurfaceOptimiser::finish(const PlatformDofs& dofs,
+                                               SolveReport report) noexcept {
+    TactileCommand command;
+    const InverseResult ik = kinematics_.inverse(dofs);
+    // Every path above ends on a feasible pose; the retract pose is the fallback if the
+    // geometry ever says otherwise.
+    const InverseResult& safe = ik.ok() ? ik : kinematics_.inverse(kinematics_.retractPose());
+    command.dofs = ik.ok() ? dofs : kinematics_.retractPose();
+    command.servo_rad = safe.servo_rad;
+    command.pose = safe.pose;
+    command.report = report;
+    warm_start_ = command.dofs;
+    previous_matched_ = report.outcome == SolveOutcome::kMatched && ik.ok();
+    return command;
+}
+
+}  // namespace haptic::tactile

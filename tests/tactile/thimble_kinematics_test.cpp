@@ -1,0 +1,161 @@
+#include "haptic/tactile/thimble_kinematics.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "allocation_counter.hpp"
+#include "haptic/config/device.hpp"
+
+namespace haptic::tactile {
+namespace {
+
+config::ThimbleConfig shippedThimble() {
+    return config::loadDeviceConfig(HAPTIC_THIMBLE_CONFIG).thimble();
+}
+
+class ThimbleKinematicsTest : public ::testing::Test {
+  protected:
+    ThimbleKinematics sut{shippedThimble()};
+
+    // Uniform in height and in the tilt disc, kept only when inside the workspace.
+    PlatformDofs randomReachablePose(std::mt19937_64& rng) const {
+        const auto& ws = sut.workspace();
+        std::uniform_real_distribution<double> height(ws.min_height_m, ws.max_height_m);
+        std::uniform_real_distribution<double> unit(-1.0, 1.0);
+        const double max_tilt = sut.config().max_tilt_rad;
+        for (;;) {
+            const double tx = unit(rng);
+            const double ty = unit(rng);
+            if (tx * tx + ty * ty > 1.0) {
+                continue;
+            }
+            const PlatformDofs dofs{height(rng), tx * max_tilt, ty * max_tilt};
+            if (sut.inverse(dofs).ok()) {
+                return dofs;
+            }
+        }
+    }
+};
+
+TEST_F(ThimbleKinematicsTest, InverseThenForwardRecoversTenThousandRandomPoses) {
+    std::mt19937_64 rng(20261123);
+    double worst_dofs = 0.0;
+    double worst_position_m = 0.0;
+    for (int i = 0; i < 10000; ++i) {
+        const PlatformDofs dofs = randomReachablePose(rng);
+        const InverseResult ik = sut.inverse(dofs);
+        ASSERT_TRUE(ik.ok()) << toString(ik.error);
+        const ForwardResult fk = sut.forward(ik.servo_rad);
+        ASSERT_TRUE(fk.ok()) << toString(fk.error) << " at pose " << i;
+        worst_dofs = std::max({worst_dofs, std::fabs(fk.dofs.height_m - dofs.height_m),
+                               std::fabs(fk.dofs.tilt_x_rad - dofs.tilt_x_rad),
+                               std::fabs(fk.dofs.tilt_y_rad - dofs.tilt_y_rad)});
+        worst_position_m =
+            std::max(worst_position_m, (fk.pose.position_m - ik.pose.position_m).norm());
+    }
+    EXPECT_LT(worst_dofs, 1e-9);
+    EXPECT_LT(worst_position_m, 1e-9);
+}
+
+TEST_F(ThimbleKinematicsTest, EverySphericalJointStaysInItsLegPlaneAndLinksKeepTheirLength) {
+    std::mt19937_64 rng(7);
+    const auto& g = sut.config().geometry;
+    for (int n = 0; n < 200; ++n) {
+        const InverseResult ik = sut.inverse(randomReachablePose(rng));
+        ASSERT_TRUE(ik.ok());
+        for (std::size_t i = 0; i < 3; ++i) {
+            const double gamma = g.leg_angles_rad[i];
+            const Eigen::Vector3d e(std::cos(gamma), std::sin(gamma), 0.0);
+            const Eigen::Vector3d axis = Eigen::Vector3d::UnitZ().cross(e);
+            const Eigen::Vector3d joint =
+                ik.pose.position_m + ik.pose.rotation * (g.platform_radius_m * e);
+            const Eigen::Vector3d elbow =
+                g.base_radius_m * e +
+                g.crank_length_m * (std::cos(ik.servo_rad[i]) * e +
+                                    std::sin(ik.servo_rad[i]) * Eigen::Vector3d::UnitZ());
+            EXPECT_NEAR(axis.dot(joint), 0.0, 1e-12);
+            EXPECT_NEAR((joint - elbow).norm(), g.link_length_m, 1e-12);
+        }
+    }
+}
+
+TEST_F(ThimbleKinematicsTest, SymmetricLayoutHasNoParasiticMotionWithoutTilt) {
+    PlatformPose pose;
+    ASSERT_EQ(sut.platformPose({0.02, 0.0, 0.0}, pose), KinematicsError::kNone);
+    EXPECT_NEAR(pose.position_m.x(), 0.0, 1e-15);
+    EXPECT_NEAR(pose.position_m.y(), 0.0, 1e-15);
+    EXPECT_NEAR(pose.yaw_rad, 0.0, 1e-15);
+    // A tilt moves the centre sideways (the parasitic motion of 3-RRS/3-RPS platforms).
+    ASSERT_EQ(sut.platformPose({0.02, 0.3, 0.0}, pose), KinematicsError::kNone);
+    EXPECT_GT(std::hypot(pose.position_m.x(), pose.position_m.y()), 1e-5);
+    EXPECT_NEAR(std::acos(-pose.plateNormal().z()), 0.3, 1e-12);
+}
+
+TEST_F(ThimbleKinematicsTest, WorkspaceMatchesTheShippedAssumptions) {
+    const auto& ws = sut.workspace();
+    const auto& calib = sut.config().finger_calibration;
+    EXPECT_DOUBLE_EQ(ws.min_height_m, calib.contact_height_m - calib.max_indentation_m);
+    EXPECT_GT(ws.max_height_m, calib.contact_height_m);  // the retract pose clears the pad
+    const TiltReach reach = sut.tiltReach();
+    EXPECT_GT(reach.max_tilt_rad, 0.0);
+    EXPECT_LE(reach.max_tilt_rad, sut.config().max_tilt_rad);
+    const double h = reach.best_height_m;
+    for (int d = 0; d < 8; ++d) {
+        const double a = 2.0 * 3.14159265358979323846 * (9 * d) / 72.0;  // sampled directions
+        EXPECT_TRUE(
+            sut.inverse({h, reach.max_tilt_rad * std::cos(a), reach.max_tilt_rad * std::sin(a)})
+                .ok());
+    }
+    EXPECT_TRUE(sut.inverse(sut.retractPose()).ok());
+    EXPECT_FALSE(sut.inverse({ws.max_height_m + 1e-4, 0.0, 0.0}).ok());
+}
+
+TEST_F(ThimbleKinematicsTest, PosesOutsideTheWorkspaceReportWhy) {
+    const double h = sut.centrePose().height_m;
+    EXPECT_EQ(sut.inverse({h, sut.config().max_tilt_rad + 0.01, 0.0}).error,
+              KinematicsError::kTiltLimit);
+    EXPECT_EQ(sut.inverse({sut.minHeightM() - 1e-4, 0.0, 0.0}).error,
+              KinematicsError::kIndentationLimit);
+    const InverseResult far = sut.inverse({0.2, 0.0, 0.0});
+    EXPECT_EQ(far.error, KinematicsError::kLegUnreachable);
+    EXPECT_EQ(far.leg, 0);
+    EXPECT_EQ(sut.inverse({std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0}).error,
+              KinematicsError::kNonFinite);
+    // Without the workspace check the same reachable-but-forbidden pose still has angles.
+    EXPECT_TRUE(sut.inverse({sut.minHeightM() - 1e-4, 0.0, 0.0}, false).ok());
+}
+
+TEST_F(ThimbleKinematicsTest, ForwardRejectsNonFiniteAndUnassemblableAngles) {
+    EXPECT_EQ(sut.forward({std::numeric_limits<double>::infinity(), 0.0, 0.0}).error,
+              KinematicsError::kNonFinite);
+    // All cranks pointing at the base centre: no platform pose closes the legs.
+    EXPECT_EQ(sut.forward({3.0, 3.0, 3.0}).error, KinematicsError::kForwardNotConverged);
+}
+
+TEST_F(ThimbleKinematicsTest, ProjectionLandsInsideTheWorkspace) {
+    for (const PlatformDofs wanted : {PlatformDofs{0.010, 0.0, 0.0}, PlatformDofs{0.018, 0.9, 0.2},
+                                      PlatformDofs{0.030, -0.3, 0.4}}) {
+        const PlatformDofs projected = sut.projectToWorkspace(wanted);
+        EXPECT_TRUE(sut.inverse(projected).ok());
+    }
+    const PlatformDofs inside{0.02, 0.1, 0.0};
+    const PlatformDofs same = sut.projectToWorkspace(inside);
+    EXPECT_EQ(same.height_m, inside.height_m);
+    EXPECT_EQ(same.tilt_x_rad, inside.tilt_x_rad);
+}
+
+TEST_F(ThimbleKinematicsTest, InverseAndForwardDoNotAllocate) {
+    const PlatformDofs dofs{0.019, 0.1, -0.05};
+    testing::ScopedAllocationCounter counter;
+    const InverseResult ik = sut.inverse(dofs);
+    const ForwardResult fk = sut.forward(ik.servo_rad, sut.centrePose());
+    EXPECT_EQ(counter.allocations(), 0U);
+    EXPECT_TRUE(fk.ok());
+}
+
+}  // namespace
+}  // namespace haptic::tactile
