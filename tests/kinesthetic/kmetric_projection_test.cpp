@@ -28,6 +28,12 @@ ConfigVector bruteForceProjection(const Eigen::MatrixXd& K, const Eigen::VectorX
         if (static_cast<int>(set.size()) > n) {
             continue;
         }
+        if (set.empty()) {
+            if (((C.transpose() * y0 - d).array() >= -1e-9).all()) {
+                return y0;  // already feasible: zero cost, nothing can beat it
+            }
+            continue;
+        }
         Eigen::MatrixXd Cs(n, set.size());
         Eigen::VectorXd ds(set.size());
         for (std::size_t i = 0; i < set.size(); ++i) {
