@@ -14,10 +14,14 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// Done when (partly met, see README): with the passivity controller off the device generates
-// net energy over pumping cycles; with it on it must generate far less. The target "<= 0" is
-// NOT reached yet: the zero-order-hold prediction error together with the 500 N/s rate limit
-// leaves a residual of 2-6 % of the uncontrolled energy here.
+// Done when (partly met): with the passivity controller on, the net energy the device
+// generates over pumping cycles is <= 0; with it off, it is > 0. Closed loops inside the wall,
+// the user circling in the direction that the non-conservative field (§5.7.2, §6.9) feeds;
+// the port has the exoskeleton's 500 N/s rate limit. Measured: with the controller on the net
+// is <= 0 (to rounding) in 10 of the 12 strategy/angle cases of the study; naive at 60 deg and
+// anisotropic at 30 deg keep 0.5 % and 1 % of the uncontrolled energy, lost in one-tick
+// velocity reversals at first contact that the controller cannot predict. The bound below is
+// what is actually guaranteed today; see README "Kinesthetic rendering".
 TEST(PassivityController, StopsEnergyPumpingInsideTheWall) {
     for (const auto method :
          {RenderingMethod::kNaive, RenderingMethod::kSubspace, RenderingMethod::kLinearizedSubspace,
@@ -32,8 +36,9 @@ TEST(PassivityController, StopsEnergyPumpingInsideTheWall) {
                 study::runEnergyPumping(pumping, method, RhoMode::kClosedForm, 0.0, true);
             EXPECT_GT(off.generated_energy_j, 1e-4)
                 << static_cast<int>(method) << " beta " << beta_deg;
-            EXPECT_LT(on.generated_energy_j, 0.1 * off.generated_energy_j)
+            EXPECT_LT(on.generated_energy_j, 0.02 * off.generated_energy_j)
                 << static_cast<int>(method) << " beta " << beta_deg;
+            EXPECT_GT(on.max_force_n, 0.5 * off.max_force_n);
         }
     }
 }

@@ -10,8 +10,9 @@ namespace {
 constexpr double kPredictionMargin = 1.0;
 }  // namespace
 
-PassivityController::PassivityController(double period_s, double max_damping) noexcept
-    : period_s_(period_s), max_damping_(max_damping) {}
+PassivityController::PassivityController(double period_s, double max_damping,
+                                         double max_force_rate) noexcept
+    : period_s_(period_s), max_damping_(max_damping), max_rate_(max_force_rate) {}
 
 void PassivityController::reset() noexcept {
     energy_ = 0.0;
@@ -37,23 +38,39 @@ double PassivityController::correct(double u_desired) const noexcept {
     if (!enabled_ || v == 0.0) {
         return u_desired;
     }
-    double u = u_desired;
-    // The motion over the next period is not known yet; budget for up to twice the last one
-    // when the force pushes along it (zero-order hold, the velocity changes within a period).
-    double predicted =
-        energy_ - u * v * period_s_ - kPredictionMargin * std::max(0.0, u * v) * period_s_;
-    if (predicted >= 0.0) {
-        return u;
-    }
-    // First stop pushing along the motion beyond what the energy reserve pays for...
-    if (u * v > 0.0) {
-        u = energy_ > 0.0 ? energy_ / ((1.0 + kPredictionMargin) * v * period_s_) : 0.0;
-        predicted = energy_ - (1.0 + kPredictionMargin) * u * v * period_s_;
-    }
-    // ...then damp out the remaining deficit (a damper alone cannot, once b hits its cap).
+    const double speed = std::abs(v);
+    const double ramp = std::isfinite(max_rate_) ? 0.5 * speed / max_rate_ : 0.0;  // * u^2
+    // A force pushing along the motion spends the reserve E; a force resisting it refills E
+    // but may push along the motion after the next reversal, when it can only ramp down at the
+    // rate limit (costing about |v| u^2 / (2 rate)). Cap |u| so that the reserve, after the
+    // next period (budgeted at (1 + margin) times the last displacement when spending), still
+    // pays for that ramp.
+    const auto cap = [&](double u) {
+        double allowed = std::numeric_limits<double>::infinity();
+        if (u * v > 0.0) {
+            const double spend = (1.0 + kPredictionMargin) * speed * period_s_;  // * |u|
+            if (energy_ <= 0.0) {
+                allowed = 0.0;
+            } else if (ramp > 0.0) {
+                allowed = (-spend + std::sqrt(spend * spend + 4.0 * ramp * energy_)) / (2.0 * ramp);
+            } else {
+                allowed = energy_ / spend;
+            }
+        } else if (ramp > 0.0) {
+            const double gain = speed * period_s_;  // * |u|
+            const double discriminant = gain * gain + 4.0 * ramp * energy_;
+            allowed = discriminant > 0.0 ? (gain + std::sqrt(discriminant)) / (2.0 * ramp)
+                                         : gain / (2.0 * ramp);
+        }
+        return std::abs(u) > allowed ? std::copysign(allowed, u) : u;
+    };
+    double u = cap(u_desired);
+    // Whatever deficit remains is damped out, b = -(E - u v T) / (T v^2) up to its cap; the
+    // damped force resists the motion, and is capped like any other.
+    const double predicted = energy_ - u * v * period_s_;
     if (predicted < 0.0) {
         const double damping = std::min(-predicted / (period_s_ * v * v), max_damping_);
-        u -= damping * v;
+        u = cap(u - damping * v);
     }
     return u;
 }
@@ -103,7 +120,7 @@ bool positiveFinite(double value) {
 
 ActuatorPortGuard::ActuatorPortGuard(const PortGuardConfig& config)
     : config_(config),
-      passivity_(config.period_s, config.max_passivity_damping),
+      passivity_(config.period_s, config.max_passivity_damping, config.max_force_rate_n_per_s),
       fade_(config.period_s, config.fade_time_s) {
     if (!positiveFinite(config.period_s) || !positiveFinite(config.max_force_n) ||
         !positiveFinite(config.max_force_rate_n_per_s) || !positiveFinite(config.fade_time_s) ||

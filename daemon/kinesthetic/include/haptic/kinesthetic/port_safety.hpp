@@ -6,20 +6,26 @@
 // Everything is noexcept, allocation- and lock-free, O(1).
 
 #include <cstdint>
+#include <limits>
 
 namespace haptic::kinesthetic {
 
 // Energy bookkeeping of the port, sign convention of §5.7.3: u acts along increasing ell; the
 // energy absorbed by the rendered environment is E += -u_applied(k-1) (ell_k - ell_{k-1})
 // (zero-order hold: the force applied during a period times the motion over that period).
-// E < 0 means the rendering has given the user net energy. When the prediction E - u v T for
-// the next period is negative the controller (1) cuts the part of u that pushes along the
-// motion v down to what the reserve E can pay for, and (2) adds the damping that brings the
-// prediction back to zero, b = -(E - u v T) / (T v^2), capped at max_damping, u <- u - b v.
-// Step (1) matters at low speed, where a capped damper cannot dissipate a deficit in time.
+// E < 0 means the rendering has given the user net energy. Two things keep E >= 0 although
+// the motion over the next period is unknown and the force can only ramp at the rate limit:
+// (1) |u| is capped so that the reserve E, after the next period, still pays for ramping u to
+// zero at the rate limit should the motion reverse (|v| u^2 / (2 rate)); a force along the
+// motion is budgeted at twice the last displacement, one against it earns its next period;
+// (2) a remaining deficit is damped out, b = -(E - u v T) / (T v^2) up to max_damping.
+// The cost is the classic one of passivity control: a wall that has not stored energy yet
+// (first contact, fast reversals) renders less force for a few milliseconds.
 class PassivityController {
   public:
-    PassivityController(double period_s, double max_damping) noexcept;
+    // max_force_rate: the slew limit applied after this controller (infinity if none).
+    PassivityController(double period_s, double max_damping,
+                        double max_force_rate = std::numeric_limits<double>::infinity()) noexcept;
 
     // Start of a tick: the measured actuator coordinate. Returns the velocity estimate.
     double observe(double ell) noexcept;
@@ -38,6 +44,7 @@ class PassivityController {
   private:
     double period_s_;
     double max_damping_;
+    double max_rate_;
     double energy_{0.0};
     double ell_previous_{0.0};
     double velocity_{0.0};
