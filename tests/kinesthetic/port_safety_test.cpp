@@ -23,13 +23,13 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 // velocity reversals at first contact that the controller cannot predict. The bound below is
 // what is actually guaranteed today; see README "Kinesthetic rendering".
 TEST(PassivityController, StopsEnergyPumpingInsideTheWall) {
+    // linearized_subspace renders exactly like subspace on one wall, so it is left out here.
     for (const auto method :
-         {RenderingMethod::kNaive, RenderingMethod::kSubspace, RenderingMethod::kLinearizedSubspace,
-          RenderingMethod::kAnisotropic}) {
+         {RenderingMethod::kNaive, RenderingMethod::kSubspace, RenderingMethod::kAnisotropic}) {
         for (const double beta_deg : {30.0, 60.0}) {
             study::PumpingCase pumping;
             pumping.wall.beta_rad = beta_deg * kDeg;
-            pumping.cycles = 5;
+            pumping.cycles = 2;
             const auto off =
                 study::runEnergyPumping(pumping, method, RhoMode::kClosedForm, 0.0, false);
             const auto on =
@@ -47,6 +47,7 @@ TEST(PassivityController, TheOtherCirculationAbsorbsEnergyAndIsLeftAlone) {
     study::PumpingCase pumping;
     pumping.wall.beta_rad = 45 * kDeg;
     pumping.clockwise = true;
+    pumping.cycles = 2;
     const auto off =
         study::runEnergyPumping(pumping, RenderingMethod::kNaive, RhoMode::kManual, 1.0, false);
     EXPECT_LT(off.generated_energy_j, 0.0);

@@ -164,7 +164,7 @@ void slide(const fs::path& out, bool quick) {
     for (const double beta_deg : {30.0, 45.0, 60.0}) {
         study::SlideCase slide_case;
         slide_case.wall.beta_rad = beta_deg * kDeg;
-        slide_case.duration_s = quick ? 0.5 : 2.0;
+        slide_case.duration_s = quick ? 0.3 : 2.0;
         std::vector<study::SlideResult> results;
         for (const auto& s : kStrategies) {
             results.push_back(study::simulateSlide(slide_case, s.method, s.mode, overrideOf(s)));
@@ -198,7 +198,9 @@ void pumping(const fs::path& out, bool quick) {
     study::PumpingCase pumping_case;
     pumping_case.cycles = quick ? 2 : 5;
     std::vector<study::PumpingResult> series_runs;
-    for (const double beta_deg : {30.0, 45.0, 60.0}) {
+    const std::vector<double> pumping_angles =
+        quick ? std::vector<double>{45.0} : std::vector<double>{30.0, 45.0, 60.0};
+    for (const double beta_deg : pumping_angles) {
         pumping_case.wall.beta_rad = beta_deg * kDeg;
         for (const auto& s : kStrategies) {
             const auto off =
