@@ -17,10 +17,11 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 // Done when (partly met): with the passivity controller on, the net energy the device
 // generates over pumping cycles is <= 0; with it off, it is > 0. Closed loops inside the wall,
 // the user circling in the direction that the non-conservative field (§5.7.2, §6.9) feeds;
-// the port has the exoskeleton's 500 N/s rate limit. Measured: with the controller on the net
-// is <= 0 (to rounding) in 10 of the 12 strategy/angle cases of the study; naive at 60 deg and
-// anisotropic at 30 deg keep 0.5 % and 1 % of the uncontrolled energy, lost in one-tick
-// velocity reversals at first contact that the controller cannot predict. The bound below is
+// the port has the exoskeleton's 500 N/s rate limit. Measured (5 loops, README): with the
+// controller on the net is <= 0 (to rounding) in 6 of the 9 strategy/angle cases of the
+// study; naive at 60 deg and anisotropic at 30 and 45 deg keep 0.3-1 % of the uncontrolled
+// energy, lost in one-tick velocity reversals near first contact that the controller cannot
+// predict. The bound below is
 // what is actually guaranteed today; see README "Kinesthetic rendering".
 TEST(PassivityController, StopsEnergyPumpingInsideTheWall) {
     // linearized_subspace renders exactly like subspace on one wall, so it is left out here.
