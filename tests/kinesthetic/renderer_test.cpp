@@ -128,6 +128,27 @@ TEST(RhoSearch, SingleConstraintArgminIsTheClosedForm) {
     }
 }
 
+TEST(RhoSearch, DegenerateInputFallsBackToNaiveWithAReport) {
+    const Eigen::Vector2d a = study::actuatedDirection(30 * kDeg).col(0);
+    const ConfigMatrix K_u = ConfigMatrix::Identity(2, 2) * 300.0;
+    ConfigVector normal(2);
+    normal << 0.0, std::numeric_limits<double>::quiet_NaN();
+    auto search = searchOptimalRho(projectorOn(a), 1000.0, K_u, normal);
+    EXPECT_FALSE(search.valid);
+    EXPECT_EQ(search.rho, 1.0);
+    normal << 0.0, 0.0;  // zero normal
+    EXPECT_FALSE(searchOptimalRho(projectorOn(a), 1000.0, K_u, normal).valid);
+    normal << 0.0, 1.0;
+    EXPECT_FALSE(searchOptimalRho(projectorOn(a), 0.0, K_u, normal).valid);  // zero k_a
+    EXPECT_FALSE(searchOptimalRho(projectorOn(a), 1000.0, ConfigMatrix::Zero(2, 2), normal).valid);
+    EXPECT_TRUE(std::isnan(optimalRhoIsotropic(0.0, 300.0)));
+    // Huge stiffness: bounded search still lands on the closed form.
+    search = searchOptimalRho(projectorOn(a), 1e9, K_u, normal);
+    ASSERT_TRUE(search.valid);
+    EXPECT_NEAR(std::log(search.rho), std::log(optimalRhoIsotropic(1e9, 300.0)), 1e-5);
+    EXPECT_EQ(search.evaluations, 2 + 48);
+}
+
 TEST(RhoSearch, AnisotropicUserStiffnessMinimisesTheNumericEquilibriumMismatch) {
     // Stiffer across the wall than along it, and coupled: no §6.6 closed form applies.
     ConfigMatrix K_u(2, 2);
