@@ -1,0 +1,388 @@
+#include "haptic/kinesthetic/renderer.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "haptic/kinesthetic/anisotropic.hpp"
+
+namespace haptic::kinesthetic {
+
+namespace {
+
+// Below this share of a constraint normal in range(B) the actuators cannot push it out.
+constexpr double kActuatedShareEpsilon = 1e-9;
+
+bool isSymmetricPositiveDefinite(const ConfigMatrix& M) noexcept {
+    if (!M.allFinite() ||
+        (M - M.transpose()).cwiseAbs().maxCoeff() > 1e-9 * (1.0 + M.cwiseAbs().maxCoeff())) {
+        return false;
+    }
+    const Eigen::LDLT<ConfigMatrix> ldlt(M);
+    return ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0.0;
+}
+
+RenderFault faultOf(SolveStatus status) noexcept {
+    switch (status) {
+        case SolveStatus::kOptimal:
+            return RenderFault::kNone;
+        case SolveStatus::kIterationLimit:
+            return RenderFault::kSolverIterationLimit;
+        case SolveStatus::kInfeasible:
+            return RenderFault::kInfeasibleConstraints;
+        case SolveStatus::kInvalidInput:
+            return RenderFault::kInvalidConstraints;
+    }
+    return RenderFault::kInvalidConstraints;
+}
+
+}  // namespace
+
+const char* toString(RenderFault fault) noexcept {
+    switch (fault) {
+        case RenderFault::kNone:
+            return "none";
+        case RenderFault::kNonFiniteState:
+            return "device state has NaN/Inf or the wrong size";
+        case RenderFault::kInvalidConstraints:
+            return "constraints have NaN/Inf, the wrong size or too many entries";
+        case RenderFault::kSolverIterationLimit:
+            return "proxy solver hit its iteration bound";
+        case RenderFault::kInfeasibleConstraints:
+            return "constraints are infeasible";
+        case RenderFault::kNotRenderable:
+            return "required force has no actuated component";
+    }
+    return "unknown";
+}
+
+const char* KinestheticRenderer::validate(const DeviceModel& device,
+                                          const RenderParameters& p) noexcept {
+    const int n = device.dofs();
+    if (n < 1 || n > kMaxDofs || device.actuators() < 1 || device.actuators() > kMaxActuators ||
+        device.actuators() > n) {
+        return "device dimensions exceed the renderer's capacity";
+    }
+    if (!(p.tracking_stiffness > 0.0) || !std::isfinite(p.tracking_stiffness)) {
+        return "tracking_stiffness (k_a) must be finite and > 0";
+    }
+    if (!(p.user_stiffness > 0.0) || !std::isfinite(p.user_stiffness)) {
+        return "user_stiffness (k_u) must be finite and > 0";
+    }
+    if (p.user_stiffness_matrix.size() != 0 &&
+        (p.user_stiffness_matrix.rows() != n || p.user_stiffness_matrix.cols() != n ||
+         !isSymmetricPositiveDefinite(p.user_stiffness_matrix))) {
+        return "user_stiffness_matrix must be empty or a symmetric positive definite n x n";
+    }
+    if (p.rho_mode == RhoMode::kManual &&
+        (!(p.rho_override > 0.0) || !std::isfinite(p.rho_override))) {
+        return "rho_override must be finite and > 0";
+    }
+    if (!(p.actuator_damping >= 0.0) || !std::isfinite(p.actuator_damping)) {
+        return "actuator_damping must be finite and >= 0";
+    }
+    if (p.max_iterations < 1 || p.max_iterations > 1000) {
+        return "max_iterations must be in [1, 1000]";
+    }
+    if (p.rho_search_iterations < 1 || p.rho_search_iterations > 200) {
+        return "rho_search_iterations must be in [1, 200]";
+    }
+    if (!(p.nullspace_regularisation >= 0.0) || !std::isfinite(p.nullspace_regularisation)) {
+        return "nullspace_regularisation must be finite and >= 0";
+    }
+    return nullptr;
+}
+
+KinestheticRenderer::KinestheticRenderer(const DeviceModel& device,
+                                         const RenderParameters& parameters)
+    : device_(device), parameters_(parameters), projector_(parameters.max_iterations) {
+    if (const char* reason = validate(device, parameters)) {
+        throw std::invalid_argument(std::string("KinestheticRenderer: ") + reason);
+    }
+}
+
+const char* KinestheticRenderer::setParameters(const RenderParameters& parameters) noexcept {
+    if (const char* reason = validate(device_, parameters)) {
+        return reason;
+    }
+    parameters_ = parameters;
+    projector_ = KMetricProjector(parameters.max_iterations);
+    reset();
+    return nullptr;
+}
+
+void KinestheticRenderer::setMethod(RenderingMethod method) noexcept {
+    parameters_.method = method;
+    reset();
+}
+
+void KinestheticRenderer::clearOutput(const ConfigVector& q, RenderFault fault,
+                                      RenderOutput& out) noexcept {
+    const int n = device_.dofs();
+    out.actuator_force.setZero(device_.actuators());
+    if (q.size() == n && q.allFinite()) {
+        out.proxy = q;
+    } else {
+        out.proxy.setZero(n);
+    }
+    out.coupling_force.setZero(n);
+    out.rendered_force.setZero(n);
+    out.fault = fault;
+    out.iterations = 0;
+    out.active_constraints = 0;
+    out.in_contact = false;
+    out.solve_status = SolveStatus::kInvalidInput;
+    reset();
+}
+
+void KinestheticRenderer::tick(const ConfigVector& q, const ConfigVector& q_dot,
+                               std::span<const msgs::LinearConstraint> constraints,
+                               RenderOutput& out) noexcept {
+    const int n = device_.dofs();
+    if (constraints.size() > static_cast<std::size_t>(kMaxConstraintCount)) {
+        clearOutput(q, RenderFault::kInvalidConstraints, out);
+        return;
+    }
+    const int count = static_cast<int>(constraints.size());
+    C_scratch_.resize(n, count);
+    d_scratch_.resize(count);
+    for (int j = 0; j < count; ++j) {
+        const auto& constraint = constraints[static_cast<std::size_t>(j)];
+        for (int i = 0; i < n; ++i) {
+            C_scratch_(i, j) = constraint.a[static_cast<std::size_t>(i)];
+        }
+        d_scratch_[j] = constraint.b;
+    }
+    tick(q, q_dot, C_scratch_, d_scratch_, out);
+}
+
+void KinestheticRenderer::tick(const ConfigVector& q, const ConfigVector& q_dot,
+                               const ConstraintMatrix& C, const ConstraintVector& d,
+                               RenderOutput& out) noexcept {
+    const int n = device_.dofs();
+    if (q.size() != n || q_dot.size() != n || !q.allFinite() || !q_dot.allFinite()) {
+        clearOutput(q, RenderFault::kNonFiniteState, out);
+        return;
+    }
+    if ((C.cols() > 0 && C.rows() != n) || d.size() != C.cols() || !C.allFinite() ||
+        !d.allFinite()) {
+        clearOutput(q, RenderFault::kInvalidConstraints, out);
+        return;
+    }
+    device_.actuationMatrix(q, B_);
+    gram_.noalias() = B_.transpose() * B_;
+    const Eigen::LDLT<BoundedMatrix<kMaxActuators, kMaxActuators>> gram_ldlt(gram_);
+    if (!B_.allFinite() || gram_ldlt.info() != Eigen::Success ||
+        !(gram_ldlt.vectorD().minCoeff() > 1e-14 * (1.0 + gram_.diagonal().maxCoeff()))) {
+        clearOutput(q, RenderFault::kNotRenderable, out);
+        return;
+    }
+    P_a_.noalias() = B_ * gram_ldlt.solve(B_.transpose());
+
+    out.fault = RenderFault::kNone;
+    out.solve_status = SolveStatus::kOptimal;
+    out.iterations = 0;
+    out.rho = 1.0;
+    switch (parameters_.method) {
+        case RenderingMethod::kStandard:
+        case RenderingMethod::kNaive:
+            renderProxy(1.0, q, C, d, out);
+            break;
+        case RenderingMethod::kNullspace:
+            renderProxy(1.0, q, C, d, out);
+            redistributeInNullspace(q, out);
+            break;
+        case RenderingMethod::kAnisotropic:
+            renderProxy(chooseRho(C, d, q), q, C, d, out);
+            break;
+        case RenderingMethod::kSubspace:
+            renderSubspace(q, C, d, out);
+            break;
+        case RenderingMethod::kLinearizedSubspace:
+            renderLinearizedSubspace(q, C, d, out);
+            break;
+    }
+    if (parameters_.method != RenderingMethod::kSubspace &&
+        parameters_.method != RenderingMethod::kLinearizedSubspace) {
+        out.actuator_force = gram_ldlt.solve(B_.transpose() * out.coupling_force);
+    }
+    if (out.in_contact && parameters_.actuator_damping > 0.0) {
+        out.actuator_force.noalias() -= parameters_.actuator_damping * (B_.transpose() * q_dot);
+    }
+    if (!out.actuator_force.allFinite()) {
+        clearOutput(q, RenderFault::kNotRenderable, out);
+        return;
+    }
+    out.rendered_force.noalias() = B_ * out.actuator_force;
+}
+
+double KinestheticRenderer::chooseRho(const ConstraintMatrix& C, const ConstraintVector& d,
+                                      const ConfigVector& q) noexcept {
+    const double k_a = parameters_.tracking_stiffness;
+    switch (parameters_.rho_mode) {
+        case RhoMode::kManual:
+            return std::clamp(parameters_.rho_override, kMinRho, kMaxRho);
+        case RhoMode::kClosedForm:
+            return optimalRhoIsotropic(k_a, parameters_.user_stiffness);
+        case RhoMode::kNumericSearch:
+            break;
+    }
+    // The search is defined for one plane: use the most penetrated constraint.
+    int deepest = -1;
+    double depth = 0.0;
+    for (int j = 0; j < C.cols(); ++j) {
+        const double norm = C.col(j).norm();
+        if (norm > 0.0) {
+            const double penetration = (d[j] - C.col(j).dot(q)) / norm;
+            if (penetration > depth) {
+                depth = penetration;
+                deepest = j;
+            }
+        }
+    }
+    if (deepest < 0) {
+        return optimalRhoIsotropic(k_a, parameters_.user_stiffness);
+    }
+    const int n = device_.dofs();
+    ConfigMatrix K_u;
+    if (parameters_.user_stiffness_matrix.size() == 0) {
+        K_u = parameters_.user_stiffness * ConfigMatrix::Identity(n, n);
+    } else {
+        K_u = parameters_.user_stiffness_matrix;
+    }
+    const ConfigVector normal = C.col(deepest);
+    const RhoSearchResult search =
+        searchOptimalRho(P_a_, k_a, K_u, normal, parameters_.rho_search_iterations);
+    return search.valid ? search.rho : optimalRhoIsotropic(k_a, parameters_.user_stiffness);
+}
+
+void KinestheticRenderer::renderProxy(double rho, const ConfigVector& q, const ConstraintMatrix& C,
+                                      const ConstraintVector& d, RenderOutput& out) noexcept {
+    const int n = device_.dofs();
+    const double k_a = parameters_.tracking_stiffness;
+    out.rho = rho;
+    const ConfigMatrix K = k_a * (P_a_ + rho * (ConfigMatrix::Identity(n, n) - P_a_));
+    const ProjectionResult result = projector_.project(K, q, C, d, warm_start_, out.proxy);
+    warm_start_ = result.active;
+    out.solve_status = result.status;
+    out.fault = faultOf(result.status);
+    out.iterations = result.iterations;
+    out.active_constraints = result.active.size;
+    out.in_contact = result.active.size > 0;
+    out.coupling_force.noalias() = K * (out.proxy - q);
+}
+
+void KinestheticRenderer::redistributeInNullspace(const ConfigVector& q,
+                                                  RenderOutput& out) noexcept {
+    const int n = device_.dofs();
+    PointJacobian J;
+    device_.contactJacobian(q, J);
+    if (!out.in_contact || J.rows() >= n || !J.allFinite()) {
+        return;  // no joint torques without a contact force: nothing to redistribute
+    }
+    const BoundedMatrix<kMaxPointDim, kMaxPointDim> JJt = J * J.transpose();
+    const Eigen::LDLT<BoundedMatrix<kMaxPointDim, kMaxPointDim>> jj_ldlt(JJt);
+    if (jj_ldlt.info() != Eigen::Success ||
+        !(jj_ldlt.vectorD().minCoeff() > 1e-12 * (1.0 + JJt.diagonal().maxCoeff()))) {
+        return;  // singular finger pose: the contact force is undefined, keep naive
+    }
+    const ConfigMatrix identity = ConfigMatrix::Identity(n, n);
+    const ConfigMatrix N = identity - J.transpose() * jj_ldlt.solve(J);
+    const ConfigMatrix P_u = identity - P_a_;
+    const ConfigMatrix normal_matrix =
+        N * P_u * N + parameters_.nullspace_regularisation * identity;
+    const Eigen::LDLT<ConfigMatrix> ldlt(normal_matrix);
+    if (ldlt.info() != Eigen::Success) {
+        return;
+    }
+    const ConfigVector rhs = -(N * (P_u * out.coupling_force));
+    const ConfigVector lambda = ldlt.solve(rhs);
+    if (lambda.allFinite()) {
+        out.coupling_force.noalias() += N * lambda;
+    }
+}
+
+void KinestheticRenderer::renderSubspace(const ConfigVector& q, const ConstraintMatrix& C,
+                                         const ConstraintVector& d, RenderOutput& out) noexcept {
+    const int m = device_.actuators();
+    const int count = static_cast<int>(C.cols());
+    const double k_a = parameters_.tracking_stiffness;
+    out.rho = kMaxRho;
+    ConfigMatrix K_alpha = gram_ / k_a;
+    ConstraintMatrix C_alpha(m, count);
+    C_alpha.noalias() = B_.transpose() * C / k_a;
+    const double b_norm = std::sqrt(gram_.trace());
+    bool unrenderable = false;
+    for (int j = 0; j < count; ++j) {
+        // A normal (almost) outside range(B) cannot be pushed out by the actuators (§5.4).
+        if (C_alpha.col(j).norm() * k_a <= kActuatedShareEpsilon * b_norm * C.col(j).norm()) {
+            C_alpha.col(j).setZero();
+        }
+    }
+    ConstraintVector d_alpha(count);
+    d_alpha.noalias() = d - C.transpose() * q;
+    ConfigVector alpha;
+    const ConfigVector zero = ConfigVector::Zero(m);
+    const ProjectionResult result =
+        projector_.project(K_alpha, zero, C_alpha, d_alpha, warm_start_, alpha);
+    warm_start_ = result.active;
+    out.solve_status = result.status;
+    out.fault = faultOf(result.status);
+    unrenderable = result.status == SolveStatus::kInfeasible;
+    out.iterations = result.iterations;
+    out.active_constraints = result.active.size;
+    out.in_contact = result.active.size > 0;
+    out.actuator_force.resize(m);
+    for (int i = 0; i < m; ++i) {
+        const double limit = device_.actuatorLimits(i).max_force_n;
+        out.actuator_force[i] = std::clamp(alpha[i], -limit, limit);
+    }
+    if (unrenderable) {
+        out.fault = RenderFault::kNotRenderable;
+    }
+    out.proxy = q + B_ * out.actuator_force / k_a;
+    out.coupling_force.noalias() = B_ * out.actuator_force;
+}
+
+void KinestheticRenderer::renderLinearizedSubspace(const ConfigVector& q, const ConstraintMatrix& C,
+                                                   const ConstraintVector& d,
+                                                   RenderOutput& out) noexcept {
+    const int m = device_.actuators();
+    const double k_a = parameters_.tracking_stiffness;
+    out.rho = kMaxRho;
+    const Eigen::LDLT<BoundedMatrix<kMaxActuators, kMaxActuators>> gram_ldlt(gram_);
+    const double b_norm = std::sqrt(gram_.trace());
+    ActuatorVector alpha = ActuatorVector::Zero(m);
+    ConfigVector q_p = q;
+    int corrected = 0;
+    for (int j = 0; j < C.cols(); ++j) {
+        const double gap = C.col(j).dot(q_p) - d[j];
+        if (gap >= 0.0) {
+            continue;
+        }
+        ActuatorVector w = ActuatorVector::Zero(m);
+        w.noalias() = B_.transpose() * C.col(j);
+        if (w.norm() <= kActuatedShareEpsilon * b_norm * C.col(j).norm()) {
+            out.fault = RenderFault::kNotRenderable;
+            continue;
+        }
+        // Minimum-norm (in B^T B) alpha that brings q + B alpha / k_a onto constraint j.
+        const ActuatorVector direction = gram_ldlt.solve(w);
+        alpha.noalias() += (-gap * k_a / w.dot(direction)) * direction;
+        q_p = q + B_ * alpha / k_a;
+        ++corrected;
+    }
+    out.iterations = 1;
+    out.active_constraints = corrected;
+    out.in_contact = corrected > 0;
+    out.actuator_force.resize(m);
+    for (int i = 0; i < m; ++i) {
+        const double limit = device_.actuatorLimits(i).max_force_n;
+        out.actuator_force[i] = std::clamp(alpha[i], -limit, limit);
+    }
+    out.proxy = q + B_ * out.actuator_force / k_a;
+    out.coupling_force.noalias() = B_ * out.actuator_force;
+}
+
+}  // namespace haptic::kinesthetic

@@ -1,0 +1,74 @@
+#include <gtest/gtest.h>
+
+#include "allocation_counter.hpp"
+#include "haptic/config/device.hpp"
+#include "haptic/kinesthetic/anisotropic.hpp"
+#include "haptic/kinesthetic/port_safety.hpp"
+#include "haptic/kinesthetic/renderer.hpp"
+
+namespace haptic::kinesthetic {
+namespace {
+
+// The 1 kHz path: renderer tick (every method and rho mode, msgs constraints), rho search and
+// the port guard, on the exoskeleton with 4 active constraints, must not touch the heap.
+TEST(KinestheticAllocation, RenderingTickAndPortGuardAllocateNothing) {
+    const auto exo_config =
+        config::loadDeviceConfig(std::string(HAPTIC_CONFIG_DIR) + "/devices/exoskeleton.yaml");
+    const ExoskeletonDevice exo(exo_config.exoskeleton());
+    RenderParameters p;
+    p.tracking_stiffness = 2.0;
+    p.actuator_damping = 0.5;
+    KinestheticRenderer renderer(exo, p);
+    PortGuardConfig guard_config;
+    ActuatorPortGuard guard(guard_config);
+
+    std::array<msgs::LinearConstraint, 4> constraints{};
+    const double normals[4][3] = {{-1, 0, -0.2}, {-1, 0, -1}, {-1, -0.5, -0.3}, {-0.2, 0, -1}};
+    ConfigVector q(3);
+    q << 0.6, 0.9, 0.5;
+    for (std::size_t j = 0; j < 4; ++j) {
+        double dot = 0.0;
+        for (std::size_t i = 0; i < 3; ++i) {
+            constraints[j].a[i] = normals[j][i];
+            dot += normals[j][i] * q[static_cast<Eigen::Index>(i)];
+        }
+        constraints[j].b = dot + 0.02;  // all four violated
+    }
+    ConfigVector q_dot(3);
+    q_dot << 0.1, -0.2, 0.05;
+    RenderOutput out;
+    ActuatorVector ell;
+    const RhoMode modes[] = {RhoMode::kClosedForm, RhoMode::kNumericSearch, RhoMode::kManual};
+    const RenderingMethod methods[] = {
+        RenderingMethod::kStandard,           RenderingMethod::kNaive,
+        RenderingMethod::kNullspace,          RenderingMethod::kSubspace,
+        RenderingMethod::kLinearizedSubspace, RenderingMethod::kAnisotropic};
+    int ticks = 0;
+    std::uint64_t allocations = 0;
+    {
+        testing::ScopedAllocationCounter counter;
+        for (const auto mode : modes) {
+            RenderParameters changed = p;
+            changed.rho_mode = mode;
+            // setParameters is not on the loop but must not allocate either (run-time switch).
+            ASSERT_EQ(renderer.setParameters(changed), nullptr);
+            for (const auto method : methods) {
+                renderer.setMethod(method);
+                for (int k = 0; k < 60; ++k) {
+                    q[1] += (k % 2 == 0 ? 1e-4 : -1e-4);
+                    renderer.tick(q, q_dot, constraints, out);
+                    exo.actuatorCoordinates(q, ell);
+                    (void)guard.apply(out.actuator_force[0], ell[0], k % 20 != 0);
+                    ++ticks;
+                }
+            }
+        }
+        allocations = counter.allocations();
+    }
+    EXPECT_EQ(allocations, 0U);
+    EXPECT_EQ(ticks, 3 * 6 * 60);
+    EXPECT_TRUE(out.actuator_force.allFinite());
+}
+
+}  // namespace
+}  // namespace haptic::kinesthetic

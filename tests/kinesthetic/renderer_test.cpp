@@ -1,0 +1,392 @@
+#include "haptic/kinesthetic/renderer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+#include "haptic/config/device.hpp"
+#include "haptic/kinesthetic/anisotropic.hpp"
+#include "haptic/kinesthetic/study.hpp"
+
+namespace haptic::kinesthetic {
+namespace {
+
+using study::WallCase;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+constexpr RenderingMethod kAllMethods[] = {
+    RenderingMethod::kStandard,           RenderingMethod::kNaive,
+    RenderingMethod::kNullspace,          RenderingMethod::kSubspace,
+    RenderingMethod::kLinearizedSubspace, RenderingMethod::kAnisotropic};
+
+// Done when: at rho* the equilibrium force equals P_a F_full to 1e-9 relative, for at least 5
+// wall angles and 3 stiffness ratios. Both equilibria are solved numerically through the
+// renderer (fully actuated device with `standard` vs underactuated with `anisotropic`).
+TEST(AnisotropicRendering, BestMatchAtRhoStarForEveryWallAngleAndStiffnessRatio) {
+    for (const double ratio : {0.3, 1.0, 3.3}) {
+        for (const double beta_deg : {0.0, 15.0, 30.0, 45.0, 60.0, 75.0}) {
+            WallCase wall;
+            wall.beta_rad = beta_deg * kDeg;
+            wall.k_u = 300.0;
+            wall.k_a = ratio * wall.k_u;
+            const auto m =
+                study::measureWall(wall, RenderingMethod::kAnisotropic, RhoMode::kClosedForm, 0.0);
+            ASSERT_TRUE(m.converged);
+            EXPECT_NEAR(m.rho, wall.k_u / (wall.k_u + wall.k_a), 1e-15);
+            EXPECT_LE(m.ghost_force, 1e-9 * m.full_force)
+                << "beta " << beta_deg << " k_a/k_u " << ratio;
+            // Unavoidable residual |F_full| sin(beta) (§6.6).
+            EXPECT_NEAR(m.force_error, m.full_force * std::sin(wall.beta_rad), 1e-9 * m.full_force);
+        }
+    }
+}
+
+// Done when: naive and subspace rendering show the ghost force the closed forms predict.
+TEST(GhostForces, NaiveAndSubspaceMatchTheClosedForms) {
+    for (const double ratio : {0.5, 3.3, 10.0}) {
+        for (const double beta_deg : {10.0, 30.0, 50.0, 70.0}) {
+            WallCase wall;
+            wall.beta_rad = beta_deg * kDeg;
+            wall.k_a = ratio * wall.k_u;
+            const double c = std::cos(wall.beta_rad);
+            const auto naive_prediction =
+                predictSingleWall(wall.k_a, wall.k_u, wall.depth_u_m, c, 1.0);
+            const auto subspace_prediction = predictSingleWall(
+                wall.k_a, wall.k_u, wall.depth_u_m, c, std::numeric_limits<double>::infinity());
+            // §6.6: |g(1)| = |F_full| c ((k_u + k_a)/(k_u + k_a c^2) - 1), |g(inf)| = |F_full| (1/c
+            // - c).
+            const double full = naive_prediction.full_force;
+            EXPECT_NEAR(naive_prediction.ghost_force,
+                        full * c * ((wall.k_u + wall.k_a) / (wall.k_u + wall.k_a * c * c) - 1.0),
+                        1e-12);
+            EXPECT_NEAR(subspace_prediction.ghost_force, full * (1.0 / c - c), 1e-12);
+
+            const auto naive =
+                study::measureWall(wall, RenderingMethod::kNaive, RhoMode::kManual, 1);
+            EXPECT_NEAR(naive.ghost_force, naive_prediction.ghost_force, 1e-9 * full);
+            EXPECT_NEAR(naive.tangential_force, naive_prediction.tangential_force, 1e-9 * full);
+            for (const auto method :
+                 {RenderingMethod::kSubspace, RenderingMethod::kLinearizedSubspace}) {
+                const auto sub = study::measureWall(wall, method, RhoMode::kManual, 1);
+                ASSERT_TRUE(sub.converged);
+                EXPECT_NEAR(sub.ghost_force, subspace_prediction.ghost_force, 1e-9 * full);
+                EXPECT_NEAR(sub.normal_force, full, 1e-9 * full);  // normal force kept exactly
+            }
+        }
+    }
+}
+
+TEST(GhostForces, ReproduceTheWorkedNumbersOfAlgorithmsSection66) {
+    WallCase wall;  // k_a = 1000, k_u = 300, 10 mm deep
+    struct Row {
+        double beta_deg;
+        RenderingMethod method;
+        double force, normal, tangential, error;
+    };
+    const Row rows[] = {
+        {30, RenderingMethod::kSubspace, 2.665, 2.308, 1.332, 1.332},
+        {30, RenderingMethod::kNaive, 2.474, 2.143, 1.237, 1.248},
+        {30, RenderingMethod::kAnisotropic, 1.999, 1.731, 0.999, 1.154},
+        {60, RenderingMethod::kSubspace, 4.615, 2.308, 3.997, 3.997},
+        {60, RenderingMethod::kNaive, 2.727, 1.364, 2.362, 2.544},
+        {60, RenderingMethod::kAnisotropic, 1.154, 0.577, 0.999, 1.999},
+    };
+    for (const Row& row : rows) {
+        wall.beta_rad = row.beta_deg * kDeg;
+        const auto m = study::measureWall(wall, row.method, RhoMode::kClosedForm, 0);
+        EXPECT_NEAR(m.full_force, 2.308, 1e-3);
+        EXPECT_NEAR(m.rendered_force, row.force, 1.5e-3) << row.beta_deg;
+        EXPECT_NEAR(m.normal_force, row.normal, 1.5e-3) << row.beta_deg;
+        EXPECT_NEAR(m.tangential_force, row.tangential, 1.5e-3) << row.beta_deg;
+        EXPECT_NEAR(m.force_error, row.error, 1.5e-3) << row.beta_deg;
+    }
+}
+
+ConfigMatrix projectorOn(const Eigen::Vector2d& a) {
+    return ConfigMatrix(a * a.transpose() / a.squaredNorm());
+}
+
+// Done when: for a single constraint, rho* is the argmin of the numeric search.
+TEST(RhoSearch, SingleConstraintArgminIsTheClosedForm) {
+    for (const double ratio : {0.1, 1.0, 3.3, 30.0}) {
+        for (const double beta_deg : {5.0, 30.0, 60.0, 85.0}) {
+            const double k_u = 300.0;
+            const double k_a = ratio * k_u;
+            const Eigen::Vector2d a = study::actuatedDirection(beta_deg * kDeg).col(0);
+            const ConfigMatrix K_u = ConfigMatrix::Identity(2, 2) * k_u;
+            ConfigVector normal(2);
+            normal << 0.0, 2.0;  // any length
+            const auto search = searchOptimalRho(projectorOn(a), k_a, K_u, normal);
+            ASSERT_TRUE(search.valid);
+            EXPECT_NEAR(std::log(search.rho), std::log(optimalRhoIsotropic(k_a, k_u)), 1e-6);
+            EXPECT_LT(search.mismatch, 1e-6 * k_a);
+        }
+    }
+}
+
+TEST(RhoSearch, DegenerateInputFallsBackToNaiveWithAReport) {
+    const Eigen::Vector2d a = study::actuatedDirection(30 * kDeg).col(0);
+    const ConfigMatrix K_u = ConfigMatrix::Identity(2, 2) * 300.0;
+    ConfigVector normal(2);
+    normal << 0.0, std::numeric_limits<double>::quiet_NaN();
+    auto search = searchOptimalRho(projectorOn(a), 1000.0, K_u, normal);
+    EXPECT_FALSE(search.valid);
+    EXPECT_EQ(search.rho, 1.0);
+    normal << 0.0, 0.0;  // zero normal
+    EXPECT_FALSE(searchOptimalRho(projectorOn(a), 1000.0, K_u, normal).valid);
+    normal << 0.0, 1.0;
+    EXPECT_FALSE(searchOptimalRho(projectorOn(a), 0.0, K_u, normal).valid);  // zero k_a
+    EXPECT_FALSE(searchOptimalRho(projectorOn(a), 1000.0, ConfigMatrix::Zero(2, 2), normal).valid);
+    EXPECT_TRUE(std::isnan(optimalRhoIsotropic(0.0, 300.0)));
+    // Huge stiffness: bounded search still lands on the closed form.
+    search = searchOptimalRho(projectorOn(a), 1e9, K_u, normal);
+    ASSERT_TRUE(search.valid);
+    EXPECT_NEAR(std::log(search.rho), std::log(optimalRhoIsotropic(1e9, 300.0)), 1e-5);
+    EXPECT_EQ(search.evaluations, 2 + 48);
+}
+
+TEST(RhoSearch, AnisotropicUserStiffnessMinimisesTheNumericEquilibriumMismatch) {
+    // Stiffer across the wall than along it, and coupled: no §6.6 closed form applies.
+    ConfigMatrix K_u(2, 2);
+    K_u << 200.0, 80.0, 80.0, 600.0;
+    WallCase wall;
+    wall.beta_rad = 40.0 * kDeg;
+    const Eigen::Vector2d a = study::actuatedDirection(wall.beta_rad).col(0);
+    ConfigVector normal(2);
+    normal << 0.0, 1.0;
+    const auto search = searchOptimalRho(projectorOn(a), wall.k_a, K_u, normal);
+    ASSERT_TRUE(search.valid);
+    // Our generalised closed form (*) in anisotropic.hpp agrees...
+    EXPECT_NEAR(search.rho, optimalRhoAnisotropicUser(projectorOn(a), wall.k_a, K_u, normal),
+                1e-6 * search.rho);
+
+    // ...and an independent check: Newton equilibria of the real renderer over a rho grid.
+    auto measure = [&](double rho) {
+        ConstraintMatrix C;
+        ConstraintVector d;
+        study::wallConstraint(2, C, d);
+        const Eigen::Vector2d x_u(0.05, -wall.depth_u_m);
+        const LinearPointDevice full_device(Eigen::MatrixXd::Identity(2, 2), 1e6);
+        RenderParameters p;
+        p.method = RenderingMethod::kStandard;
+        p.tracking_stiffness = wall.k_a;
+        KinestheticRenderer full(full_device, p);
+        const auto reference = study::solveEquilibrium(full, Eigen::MatrixXd(K_u), x_u, C, d);
+        const LinearPointDevice device(study::actuatedDirection(wall.beta_rad), 1e6);
+        p.method = RenderingMethod::kAnisotropic;
+        p.rho_mode = RhoMode::kManual;
+        p.rho_override = rho;
+        KinestheticRenderer sut(device, p);
+        const auto eq = study::solveEquilibrium(sut, Eigen::MatrixXd(K_u), x_u, C, d);
+        const Eigen::Vector2d F_full = reference.rendered_force;
+        return (Eigen::Vector2d(eq.rendered_force) - a * a.dot(F_full)).norm();
+    };
+    const double at_search = measure(search.rho);
+    EXPECT_LT(at_search, 1e-9);
+    for (double log_rho = -4.0; log_rho <= 2.0; log_rho += 0.25) {
+        EXPECT_LE(at_search, measure(std::pow(10.0, log_rho)) + 1e-12);
+    }
+}
+
+TEST(KinestheticRenderer, RhoModesAndRunTimeMethodSwitch) {
+    const LinearPointDevice device(study::actuatedDirection(30 * kDeg), 100.0);
+    RenderParameters p;
+    p.rho_mode = RhoMode::kManual;
+    p.rho_override = 0.05;
+    KinestheticRenderer sut(device, p);
+    ConstraintMatrix C;
+    ConstraintVector d;
+    study::wallConstraint(2, C, d);
+    ConfigVector q(2);
+    q << 0.0, -0.01;
+    const ConfigVector zero = ConfigVector::Zero(2);
+    RenderOutput out;
+    sut.tick(q, zero, C, d, out);
+    EXPECT_DOUBLE_EQ(out.rho, 0.05);
+    EXPECT_EQ(out.fault, RenderFault::kNone);
+    const double anisotropic_force = out.actuator_force[0];
+
+    p.rho_mode = RhoMode::kNumericSearch;
+    ASSERT_EQ(sut.setParameters(p), nullptr);
+    sut.tick(q, zero, C, d, out);
+    EXPECT_NEAR(out.rho, optimalRhoIsotropic(p.tracking_stiffness, p.user_stiffness), 1e-6);
+
+    sut.setMethod(RenderingMethod::kSubspace);
+    sut.tick(q, zero, C, d, out);
+    EXPECT_GT(out.actuator_force[0], anisotropic_force);
+    EXPECT_NEAR(out.proxy[1], 0.0, 1e-12);  // proxy on the wall, moved along a only
+}
+
+config::ExoskeletonConfig shippedExoskeleton() {
+    return config::loadDeviceConfig(std::string(HAPTIC_CONFIG_DIR) + "/devices/exoskeleton.yaml")
+        .exoskeleton();
+}
+
+TEST(NullspaceRendering, KeepsTheFingertipForceAndLosesLessThanNaive) {
+    const ExoskeletonDevice exo(shippedExoskeleton());
+    RenderParameters p;
+    p.method = RenderingMethod::kNaive;
+    p.tracking_stiffness = 2.0;  // N m / rad
+    KinestheticRenderer naive(exo, p);
+    p.method = RenderingMethod::kNullspace;
+    KinestheticRenderer sut(exo, p);
+    ConfigVector q(3);
+    q << 0.6, 0.9, 0.5;
+    ConstraintMatrix C(3, 1);
+    C << -1.0, -0.6, -0.3;  // flexion limited by a virtual object
+    ConstraintVector d = ConstraintVector::Constant(1, -(C.col(0).dot(q)) - 0.02);
+    const ConfigVector zero = ConfigVector::Zero(3);
+    RenderOutput naive_out;
+    RenderOutput out;
+    naive.tick(q, zero, C, d, naive_out);
+    sut.tick(q, zero, C, d, out);
+    ASSERT_TRUE(out.in_contact);
+    PointJacobian J;
+    exo.contactJacobian(q, J);
+    const Eigen::MatrixXd Jpinv_t = (J * J.transpose()).inverse() * J;  // J^{+T}
+    EXPECT_LT((Jpinv_t * (out.coupling_force - naive_out.coupling_force)).norm(),
+              1e-9 * naive_out.coupling_force.norm());
+    const auto unrenderable = [](const RenderOutput& o) {
+        return (o.coupling_force - o.rendered_force).norm();
+    };
+    EXPECT_LT(unrenderable(out), unrenderable(naive_out));
+
+    // On the point device (J = I) there is no null space: identical to naive.
+    const LinearPointDevice point(study::actuatedDirection(0.5), 100.0);
+    p.method = RenderingMethod::kNaive;
+    KinestheticRenderer point_naive(point, p);
+    p.method = RenderingMethod::kNullspace;
+    KinestheticRenderer point_nullspace(point, p);
+    ConstraintMatrix wall;
+    ConstraintVector offset;
+    study::wallConstraint(2, wall, offset);
+    ConfigVector x(2);
+    x << 0.1, -0.01;
+    const ConfigVector zero2 = ConfigVector::Zero(2);
+    point_naive.tick(x, zero2, wall, offset, naive_out);
+    point_nullspace.tick(x, zero2, wall, offset, out);
+    EXPECT_DOUBLE_EQ(out.actuator_force[0], naive_out.actuator_force[0]);
+}
+
+// Done when: every solver hits its bound gracefully on degenerate input.
+class DegenerateInput : public ::testing::TestWithParam<RenderingMethod> {
+  protected:
+    const LinearPointDevice device_{study::actuatedDirection(30 * kDeg), 50.0};
+    RenderParameters parameters() const {
+        RenderParameters p;
+        p.method = GetParam();
+        return p;
+    }
+    const ConfigVector zero_ = ConfigVector::Zero(2);
+    ConfigVector inside() const {
+        ConfigVector q(2);
+        q << 0.0, -0.01;
+        return q;
+    }
+    static void expectSafe(const RenderOutput& out) {
+        EXPECT_TRUE(out.actuator_force.allFinite());
+        EXPECT_TRUE(out.rendered_force.allFinite());
+        EXPECT_TRUE(out.proxy.allFinite());
+    }
+};
+
+TEST_P(DegenerateInput, NaNStateOrConstraintGivesZeroForceAndAReason) {
+    KinestheticRenderer sut(device_, parameters());
+    ConstraintMatrix C;
+    ConstraintVector d;
+    study::wallConstraint(2, C, d);
+    RenderOutput out;
+    ConfigVector q = inside();
+    q[0] = std::numeric_limits<double>::quiet_NaN();
+    sut.tick(q, zero_, C, d, out);
+    EXPECT_EQ(out.fault, RenderFault::kNonFiniteState);
+    EXPECT_EQ(out.actuator_force[0], 0.0);
+    expectSafe(out);
+    C(0, 0) = std::numeric_limits<double>::infinity();
+    sut.tick(inside(), zero_, C, d, out);
+    EXPECT_EQ(out.fault, RenderFault::kInvalidConstraints);
+    EXPECT_EQ(out.actuator_force[0], 0.0);
+    EXPECT_STRNE(toString(out.fault), "unknown");
+}
+
+TEST_P(DegenerateInput, ParallelContradictoryConstraintsAreFlaggedNotCrashed) {
+    KinestheticRenderer sut(device_, parameters());
+    ConstraintMatrix C(2, 3);
+    C << 0, 0, 0, 1, 1, -1;
+    ConstraintVector d(3);
+    d << 0.0, 0.0, 0.005;  // y >= 0 twice, and y <= -0.005
+    RenderOutput out;
+    sut.tick(inside(), zero_, C, d, out);
+    expectSafe(out);
+    if (GetParam() != RenderingMethod::kLinearizedSubspace) {
+        EXPECT_NE(out.fault, RenderFault::kNone) << toString(out.fault);
+    }
+}
+
+TEST_P(DegenerateInput, NormalInTheNonActuatedSubspace) {
+    const LinearPointDevice device(study::actuatedDirection(90 * kDeg), 50.0);  // a = (1, 0)
+    KinestheticRenderer sut(device, parameters());
+    ConstraintMatrix C;
+    ConstraintVector d;
+    study::wallConstraint(2, C, d);  // n = (0, 1), c = 0
+    RenderOutput out;
+    sut.tick(inside(), zero_, C, d, out);
+    expectSafe(out);
+    EXPECT_NEAR(out.actuator_force[0], 0.0, 1e-12);
+    if (GetParam() == RenderingMethod::kSubspace ||
+        GetParam() == RenderingMethod::kLinearizedSubspace) {
+        EXPECT_EQ(out.fault, RenderFault::kNotRenderable);
+    }
+}
+
+TEST_P(DegenerateInput, ZeroStiffnessIsRejectedAndHugeStiffnessStaysFinite) {
+    RenderParameters p = parameters();
+    p.tracking_stiffness = 0.0;
+    EXPECT_THROW(KinestheticRenderer(device_, p), std::invalid_argument);
+    p.tracking_stiffness = 1000.0;
+    KinestheticRenderer sut(device_, p);
+    RenderParameters bad = p;
+    bad.user_stiffness = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_NE(sut.setParameters(bad), nullptr);
+    EXPECT_EQ(sut.parameters().user_stiffness, p.user_stiffness);
+    p.tracking_stiffness = 1e12;
+    ASSERT_EQ(sut.setParameters(p), nullptr);
+    ConstraintMatrix C;
+    ConstraintVector d;
+    study::wallConstraint(2, C, d);
+    RenderOutput out;
+    sut.tick(inside(), zero_, C, d, out);
+    expectSafe(out);
+    EXPECT_GT(std::abs(out.actuator_force[0]), 0.0);
+}
+
+TEST_P(DegenerateInput, IterationBoundOnTheExoskeletonWithFourConstraints) {
+    const ExoskeletonDevice exo(shippedExoskeleton());
+    RenderParameters p = parameters();
+    p.tracking_stiffness = 2.0;
+    p.max_iterations = 1;
+    KinestheticRenderer sut(exo, p);
+    ConfigVector q(3);
+    q << 0.6, 0.9, 0.5;
+    ConstraintMatrix C(3, 4);
+    C << -1, 0, -0.2, -1, 0, -1, -1, -0.5, -0.3, -0.2, 0, -1;
+    ConstraintVector d = -(C.transpose() * q);
+    d.array() += 0.02;
+    RenderOutput out;
+    sut.tick(q, ConfigVector::Zero(3), C, d, out);
+    expectSafe(out);
+    const auto method = GetParam();
+    if (method != RenderingMethod::kLinearizedSubspace) {
+        EXPECT_EQ(out.fault, RenderFault::kSolverIterationLimit) << toString(out.fault);
+        EXPECT_EQ(out.iterations, 1);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllMethods, DegenerateInput, ::testing::ValuesIn(kAllMethods));
+
+}  // namespace
+}  // namespace haptic::kinesthetic
