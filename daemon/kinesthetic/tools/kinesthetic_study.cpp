@@ -196,7 +196,7 @@ void pumping(const fs::path& out, bool quick) {
     series << "time_s,energy_naive_pc_off_j,energy_naive_pc_on_j,energy_anisotropic_pc_off_j,"
               "energy_anisotropic_pc_on_j\n";
     study::PumpingCase pumping_case;
-    pumping_case.cycles = quick ? 2 : 5;
+    pumping_case.cycles = quick ? 1 : 5;
     std::vector<study::PumpingResult> series_runs;
     const std::vector<double> pumping_angles =
         quick ? std::vector<double>{45.0} : std::vector<double>{30.0, 45.0, 60.0};
