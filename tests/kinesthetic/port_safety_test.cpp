@@ -14,31 +14,33 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// Done when (partly met): with the passivity controller on, the net energy the device
-// generates over pumping cycles is <= 0; with it off, it is > 0. Closed loops inside the wall,
-// the user circling in the direction that the non-conservative field (§5.7.2, §6.9) feeds;
-// the port has the exoskeleton's 500 N/s rate limit. Measured (5 loops, README): with the
-// controller on the net is <= 0 (to rounding) in 6 of the 9 strategy/angle cases of the
-// study; naive at 60 deg and anisotropic at 30 and 45 deg keep 0.3-1 % of the uncontrolled
-// energy, lost in one-tick velocity reversals near first contact that the controller cannot
-// predict. The bound below is
-// what is actually guaranteed today; see README "Kinesthetic rendering".
+// Done when: with the passivity controller on, the net energy the device generates over
+// pumping cycles is <= 0; with it off, it is > 0. Closed loops inside the wall, the user
+// circling in the direction that the non-conservative field (§5.7.2, §6.9) feeds; the port has
+// the exoskeleton's 500 N/s rate limit. The energy is measured by the simulation (force held
+// over each tick times the actuator displacement over it), not by the observer, in every
+// strategy/angle case of the study.
 TEST(PassivityController, StopsEnergyPumpingInsideTheWall) {
     // linearized_subspace renders exactly like subspace on one wall, so it is left out here.
     for (const auto method :
          {RenderingMethod::kNaive, RenderingMethod::kSubspace, RenderingMethod::kAnisotropic}) {
-        for (const double beta_deg : {30.0, 60.0}) {
+        for (const double beta_deg : {30.0, 45.0, 60.0}) {
             study::PumpingCase pumping;
             pumping.wall.beta_rad = beta_deg * kDeg;
-            pumping.cycles = 2;
+            pumping.cycles = 1;  // the full study runs 5 (README); 1 keeps ASan quick
             const auto off =
                 study::runEnergyPumping(pumping, method, RhoMode::kClosedForm, 0.0, false);
             const auto on =
                 study::runEnergyPumping(pumping, method, RhoMode::kClosedForm, 0.0, true);
-            EXPECT_GT(off.generated_energy_j, 1e-4)
+            EXPECT_GT(off.generated_energy_j, 1e-3)
                 << static_cast<int>(method) << " beta " << beta_deg;
-            EXPECT_LT(on.generated_energy_j, 0.02 * off.generated_energy_j)
+            EXPECT_LE(on.generated_energy_j, 0.0)
                 << static_cast<int>(method) << " beta " << beta_deg;
+            for (const double running : on.generated_energy) {
+                ASSERT_LE(running, 0.0) << static_cast<int>(method) << " beta " << beta_deg;
+            }
+            // Reduce-only: no overshoot beyond what the (different) trajectory itself asks for.
+            EXPECT_LE(on.max_force_n, 1.05 * off.max_force_n);
             EXPECT_GT(on.max_force_n, 0.5 * off.max_force_n);
         }
     }
@@ -48,23 +50,55 @@ TEST(PassivityController, TheOtherCirculationAbsorbsEnergyAndIsLeftAlone) {
     study::PumpingCase pumping;
     pumping.wall.beta_rad = 45 * kDeg;
     pumping.clockwise = true;
-    pumping.cycles = 2;
+    pumping.cycles = 1;  // the full study runs 5 (README); 1 keeps ASan quick
     const auto off =
         study::runEnergyPumping(pumping, RenderingMethod::kNaive, RhoMode::kManual, 1.0, false);
     EXPECT_LT(off.generated_energy_j, 0.0);
 }
 
 TEST(PassivityController, AccountsZeroOrderHoldEnergy) {
-    PassivityController sut(1e-3, 100.0);
+    PassivityController sut(1e-3, 0.1);
     sut.setEnabled(false);
     sut.observe(0.0);
     sut.record(2.0);     // 2 N held along +ell
     sut.observe(0.001);  // moved 1 mm with it: the device gave 2 mJ
     EXPECT_NEAR(sut.observedEnergy(), -2e-3, 1e-15);
-    EXPECT_DOUBLE_EQ(sut.correct(1.0), 1.0);  // disabled: untouched
+    EXPECT_DOUBLE_EQ(sut.limit(1.0), 1.0);  // disabled: untouched
     sut.setEnabled(true);
-    // Still moving at 1 m/s: the correction must oppose the motion.
-    EXPECT_LT(sut.correct(1.0), 1.0);
+    // In deficit and still moving along +ell: a force along the motion is cut to zero, one
+    // resisting it passes untouched (reduce-only, never a sign flip or added damping).
+    EXPECT_DOUBLE_EQ(sut.limit(1.0), 0.0);
+    EXPECT_DOUBLE_EQ(sut.limit(-1.5), -1.5);
+}
+
+TEST(ActuatorPortGuard, PassivityActsAfterTheRateLimitAndOnlyReducesTheForce) {
+    PortGuardConfig config;
+    config.max_force_rate_n_per_s = 500.0;  // 0.5 N per tick
+    config.fade_time_s = config.period_s;
+    config.passivity_port_mass_kg = 0.1;
+    ActuatorPortGuard sut(config);
+    // At rest with nothing stored, even a small force could carry the mass along: held at 0.
+    auto command = sut.apply(5.0, 0.0, true);
+    EXPECT_DOUBLE_EQ(command.force_n, 0.0);
+    EXPECT_TRUE(command.flags & kPortPassivityActive);
+    // Pushed into the force at 0.1 m/s: a resisting force passes, ramping at the rate limit,
+    // and the observer books what it absorbs.
+    for (int k = 1; k <= 4; ++k) {
+        command = sut.apply(5.0, -1e-4 * k, true);
+        EXPECT_DOUBLE_EQ(command.force_n, 0.5 * k);
+        EXPECT_FALSE(command.flags & kPortPassivityActive);
+    }
+    // Reversal: the 2 N held over the last tick gave 0.2 mJ back, 0.1 mJ remain. The next
+    // force (2.5 N after the rate limit) would spend more than that: the controller cuts it
+    // below the rate limit's floor of 1.5 N, since it acts last.
+    command = sut.apply(5.0, -3e-4, true);
+    EXPECT_NEAR(sut.passivity().observedEnergy(), 1e-4, 1e-15);
+    EXPECT_TRUE(command.flags & kPortPassivityActive);
+    EXPECT_GT(command.force_n, 0.0);
+    EXPECT_LT(command.force_n, 0.5);
+    // Budgeted for twice the last displacement plus what the force adds to 0.1 kg.
+    const double budget = command.force_n * (2e-4 + command.force_n * 1e-6 / 0.1);
+    EXPECT_LE(budget, 1e-4);
 }
 
 TEST(SaturateForce, ClampsMagnitudeThenRate) {

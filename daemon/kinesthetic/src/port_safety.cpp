@@ -7,16 +7,19 @@
 namespace haptic::kinesthetic {
 
 namespace {
+// A spending force is budgeted for twice the last displacement (the motion may speed up).
 constexpr double kPredictionMargin = 1.0;
+// Kept in the reserve so that rounding in E (sums of ~1e-20 J products) cannot cross zero.
+constexpr double kRoundingReserveJ = 1e-12;
 }  // namespace
 
-PassivityController::PassivityController(double period_s, double max_damping,
-                                         double max_force_rate) noexcept
-    : period_s_(period_s), max_damping_(max_damping), max_rate_(max_force_rate) {}
+PassivityController::PassivityController(double period_s, double port_mass_kg) noexcept
+    : period_s_(period_s), port_mass_kg_(port_mass_kg) {}
 
 void PassivityController::reset() noexcept {
     energy_ = 0.0;
     velocity_ = 0.0;
+    reversed_ = false;
     u_applied_ = 0.0;
     has_previous_ = false;
 }
@@ -28,51 +31,32 @@ double PassivityController::observe(double ell) noexcept {
     }
     const double displacement = ell - ell_previous_;
     energy_ -= u_applied_ * displacement;
+    reversed_ = displacement * velocity_ < 0.0;
     velocity_ = displacement / period_s_;
     ell_previous_ = ell;
     return velocity_;
 }
 
-double PassivityController::correct(double u_desired) const noexcept {
-    const double v = velocity_;
-    if (!enabled_ || v == 0.0) {
+double PassivityController::limit(double u_desired) const noexcept {
+    if (!enabled_ || u_desired == 0.0) {
         return u_desired;
     }
-    const double speed = std::abs(v);
-    const double ramp = std::isfinite(max_rate_) ? 0.5 * speed / max_rate_ : 0.0;  // * u^2
-    // A force pushing along the motion spends the reserve E; a force resisting it refills E
-    // but may push along the motion after the next reversal, when it can only ramp down at the
-    // rate limit (costing about |v| u^2 / (2 rate)). Cap |u| so that the reserve, after the
-    // next period (budgeted at (1 + margin) times the last displacement when spending), still
-    // pays for that ramp.
-    const auto cap = [&](double u) {
-        double allowed = std::numeric_limits<double>::infinity();
-        if (u * v > 0.0) {
-            const double spend = (1.0 + kPredictionMargin) * speed * period_s_;  // * |u|
-            if (energy_ <= 0.0) {
-                allowed = 0.0;
-            } else if (ramp > 0.0) {
-                allowed = (-spend + std::sqrt(spend * spend + 4.0 * ramp * energy_)) / (2.0 * ramp);
-            } else {
-                allowed = energy_ / spend;
-            }
-        } else if (ramp > 0.0) {
-            const double gain = speed * period_s_;  // * |u|
-            const double discriminant = gain * gain + 4.0 * ramp * energy_;
-            allowed = discriminant > 0.0 ? (gain + std::sqrt(discriminant)) / (2.0 * ramp)
-                                         : gain / (2.0 * ramp);
-        }
-        return std::abs(u) > allowed ? std::copysign(allowed, u) : u;
-    };
-    double u = cap(u_desired);
-    // Whatever deficit remains is damped out, b = -(E - u v T) / (T v^2) up to its cap; the
-    // damped force resists the motion, and is capped like any other.
-    const double predicted = energy_ - u * v * period_s_;
-    if (predicted < 0.0) {
-        const double damping = std::min(-predicted / (period_s_ * v * v), max_damping_);
-        u = cap(u - damping * v);
-    }
-    return u;
+    // Worst-case displacement along u over the next tick: the last one (grown by the margin
+    // when u pushes along it, shrunk when u resists it) plus what u alone adds to a mass of
+    // at least port_mass: d(|u|) = a + b |u|. Keep E - |u| d(|u|) >= 0.
+    const double last = std::abs(velocity_) * period_s_;
+    const bool spending = u_desired * velocity_ > 0.0 || reversed_;
+    const double a =
+        spending ? (1.0 + kPredictionMargin) * last : -last / (1.0 + kPredictionMargin);
+    const double b = period_s_ * period_s_ / port_mass_kg_;
+    const double magnitude = std::abs(u_desired);
+    const double reserve = energy_ - kRoundingReserveJ;
+    // In deficit nothing may be spent: only a force too small to carry the port along itself
+    // (d <= 0) passes, and it repays the deficit. Otherwise the largest |u| with
+    // b u^2 + a u <= reserve.
+    const double upper = reserve < 0.0 ? std::max(0.0, -a / b)
+                                       : (-a + std::sqrt(a * a + 4.0 * b * reserve)) / (2.0 * b);
+    return magnitude > upper ? std::copysign(upper, u_desired) : u_desired;
 }
 
 double saturateForce(double u, double previous, double max_force, double max_rate,
@@ -105,7 +89,7 @@ const char* describePortFlag(PortFlag flag) noexcept {
         case kPortRateLimited:
             return "force rate limited";
         case kPortPassivityActive:
-            return "passivity controller adding damping";
+            return "passivity controller reduced the force";
     }
     return "unknown";
 }
@@ -120,14 +104,14 @@ bool positiveFinite(double value) {
 
 ActuatorPortGuard::ActuatorPortGuard(const PortGuardConfig& config)
     : config_(config),
-      passivity_(config.period_s, config.max_passivity_damping, config.max_force_rate_n_per_s),
+      passivity_(config.period_s, config.passivity_port_mass_kg),
       fade_(config.period_s, config.fade_time_s) {
     if (!positiveFinite(config.period_s) || !positiveFinite(config.max_force_n) ||
         !positiveFinite(config.max_force_rate_n_per_s) || !positiveFinite(config.fade_time_s) ||
-        !(config.max_passivity_damping >= 0.0) || !std::isfinite(config.max_passivity_damping)) {
+        !positiveFinite(config.passivity_port_mass_kg)) {
         throw std::invalid_argument(
-            "ActuatorPortGuard: period, max force, max force rate and fade time must be finite "
-            "and > 0, max passivity damping finite and >= 0");
+            "ActuatorPortGuard: period, max force, max force rate, fade time and passivity port "
+            "mass must be finite and > 0");
     }
     passivity_.setEnabled(config.passivity_enabled);
 }
@@ -141,14 +125,8 @@ PortCommand ActuatorPortGuard::apply(double u_desired, double ell, bool input_fr
         fresh = false;
         u = 0.0;
     }
-    if (std::isfinite(ell)) {
-        passivity_.observe(ell);
-        const double corrected = passivity_.correct(u);
-        if (corrected != u) {
-            command.flags |= kPortPassivityActive;
-        }
-        u = corrected;
-    } else {
+    const bool position_valid = std::isfinite(ell);
+    if (!position_valid) {
         command.flags |= kPortNonFinitePosition;
         fresh = false;
     }
@@ -170,9 +148,19 @@ PortCommand ActuatorPortGuard::apply(double u_desired, double ell, bool input_fr
     if (limited != clamped) {
         command.flags |= kPortRateLimited;
     }
-    command.force_n = limited;
-    previous_force_n_ = limited;
-    passivity_.record(limited);
+    // Passivity last: it only moves the force towards zero, so both limits above still hold
+    // (a drop towards zero may be faster than the rate limit, which is the safe direction).
+    double applied = limited;
+    if (position_valid) {
+        passivity_.observe(ell);
+        applied = passivity_.limit(limited);
+        if (applied != limited) {
+            command.flags |= kPortPassivityActive;
+        }
+    }
+    command.force_n = applied;
+    previous_force_n_ = applied;
+    passivity_.record(applied);
     return command;
 }
 

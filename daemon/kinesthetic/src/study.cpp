@@ -199,8 +199,8 @@ PumpingResult runEnergyPumping(const PumpingCase& pumping, RenderingMethod metho
     guard_config.max_force_n = 1e3;
     guard_config.max_force_rate_n_per_s = pumping.max_force_rate_n_per_s;
     guard_config.fade_time_s = pumping.period_s;  // full force from the first tick
-    guard_config.max_passivity_damping = pumping.max_passivity_damping_n_s_per_m;
     guard_config.passivity_enabled = passivity_controller;
+    guard_config.passivity_port_mass_kg = pumping.device_mass_kg;
     ActuatorPortGuard guard(guard_config);
 
     const double T = pumping.period_s;
@@ -219,6 +219,7 @@ PumpingResult runEnergyPumping(const PumpingCase& pumping, RenderingMethod metho
     Eigen::Vector2d v(0.0, 0.0);
     RenderOutput out;
     PumpingResult result;
+    double generated = 0.0;
     for (int k = 0; k <= approach_steps + loop_steps; ++k) {
         Eigen::Vector2d x_u;
         Eigen::Vector2d v_u;
@@ -239,16 +240,21 @@ PumpingResult runEnergyPumping(const PumpingCase& pumping, RenderingMethod metho
         const PortCommand command = guard.apply(out.actuator_force[0], a.dot(x), true);
         const Eigen::Vector2d f_device = a * command.force_n;
         result.max_force_n = std::max(result.max_force_n, std::abs(command.force_n));
-        result.time_s.push_back(k * T);
-        result.generated_energy.push_back(-guard.passivity().observedEnergy());
         const Eigen::Vector2d f_user =
             wall.k_u * (x_u - x) + pumping.user_damping_n_s_per_m * (v_u - v);
         const Eigen::Vector2d accel =
             (f_user + f_device - pumping.device_damping_n_s_per_m * v) / pumping.device_mass_kg;
         v += T * accel;
-        x += T * v;
+        const Eigen::Vector2d x_next = x + T * v;
+        // Measured here, not taken from the observer: the work of the force held over
+        // [k, k+1] along the actuator coordinate, including the last tick.
+        generated += command.force_n * (a.dot(x_next) - a.dot(x));
+        x = x_next;
+        result.time_s.push_back((k + 1) * T);
+        result.generated_energy.push_back(generated);
     }
-    result.generated_energy_j = -guard.passivity().observedEnergy();
+    result.generated_energy_j = generated;
+    result.observer_energy_j = -guard.passivity().observedEnergy();
     return result;
 }
 

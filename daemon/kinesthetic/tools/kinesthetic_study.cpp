@@ -196,7 +196,7 @@ void pumping(const fs::path& out, bool quick) {
     series << "time_s,energy_naive_pc_off_j,energy_naive_pc_on_j,energy_anisotropic_pc_off_j,"
               "energy_anisotropic_pc_on_j\n";
     study::PumpingCase pumping_case;
-    pumping_case.cycles = quick ? 2 : 5;
+    pumping_case.cycles = quick ? 1 : 5;
     std::vector<study::PumpingResult> series_runs;
     const std::vector<double> pumping_angles =
         quick ? std::vector<double>{45.0} : std::vector<double>{30.0, 45.0, 60.0};
@@ -211,8 +211,7 @@ void pumping(const fs::path& out, bool quick) {
                     << on.generated_energy_j << ',' << off.max_force_n << ',' << on.max_force_n
                     << '\n';
             check(off.generated_energy_j > 0.0, "pumping generates energy without the PC");
-            check(on.generated_energy_j < 0.02 * off.generated_energy_j,
-                  "PC keeps generated energy below 2 % of the uncontrolled run");
+            check(on.generated_energy_j <= 0.0, "no net energy generated with the PC on");
             if (beta_deg == 45.0 && s.method != RenderingMethod::kSubspace) {
                 series_runs.push_back(off);
                 series_runs.push_back(on);

@@ -1,8 +1,9 @@
 #pragma once
 
 // Safety stage for one actuator port, applied after the renderer every 1 kHz tick
-// (ALGORITHMS §5.7.3, §6.9): NaN/Inf rejection, time-domain passivity observer/controller
-// (Hannaford-Ryu), fade to zero on stale input, force and force-rate saturation.
+// (ALGORITHMS §5.7.3, §6.9), in this order: NaN/Inf rejection, fade to zero on stale input,
+// force and force-rate saturation, then the time-domain passivity observer/controller
+// (Hannaford-Ryu) last, so that it observes the force that is really applied.
 // Everything is noexcept, allocation- and lock-free, O(1).
 
 #include <cstdint>
@@ -10,28 +11,37 @@
 
 namespace haptic::kinesthetic {
 
-// Energy bookkeeping of the port, sign convention of §5.7.3: u acts along increasing ell; the
-// energy absorbed by the rendered environment is E += -u_applied(k-1) (ell_k - ell_{k-1})
-// (zero-order hold: the force applied during a period times the motion over that period).
-// E < 0 means the rendering has given the user net energy. Two things keep E >= 0 although
-// the motion over the next period is unknown and the force can only ramp at the rate limit:
-// (1) |u| is capped so that the reserve E, after the next period, still pays for ramping u to
-// zero at the rate limit should the motion reverse (|v| u^2 / (2 rate)); a force along the
-// motion is budgeted at twice the last displacement, one against it earns its next period;
-// (2) a remaining deficit is damped out, b = -(E - u v T) / (T v^2) up to max_damping.
-// The cost is the classic one of passivity control: a wall that has not stored energy yet
-// (first contact, fast reversals) renders less force for a few milliseconds.
+// Energy bookkeeping of the port, sign convention of §5.7.3: u acts along increasing ell. The
+// force applied at tick k is held over [k, k+1] (zero-order hold), so the energy absorbed by
+// the rendered environment is E_{k+1} = E_k - u_k (ell_{k+1} - ell_k): exactly the work the
+// actuator does, booked one tick late. E < 0 means the rendering has given the user net energy.
+//
+// The controller is the conservative (reduce-only) variant of Hannaford-Ryu for an impedance
+// port: it only ever scales the force towards zero, never adds a damping term and never flips
+// the sign, so it cannot overshoot and cannot inject energy itself. It keeps E_{k+1} >= 0 by
+// bounding the next displacement along u by d(|u|) = a + b |u|: a is the last displacement,
+// times (1 + margin) if u pushes along it (or it just reversed), divided by it if u resists;
+// b |u| = T^2 |u| / m is how far u alone carries a mass of at least m within the tick (a
+// resisting force can itself reverse a slow motion; a spending one speeds it up). The force is
+// capped so that |u| d(|u|) <= E_k. The guarantee holds as long as the port moves at least
+// `port_mass` and the other forces (the user) change the displacement by less than the margin
+// per tick. In deficit only forces with d <= 0 (they can only earn) pass.
+// It must be the last stage before the actuator (after force and rate saturation), and
+// record() must get the force actually applied: a limiter after it could hold a force the
+// controller wanted gone. The cost is the classic one of passivity control: a wall that has
+// not stored energy yet (first contact, fast reversals) pushes back less for a few ms.
 class PassivityController {
   public:
-    // max_force_rate: the slew limit applied after this controller (infinity if none).
-    PassivityController(double period_s, double max_damping,
-                        double max_force_rate = std::numeric_limits<double>::infinity()) noexcept;
+    // port_mass_kg: a lower bound on the mass the actuator moves (its reflected inertia; the
+    // hand only adds to it), so that the controller can bound how far its own force carries
+    // the port within one tick.
+    PassivityController(double period_s, double port_mass_kg) noexcept;
 
     // Start of a tick: the measured actuator coordinate. Returns the velocity estimate.
     double observe(double ell) noexcept;
-    // Force corrected for passivity (the input when disabled or nothing to correct).
-    [[nodiscard]] double correct(double u_desired) const noexcept;
-    // End of a tick: the force actually applied (after every other limit).
+    // The force reduced towards zero as far as passivity requires (the input when disabled).
+    [[nodiscard]] double limit(double u_desired) const noexcept;
+    // End of a tick: the force actually applied.
     void record(double u_applied) noexcept { u_applied_ = u_applied; }
 
     void setEnabled(bool enabled) noexcept { enabled_ = enabled; }
@@ -43,11 +53,11 @@ class PassivityController {
 
   private:
     double period_s_;
-    double max_damping_;
-    double max_rate_;
+    double port_mass_kg_;
     double energy_{0.0};
     double ell_previous_{0.0};
     double velocity_{0.0};
+    bool reversed_{false};  // the last displacement reversed the one before
     double u_applied_{0.0};
     bool has_previous_{false};
     bool enabled_{true};
@@ -76,7 +86,7 @@ struct PortGuardConfig {
     double max_force_n{10.0};
     double max_force_rate_n_per_s{500.0};
     double fade_time_s{0.1};
-    double max_passivity_damping{200.0};  // N s/m: at most this much damping is ever added
+    double passivity_port_mass_kg{0.1};  // lower bound on the moved mass, see PassivityController
     bool passivity_enabled{true};
 };
 
@@ -87,7 +97,7 @@ enum PortFlag : std::uint8_t {
     kPortStale = 1U << 2,              // fading (input stale, invalid or not yet fresh)
     kPortForceSaturated = 1U << 3,
     kPortRateLimited = 1U << 4,
-    kPortPassivityActive = 1U << 5,  // the passivity controller changed the force
+    kPortPassivityActive = 1U << 5,  // the passivity controller reduced the force
 };
 
 struct PortCommand {

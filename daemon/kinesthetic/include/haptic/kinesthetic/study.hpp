@@ -93,14 +93,16 @@ struct PumpingCase {
     double device_mass_kg{0.1};
     double device_damping_n_s_per_m{1.0};
     double user_damping_n_s_per_m{5.0};
-    // The controller's damping is a sampled-data damper too: b T / m must stay well below 2.
-    double max_passivity_damping_n_s_per_m{50.0};
     double max_force_rate_n_per_s{500.0};  // as config/devices/exoskeleton.yaml
     double period_s{1e-3};
 };
 
 struct PumpingResult {
-    double generated_energy_j{0.0};  // work done by the actuator on the user: -E_observed
+    // Work done by the actuator on the user, sum of u_k (ell_{k+1} - ell_k), measured by the
+    // simulation itself; > 0 means the device generated energy.
+    double generated_energy_j{0.0};
+    // The passivity observer's own book, -E: the same sum without the last tick.
+    double observer_energy_j{0.0};
     double max_force_n{0.0};
     std::vector<double> time_s, generated_energy;  // running total
 };
