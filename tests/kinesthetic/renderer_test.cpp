@@ -7,6 +7,7 @@
 #include <limits>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 
 #include "haptic/config/device.hpp"
 #include "haptic/kinesthetic/anisotropic.hpp"
@@ -386,7 +387,11 @@ TEST_P(DegenerateInput, IterationBoundOnTheExoskeletonWithFourConstraints) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(AllMethods, DegenerateInput, ::testing::ValuesIn(kAllMethods));
+// Named after the config spelling, so ctest lists "DegenerateInput.X/naive" and so on.
+INSTANTIATE_TEST_SUITE_P(AllMethods, DegenerateInput, ::testing::ValuesIn(kAllMethods),
+                         [](const ::testing::TestParamInfo<RenderingMethod>& info) {
+                             return std::string(config::toString(info.param));
+                         });
 
 }  // namespace
 }  // namespace haptic::kinesthetic
