@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "HapticStatusPubSubTypes.h"
+#include "command_relay.hpp"
+#include "haptic/daemon/command_channel.hpp"
 #include "haptic/daemon/daemon_core.hpp"
 #include "haptic/daemon/seqlock.hpp"
 #include "haptic/ipc/dds_participant.hpp"
@@ -58,6 +60,9 @@ daemon::CoreSettings coreSettings(const config::DaemonConfig& cfg) {
     settings.sim_transport = cfg.sim_link.transport == config::SimTransport::kDds
                                  ? msgs::SimTransport::kDds
                                  : msgs::SimTransport::kIceoryx;
+    for (const auto& entry : config::EnumTraits<config::RenderingMethod>::kEntries) {
+        settings.known_methods.emplace_back(entry.name);
+    }
     for (const auto& device : cfg.devices) {
         if (device.isExoskeleton()) {
             settings.rendering_method =
@@ -90,9 +95,11 @@ std::vector<daemon::DeviceDescriptor> deviceDescriptors(const config::DaemonConf
 // Everything the RT thread touches, built before it starts.
 class RealtimeLoop {
   public:
-    RealtimeLoop(const config::DaemonConfig& cfg, std::vector<DeviceEndpoints>& endpoints)
+    RealtimeLoop(const config::DaemonConfig& cfg, std::vector<DeviceEndpoints>& endpoints,
+                 daemon::CommandChannel& commands)
         : core_(coreSettings(cfg), deviceDescriptors(cfg)),
           endpoints_(endpoints),
+          commands_(commands),
           realtime_{cfg.loop.realtime == config::RealtimeMode::kEnforce
                         ? daemon::RealtimePolicy::kEnforce
                         : daemon::RealtimePolicy::kIgnore,
@@ -149,6 +156,7 @@ class RealtimeLoop {
             previous_wake = wake;
 
             takeSimInputs(wake);
+            takeCommands(wake);
             const std::int64_t read_done = monotonicNowNs();
             core_.update(read_done, timing);
             if (core_.snapshotDue(read_done)) {
@@ -186,6 +194,15 @@ class RealtimeLoop {
         }
     }
 
+    void takeCommands(std::int64_t now_ns) noexcept {
+        while (commands_.takeCommand(command_scratch_)) {
+            core_.applyCommand(command_scratch_, now_ns, reply_scratch_);
+            // The command took effect either way; a reply lost to a stalled non-RT side
+            // is visible in haptic/status.
+            (void)commands_.postReply(reply_scratch_);
+        }
+    }
+
     void publishDeviceStates(std::int64_t now_ns) noexcept {
         for (std::size_t i = 0; i < endpoints_.size(); ++i) {
             endpoints_[i].device_state->loan().and_then([&](auto& sample) {
@@ -197,6 +214,9 @@ class RealtimeLoop {
 
     daemon::DaemonCore core_;
     std::vector<DeviceEndpoints>& endpoints_;
+    daemon::CommandChannel& commands_;
+    msgs::HapticCommand command_scratch_{};
+    msgs::HapticCommandReply reply_scratch_{};
     daemon::RealtimeSettings realtime_;
     std::int64_t period_ns_;
     msgs::HapticStatus status_scratch_{};
@@ -248,7 +268,9 @@ int runDaemon(const DaemonOptions& options) {
     auto status_writer = participant.createWriter<idl::HapticStatusPubSubType>(
         ipc::kStatusTopic, ipc::TopicKind::kLatestState);
 
-    RealtimeLoop loop(cfg, endpoints);
+    daemon::CommandChannel commands;
+    CommandRelay command_relay(participant, commands);
+    RealtimeLoop loop(cfg, endpoints, commands);
     loop.start();
     while (loop.startState() == 0) {
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -272,13 +294,15 @@ int runDaemon(const DaemonOptions& options) {
     std::uint64_t last_ticks = 0;
     auto last_watchdog = started;
     msgs::HapticStatus status;
-    // Wake often enough for both jobs: publishing status and, under systemd, pinging the
-    // watchdog at least twice per WatchdogSec however low status_rate_hz is.
-    auto wake_period = std::chrono::duration_cast<std::chrono::nanoseconds>(status_period);
+    // Wake often enough for every job: commands within ~10 ms, each status snapshot, and,
+    // under systemd, the watchdog at least twice per WatchdogSec.
+    auto wake_period = std::min(std::chrono::duration_cast<std::chrono::nanoseconds>(status_period),
+                                std::chrono::nanoseconds(10'000'000));
     if (watchdog) {
         wake_period = std::min(wake_period, std::chrono::nanoseconds(watchdog_usec * 1000 / 4));
     }
     while (process::sleepUnlessShutdown(wake_period)) {
+        command_relay.poll();
         // The RT thread produces a snapshot per status period; publish each one once.
         const auto& snapshots = loop.status();
         if (snapshots.version() != last_version && snapshots.load(status)) {

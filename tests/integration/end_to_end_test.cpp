@@ -155,6 +155,85 @@ TEST_F(RoudiTest, MissingRoudiIsAOneLineErrorNotAHang) {
     }
 }
 
+// Operator commands from hapticctl over haptic/command to the real daemon, and the state they
+// leave in haptic/status. Exit codes: 0 accepted, 2 refused (reason on stderr).
+TEST_F(RoudiTest, EstopAndClearFromHapticctlDriveTheDaemonStateMachine) {
+    startRoudi();
+    ChildProcess daemon({HAPTICD_PATH, "--realtime", "ignore", "--dds-domain", domainArgument()},
+                        "hapticd");
+    const auto ctl = [](std::vector<std::string> args) {
+        std::vector<std::string> argv{HAPTICCTL_PATH, "--dds-domain", domainArgument(), "--timeout",
+                                      "10"};
+        argv.insert(argv.end(), args.begin(), args.end());
+        return runCommand(argv, 20s);
+    };
+    const auto state = [&] {
+        const auto status = ctl({"status"});
+        EXPECT_EQ(status.exit_code, 0) << status.err;
+        std::smatch match;
+        return std::regex_search(status.out, match, std::regex(R"(State: (\S+))")) ? match[1].str()
+                                                                                   : status.out;
+    };
+
+    // The daemon answers once it is IDLE.
+    const auto deadline = std::chrono::steady_clock::now() + 20s;
+    while (state() != "IDLE" && std::chrono::steady_clock::now() < deadline) {
+        ASSERT_TRUE(daemon.running()) << daemon.stderrText();
+    }
+    ASSERT_EQ(state(), "IDLE");
+
+    auto result = ctl({"enable"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_THAT(result.out, HasSubstr("rendering enabled"));
+    EXPECT_EQ(state(), "RENDERING");
+
+    result = ctl({"estop"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_EQ(state(), "E-STOP");
+
+    result = ctl({"enable"});
+    EXPECT_EQ(result.exit_code, 2) << "enable must be refused during E-STOP";
+    EXPECT_THAT(result.err, HasSubstr("refused: emergency stop is active"));
+    EXPECT_EQ(lineCount(result.err), 1U) << result.err;
+    EXPECT_EQ(state(), "E-STOP");
+
+    result = ctl({"clear"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_EQ(state(), "IDLE") << "clear re-arms to IDLE, never straight to RENDERING";
+
+    result = ctl({"clear"});
+    EXPECT_EQ(result.exit_code, 2);
+    EXPECT_THAT(result.err, HasSubstr("nothing to clear"));
+
+    result = ctl({"method", "no_such_method"});
+    EXPECT_EQ(result.exit_code, 2);
+    EXPECT_THAT(result.err, HasSubstr("unknown rendering method"));
+    result = ctl({"method", "naive"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    result = ctl({"status"});
+    EXPECT_THAT(result.out, HasSubstr("rendering method: naive"));
+
+    // watch redraws the same screen; --count bounds it for the test.
+    result = ctl({"watch", "--interval", "0.2", "--count", "2"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_EQ(std::count(result.out.begin(), result.out.end(), '\033'), 4) << "two redraws";
+    EXPECT_THAT(result.out, HasSubstr("State: IDLE"));
+
+    EXPECT_EQ(daemon.terminate(), std::optional<int>(0)) << daemon.stderrText();
+    EXPECT_THAT(daemon.stderrText(), HasSubstr("estop"));
+    EXPECT_EQ(roudi_->terminate(), std::optional<int>(0)) << roudi_->stderrText();
+    expectNoIceoryxLeftovers();
+}
+
+TEST(FailFast, CommandWithoutDaemonExitsThreeWithinTheTimeout) {
+    const auto result = runCommand(
+        {HAPTICCTL_PATH, "--dds-domain", domainArgument(), "--timeout", "1", "estop"}, 10s);
+    EXPECT_EQ(result.exit_code, 3);
+    EXPECT_LT(result.seconds, 3.0);
+    EXPECT_THAT(result.err, HasSubstr("no hapticd listening on 'haptic/command'"));
+    EXPECT_EQ(lineCount(result.err), 1U) << result.err;
+}
+
 TEST(FailFast, MissingDaemonIsAOneLineErrorWithinTheTimeout) {
     const auto result =
         runCommand({HAPTICCTL_PATH, "--dds-domain", domainArgument(), "status"}, 10s);
