@@ -3,6 +3,8 @@
 // non-RT thread forwards commands through a lock-free queue, so no query or command can
 // cause an overrun.
 
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -10,13 +12,16 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <exception>
+#include <fstream>
 #include <iostream>
 #include <thread>
 
 #include "HapticCommandPubSubTypes.h"
 #include "HapticStatusPubSubTypes.h"
+#include "HapticTelemetryPubSubTypes.h"
 #include "haptic/config/daemon.hpp"
 #include "haptic/config/error.hpp"
 #include "haptic/ipc/dds_participant.hpp"
@@ -25,6 +30,7 @@
 #include "haptic/process/logging.hpp"
 #include "haptic/process/shutdown.hpp"
 #include "status_format.hpp"
+#include "telemetry_csv.hpp"
 
 namespace {
 
@@ -119,6 +125,103 @@ int watchStatus(const haptic::config::DaemonConfig& cfg, double interval_s, int 
             break;
         }
     }
+    return EXIT_SUCCESS;
+}
+
+// Writes haptic/telemetry to CSV for `duration_s` (or until Ctrl-C). Exit 3 if no sample
+// arrived within the timeout.
+int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& path,
+                    double duration_s, double timeout_s) {
+    haptic::process::installShutdownHandlers();
+    std::ofstream out(path);
+    if (!out) {
+        std::fprintf(stderr, "hapticctl: cannot write '%s'\n", path.c_str());
+        return kExitError;
+    }
+    haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
+    auto reader = participant.createReader<haptic::idl::HapticTelemetryPubSubType>(
+        haptic::ipc::kTelemetryTopic, haptic::ipc::TopicKind::kStream);
+    out << haptic::ctl::telemetryCsvHeader();
+    haptic::idl::HapticTelemetry sample;
+    haptic::msgs::HapticTelemetry batch;
+    std::int64_t origin_ns = -1;
+    std::uint64_t rows = 0;
+    auto deadline = std::chrono::steady_clock::now() + toMs(timeout_s);
+    while (!haptic::process::shutdownRequested() && std::chrono::steady_clock::now() < deadline) {
+        if (!reader.waitAndTake(sample, 100ms)) {
+            continue;
+        }
+        if (const auto result = haptic::msgs::fromIdl(sample, batch); !result.ok()) {
+            std::fprintf(stderr, "hapticctl: malformed telemetry sample: %s\n",
+                         result.error.c_str());
+            return kExitError;
+        }
+        for (std::size_t i = 0; i < batch.samples.size(); ++i) {
+            if (origin_ns < 0) {
+                origin_ns = batch.samples[i].stamp_ns;
+                deadline = std::chrono::steady_clock::now() + toMs(duration_s);
+            }
+            out << haptic::ctl::telemetryCsvRow(batch.samples[i], origin_ns);
+            ++rows;
+        }
+    }
+    if (rows == 0) {
+        std::fprintf(stderr,
+                     "hapticctl: no telemetry on DDS topic '%s' (domain %d) within %.1f s; is "
+                     "hapticd running?\n",
+                     haptic::ipc::kTelemetryTopic, cfg.dds.domain_id, timeout_s);
+        return kExitNoDaemon;
+    }
+    out.flush();
+    if (!out) {
+        std::fprintf(stderr, "hapticctl: writing '%s' failed\n", path.c_str());
+        return kExitError;
+    }
+    std::printf("%llu rows written to %s\n", static_cast<unsigned long long>(rows), path.c_str());
+    return EXIT_SUCCESS;
+}
+
+// Renders a recorded CSV to PNG with gnuplot (Debian's gnuplot-nox), script on its stdin.
+int plotTelemetry(const std::string& csv_path, std::string png_path) {
+    if (png_path.empty()) {
+        png_path = csv_path + ".png";
+    }
+    if (!std::ifstream(csv_path)) {
+        std::fprintf(stderr, "hapticctl: cannot read '%s'\n", csv_path.c_str());
+        return kExitError;
+    }
+    int pipe_fds[2];
+    if (::pipe(pipe_fds) != 0) {
+        std::perror("hapticctl: pipe");
+        return kExitError;
+    }
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, pipe_fds[0], STDIN_FILENO);
+    posix_spawn_file_actions_addclose(&actions, pipe_fds[1]);
+    char program[] = "gnuplot";
+    char* argv[] = {program, nullptr};
+    pid_t pid = -1;
+    const int spawned = posix_spawnp(&pid, program, &actions, nullptr, argv, environ);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(pipe_fds[0]);
+    if (spawned != 0) {
+        ::close(pipe_fds[1]);
+        std::fprintf(stderr, "hapticctl: cannot run gnuplot (install gnuplot-nox): %s\n",
+                     std::strerror(spawned));
+        return kExitError;
+    }
+    const std::string script = haptic::ctl::telemetryPlotScript(csv_path, png_path);
+    const bool written =
+        ::write(pipe_fds[1], script.data(), script.size()) == static_cast<ssize_t>(script.size());
+    ::close(pipe_fds[1]);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    if (!written || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        std::fprintf(stderr, "hapticctl: gnuplot failed on '%s'\n", csv_path.c_str());
+        return kExitError;
+    }
+    std::printf("%s\n", png_path.c_str());
     return EXIT_SUCCESS;
 }
 
@@ -218,6 +321,19 @@ int main(int argc, char** argv) {
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber);
 
+    std::string record_path;
+    double record_duration_s = 5.0;
+    auto* record = app.add_subcommand("record", "write haptic/telemetry to a CSV file");
+    record->add_option("file", record_path, "CSV file to write")->required();
+    record->add_option("--duration", record_duration_s, "seconds to record")
+        ->capture_default_str()
+        ->check(CLI::PositiveNumber);
+    std::string plot_path;
+    std::string plot_output;
+    auto* plot = app.add_subcommand("plot", "PNG of forces and loop timing from a recorded CSV");
+    plot->add_option("file", plot_path, "CSV written by 'record'")->required();
+    plot->add_option("-o,--output", plot_output, "PNG to write (default: <file>.png)");
+
     using haptic::msgs::CommandKind;
     struct Simple {
         const char* name;
@@ -250,6 +366,12 @@ int main(int argc, char** argv) {
         }
         if (watch->parsed()) {
             return watchStatus(cfg, interval_s, count);
+        }
+        if (record->parsed()) {
+            return recordTelemetry(cfg, record_path, record_duration_s, timeout_s);
+        }
+        if (plot->parsed()) {
+            return plotTelemetry(plot_path, plot_output);
         }
         if (method->parsed()) {
             return sendCommand(cfg, CommandKind::kSetMethod, method_name, timeout_s);

@@ -124,6 +124,17 @@ std::uint64_t DaemonCore::rejectedCount(std::size_t device, InputRejection reaso
     return devices_[device].rejected_by[static_cast<std::size_t>(reason)];
 }
 
+void DaemonCore::fillTelemetry(std::size_t device, std::uint64_t tick, std::int64_t now_ns,
+                               const TickTiming& timing,
+                               msgs::TelemetrySample& out) const noexcept {
+    out = msgs::TelemetrySample{};
+    out.tick = tick;
+    out.stamp_ns = now_ns;
+    out.device_index = static_cast<std::uint16_t>(device);
+    out.compute_us = timing.read_us + timing.compute_us + timing.write_us;
+    out.wakeup_latency_us = timing.wakeup_latency_us;
+}
+
 bool DaemonCore::snapshotDue(std::int64_t now_ns) const noexcept {
     return now_ns - last_snapshot_ns_ >= settings_.status_period_ns;
 }

@@ -72,6 +72,11 @@ class DaemonCore {
     [[nodiscard]] std::uint64_t rejectedCount(std::size_t device,
                                               InputRejection reason) const noexcept;
 
+    // One telemetry sample for the device at this tick. The commanded force is the rendered
+    // force times outputGain(); no renderer is attached yet, so it is zero.
+    void fillTelemetry(std::size_t device, std::uint64_t tick, std::int64_t now_ns,
+                       const TickTiming& timing, msgs::TelemetrySample& out) const noexcept;
+
     // Every status period, fills `out` and returns true.
     bool snapshotDue(std::int64_t now_ns) const noexcept;
     void fillStatus(std::int64_t now_ns, msgs::HapticStatus& out) noexcept;
