@@ -353,7 +353,12 @@ int main(int argc, char** argv) {
     std::string method_name;
     auto* method = app.add_subcommand("method", "choose the rendering method (only in IDLE)");
     method->add_option("name", method_name, "rendering method, as in the device YAML")->required();
-    CLI11_PARSE(app, argc, argv);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& error) {
+        // --help is exit 0; any usage error is exit 1 like every other error.
+        return app.exit(error) == 0 ? EXIT_SUCCESS : kExitError;
+    }
 
     try {
         auto cfg = haptic::config::loadDaemonConfig(config_path);
