@@ -301,13 +301,15 @@ int main(int argc, char** argv) {
     app.fallthrough();
     std::string config_path = HAPTIC_DEFAULT_CONFIG_DIR "/daemon.yaml";
     int dds_domain = -1;
-    double timeout_s = 2.0;
+    // A command waits longer than a status query: DDS discovery of the command reader and
+    // the reply writer, measured here at 0.2 s usually, sometimes took over 2 s.
+    double timeout_s = 0.0;
     app.add_option("-c,--config", config_path,
                    "daemon configuration file (for the DDS domain and profile)")
         ->capture_default_str();
     app.add_option("--dds-domain", dds_domain, "override dds.domain_id")->check(CLI::Range(0, 232));
-    app.add_option("--timeout", timeout_s, "seconds to wait for the daemon's status or reply")
-        ->capture_default_str()
+    app.add_option("--timeout", timeout_s,
+                   "seconds to wait for the daemon's status (default 2) or reply (default 5)")
         ->check(CLI::PositiveNumber);
 
     auto* status = app.add_subcommand("status", "print the daemon's state and loop statistics");
@@ -366,6 +368,11 @@ int main(int argc, char** argv) {
             cfg.dds.domain_id = dds_domain;
         }
         haptic::process::setupLogging("hapticctl", "warn");
+        const bool is_command =
+            !status->parsed() && !watch->parsed() && !record->parsed() && !plot->parsed();
+        if (timeout_s <= 0.0) {
+            timeout_s = is_command ? 5.0 : 2.0;
+        }
         if (status->parsed()) {
             return printStatus(cfg, timeout_s);
         }
