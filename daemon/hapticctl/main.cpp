@@ -1,80 +1,366 @@
-// hapticctl: the status CLI. It only listens to published DDS topics and never calls into
-// the daemon's RT thread (a status query must not be able to cause an overrun).
+// hapticctl: the operator CLI. It only talks over published DDS topics (haptic/status,
+// haptic/command and its reply) and never calls into the daemon's RT thread: hapticd's
+// non-RT thread forwards commands through a lock-free queue, so no query or command can
+// cause an overrun.
+
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <exception>
+#include <fstream>
 #include <iostream>
+#include <thread>
 
+#include "HapticCommandPubSubTypes.h"
 #include "HapticStatusPubSubTypes.h"
+#include "HapticTelemetryPubSubTypes.h"
 #include "haptic/config/daemon.hpp"
 #include "haptic/config/error.hpp"
 #include "haptic/ipc/dds_participant.hpp"
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
 #include "haptic/process/logging.hpp"
+#include "haptic/process/shutdown.hpp"
 #include "status_format.hpp"
+#include "telemetry_csv.hpp"
 
 namespace {
 
-// Exit codes, so scripts can tell a daemon that is down from a broken installation.
-constexpr int kExitNoDaemon = 3;
-constexpr int kExitError = 1;
+using namespace std::chrono_literals;
 
-int printStatus(const haptic::config::DaemonConfig& cfg, double timeout_s) {
-    haptic::ipc::DdsParticipant participant(
-        haptic::ipc::DdsSettings{static_cast<std::uint32_t>(cfg.dds.domain_id),
-                                 cfg.dds.profiles_file.string(), cfg.dds.participant_profile},
-        "hapticctl");
-    auto reader = participant.createReader<haptic::idl::HapticStatusPubSubType>(
-        haptic::ipc::kStatusTopic, haptic::ipc::TopicKind::kLatestState);
-    haptic::idl::HapticStatus sample;
-    const auto timeout = std::chrono::milliseconds(static_cast<long>(timeout_s * 1000.0));
-    if (!reader.waitAndTake(sample, timeout)) {
-        std::fprintf(stderr,
-                     "hapticctl: no hapticd status on DDS topic '%s' (domain %d) within %.1f s; is "
-                     "hapticd running?\n",
-                     haptic::ipc::kStatusTopic, cfg.dds.domain_id, timeout_s);
-        return kExitNoDaemon;
-    }
+// Exit codes, so scripts can tell a refused command or a daemon that is down from a broken
+// installation.
+constexpr int kExitError = 1;
+constexpr int kExitRefused = 2;
+constexpr int kExitNoDaemon = 3;
+
+std::int64_t monotonicNs() {
+    timespec now{};
+    ::clock_gettime(CLOCK_MONOTONIC, &now);
+    return now.tv_sec * 1'000'000'000LL + now.tv_nsec;
+}
+
+haptic::ipc::DdsSettings ddsSettings(const haptic::config::DaemonConfig& cfg) {
+    return {static_cast<std::uint32_t>(cfg.dds.domain_id), cfg.dds.profiles_file.string(),
+            cfg.dds.participant_profile};
+}
+
+std::chrono::milliseconds toMs(double seconds) {
+    return std::chrono::milliseconds(static_cast<long>(seconds * 1000.0));
+}
+
+// The status screen for one sample; returns false (after printing why) if it is malformed.
+bool renderStatus(const haptic::idl::HapticStatus& sample, std::string& screen) {
     haptic::msgs::HapticStatus status;
     if (const auto result = haptic::msgs::fromIdl(sample, status); !result.ok()) {
         std::fprintf(stderr, "hapticctl: malformed status sample: %s\n", result.error.c_str());
-        return kExitError;
+        return false;
     }
     // Stamps are CLOCK_MONOTONIC of the daemon's host; over DDS from another host the age is
     // meaningless, so it is shown only when it is plausible.
-    timespec now{};
-    ::clock_gettime(CLOCK_MONOTONIC, &now);
-    const double age_s =
-        static_cast<double>(now.tv_sec * 1'000'000'000LL + now.tv_nsec - status.header.stamp_ns) *
-        1e-9;
-    std::cout << haptic::ctl::formatStatus(status, age_s >= 0.0 && age_s < 3600.0 ? age_s : -1.0)
-              << std::flush;
+    const double age_s = static_cast<double>(monotonicNs() - status.header.stamp_ns) * 1e-9;
+    screen = haptic::ctl::formatStatus(status, age_s >= 0.0 && age_s < 3600.0 ? age_s : -1.0);
+    return true;
+}
+
+void reportNoDaemon(const haptic::config::DaemonConfig& cfg, double timeout_s) {
+    std::fprintf(stderr,
+                 "hapticctl: no hapticd status on DDS topic '%s' (domain %d) within %.1f s; is "
+                 "hapticd running?\n",
+                 haptic::ipc::kStatusTopic, cfg.dds.domain_id, timeout_s);
+}
+
+int printStatus(const haptic::config::DaemonConfig& cfg, double timeout_s) {
+    haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
+    auto reader = participant.createReader<haptic::idl::HapticStatusPubSubType>(
+        haptic::ipc::kStatusTopic, haptic::ipc::TopicKind::kLatestState);
+    haptic::idl::HapticStatus sample;
+    if (!reader.waitAndTake(sample, toMs(timeout_s))) {
+        reportNoDaemon(cfg, timeout_s);
+        return kExitNoDaemon;
+    }
+    std::string screen;
+    if (!renderStatus(sample, screen)) {
+        return kExitError;
+    }
+    std::cout << screen << std::flush;
     return EXIT_SUCCESS;
+}
+
+// Redraws the status screen every `interval_s` until Ctrl-C (or `count` screens, for
+// scripts). A daemon that goes away is shown as such, and watch keeps waiting for it.
+int watchStatus(const haptic::config::DaemonConfig& cfg, double interval_s, int count) {
+    haptic::process::installShutdownHandlers();
+    haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
+    auto reader = participant.createReader<haptic::idl::HapticStatusPubSubType>(
+        haptic::ipc::kStatusTopic, haptic::ipc::TopicKind::kLatestState);
+    haptic::idl::HapticStatus sample;
+    std::string screen;
+    for (int drawn = 0; count == 0 || drawn < count; ++drawn) {
+        const bool fresh = reader.waitAndTake(sample, toMs(std::max(interval_s, 2.0)));
+        if (haptic::process::shutdownRequested()) {
+            break;
+        }
+        // Home the cursor and clear the screen, as watch(1) does.
+        std::cout << "\033[H\033[2J";
+        if (!fresh) {
+            std::cout << "● hapticd - no status on '" << haptic::ipc::kStatusTopic << "' (domain "
+                      << cfg.dds.domain_id << "); waiting for the daemon\n";
+        } else if (renderStatus(sample, screen)) {
+            std::cout << screen;
+        }
+        std::cout << std::flush;
+        if ((count != 0 && drawn + 1 >= count) ||
+            !haptic::process::sleepUnlessShutdown(
+                std::chrono::duration_cast<std::chrono::nanoseconds>(
+                    std::chrono::duration<double>(interval_s)))) {
+            break;
+        }
+    }
+    return EXIT_SUCCESS;
+}
+
+// Writes haptic/telemetry to CSV for `duration_s` (or until Ctrl-C). Exit 3 if no sample
+// arrived within the timeout.
+int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& path,
+                    double duration_s, double timeout_s) {
+    haptic::process::installShutdownHandlers();
+    std::ofstream out(path);
+    if (!out) {
+        std::fprintf(stderr, "hapticctl: cannot write '%s'\n", path.c_str());
+        return kExitError;
+    }
+    haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
+    auto reader = participant.createReader<haptic::idl::HapticTelemetryPubSubType>(
+        haptic::ipc::kTelemetryTopic, haptic::ipc::TopicKind::kStream);
+    out << haptic::ctl::telemetryCsvHeader();
+    haptic::idl::HapticTelemetry sample;
+    haptic::msgs::HapticTelemetry batch;
+    std::int64_t origin_ns = -1;
+    std::uint64_t rows = 0;
+    auto deadline = std::chrono::steady_clock::now() + toMs(timeout_s);
+    while (!haptic::process::shutdownRequested() && std::chrono::steady_clock::now() < deadline) {
+        if (!reader.waitAndTake(sample, 100ms)) {
+            continue;
+        }
+        if (const auto result = haptic::msgs::fromIdl(sample, batch); !result.ok()) {
+            std::fprintf(stderr, "hapticctl: malformed telemetry sample: %s\n",
+                         result.error.c_str());
+            return kExitError;
+        }
+        for (std::size_t i = 0; i < batch.samples.size(); ++i) {
+            if (origin_ns < 0) {
+                origin_ns = batch.samples[i].stamp_ns;
+                deadline = std::chrono::steady_clock::now() + toMs(duration_s);
+            }
+            out << haptic::ctl::telemetryCsvRow(batch.samples[i], origin_ns);
+            ++rows;
+        }
+    }
+    if (rows == 0) {
+        std::fprintf(stderr,
+                     "hapticctl: no telemetry on DDS topic '%s' (domain %d) within %.1f s; is "
+                     "hapticd running?\n",
+                     haptic::ipc::kTelemetryTopic, cfg.dds.domain_id, timeout_s);
+        return kExitNoDaemon;
+    }
+    out.flush();
+    if (!out) {
+        std::fprintf(stderr, "hapticctl: writing '%s' failed\n", path.c_str());
+        return kExitError;
+    }
+    std::printf("%llu rows written to %s\n", static_cast<unsigned long long>(rows), path.c_str());
+    return EXIT_SUCCESS;
+}
+
+// Renders a recorded CSV to PNG with gnuplot (Debian's gnuplot-nox), script on its stdin.
+int plotTelemetry(const std::string& csv_path, std::string png_path) {
+    if (png_path.empty()) {
+        png_path = csv_path + ".png";
+    }
+    if (!std::ifstream(csv_path)) {
+        std::fprintf(stderr, "hapticctl: cannot read '%s'\n", csv_path.c_str());
+        return kExitError;
+    }
+    int pipe_fds[2];
+    if (::pipe(pipe_fds) != 0) {
+        std::perror("hapticctl: pipe");
+        return kExitError;
+    }
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, pipe_fds[0], STDIN_FILENO);
+    posix_spawn_file_actions_addclose(&actions, pipe_fds[1]);
+    char program[] = "gnuplot";
+    char* argv[] = {program, nullptr};
+    pid_t pid = -1;
+    const int spawned = posix_spawnp(&pid, program, &actions, nullptr, argv, environ);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(pipe_fds[0]);
+    if (spawned != 0) {
+        ::close(pipe_fds[1]);
+        std::fprintf(stderr, "hapticctl: cannot run gnuplot (install gnuplot-nox): %s\n",
+                     std::strerror(spawned));
+        return kExitError;
+    }
+    const std::string script = haptic::ctl::telemetryPlotScript(csv_path, png_path);
+    const bool written =
+        ::write(pipe_fds[1], script.data(), script.size()) == static_cast<ssize_t>(script.size());
+    ::close(pipe_fds[1]);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    if (!written || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        std::fprintf(stderr, "hapticctl: gnuplot failed on '%s'\n", csv_path.c_str());
+        return kExitError;
+    }
+    std::printf("%s\n", png_path.c_str());
+    return EXIT_SUCCESS;
+}
+
+// Sends one command and waits for the reply carrying its request id. The command is
+// (re)sent once the daemon's reader is matched and again every 500 ms until answered: a
+// first send can reach the daemon before its reply writer has discovered our reader, and
+// the daemon answers a repeated request id from its record instead of running it twice.
+int sendCommand(const haptic::config::DaemonConfig& cfg, haptic::msgs::CommandKind kind,
+                const std::string& argument, double timeout_s) {
+    haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
+    auto writer = participant.createWriter<haptic::idl::HapticCommandPubSubType>(
+        haptic::ipc::kCommandTopic, haptic::ipc::TopicKind::kStream);
+    auto reader = participant.createReader<haptic::idl::HapticCommandReplyPubSubType>(
+        haptic::ipc::kCommandReplyTopic, haptic::ipc::TopicKind::kStream);
+
+    haptic::msgs::HapticCommand command;
+    command.request_id =
+        (static_cast<std::uint64_t>(::getpid()) << 32) ^ static_cast<std::uint64_t>(monotonicNs());
+    command.header.seq = 1;
+    command.header.stamp_ns = monotonicNs();
+    command.header.source_id.assign("hapticctl");
+    command.kind = kind;
+    if (argument.size() > haptic::msgs::DeviceId::kMaxLength) {
+        std::fprintf(stderr, "hapticctl: argument '%s' is longer than %zu characters\n",
+                     argument.c_str(), haptic::msgs::DeviceId::kMaxLength);
+        return kExitError;
+    }
+    command.argument.assign(argument);
+    const auto wire = haptic::msgs::toIdl(command);
+
+    const auto deadline = std::chrono::steady_clock::now() + toMs(timeout_s);
+    auto last_sent = std::chrono::steady_clock::time_point{};
+    bool sent = false;
+    haptic::idl::HapticCommandReply sample;
+    while (std::chrono::steady_clock::now() < deadline) {
+        const auto now = std::chrono::steady_clock::now();
+        if (writer.matchedReaders() > 0 && (!sent || now - last_sent >= 500ms)) {
+            sent = writer.write(wire) || sent;
+            last_sent = now;
+        }
+        if (!reader.waitAndTake(sample, 50ms) || sample.request_id() != command.request_id) {
+            continue;
+        }
+        haptic::msgs::HapticCommandReply reply;
+        if (const auto result = haptic::msgs::fromIdl(sample, reply); !result.ok()) {
+            std::fprintf(stderr, "hapticctl: malformed reply: %s\n", result.error.c_str());
+            return kExitError;
+        }
+        const std::string message(reply.message.view());
+        if (!reply.accepted) {
+            std::fprintf(stderr, "hapticctl: refused: %s\n", message.c_str());
+            return kExitRefused;
+        }
+        std::printf("%s\n", message.c_str());
+        return EXIT_SUCCESS;
+    }
+    if (sent) {
+        std::fprintf(stderr, "hapticctl: hapticd did not answer on '%s' within %.1f s\n",
+                     haptic::ipc::kCommandReplyTopic, timeout_s);
+    } else {
+        std::fprintf(stderr,
+                     "hapticctl: no hapticd listening on '%s' (domain %d) within %.1f s; is "
+                     "hapticd running?\n",
+                     haptic::ipc::kCommandTopic, cfg.dds.domain_id, timeout_s);
+    }
+    return kExitNoDaemon;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-    CLI::App app{"hapticctl - status of the haptic runtime (listens to hapticd's DDS topics)"};
+    CLI::App app{
+        "hapticctl - status and commands for the haptic runtime (over hapticd's DDS "
+        "topics)"};
     app.require_subcommand(1);
+    // Global options may follow the subcommand too (hapticctl status --timeout 5).
+    app.fallthrough();
     std::string config_path = HAPTIC_DEFAULT_CONFIG_DIR "/daemon.yaml";
     int dds_domain = -1;
+    // A command waits longer than a status query: DDS discovery of the command reader and
+    // the reply writer, measured here at 0.2 s usually, sometimes took over 2 s.
+    double timeout_s = 0.0;
     app.add_option("-c,--config", config_path,
                    "daemon configuration file (for the DDS domain and profile)")
         ->capture_default_str();
     app.add_option("--dds-domain", dds_domain, "override dds.domain_id")->check(CLI::Range(0, 232));
+    app.add_option("--timeout", timeout_s,
+                   "seconds to wait for the daemon's status (default 2) or reply (default 5)")
+        ->check(CLI::PositiveNumber);
 
-    double timeout_s = 2.0;
     auto* status = app.add_subcommand("status", "print the daemon's state and loop statistics");
-    status->add_option("--timeout", timeout_s, "seconds to wait for a status sample")
+    double interval_s = 1.0;
+    int count = 0;
+    auto* watch = app.add_subcommand("watch", "redraw the status screen live (Ctrl-C stops)");
+    watch->add_option("-n,--interval", interval_s, "seconds between screens")
+        ->capture_default_str()
+        ->check(CLI::Range(0.05, 3600.0));
+    watch->add_option("--count", count, "stop after this many screens (0: until Ctrl-C)")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+
+    std::string record_path;
+    double record_duration_s = 5.0;
+    auto* record = app.add_subcommand("record", "write haptic/telemetry to a CSV file");
+    record->add_option("file", record_path, "CSV file to write")->required();
+    record->add_option("--duration", record_duration_s, "seconds to record")
         ->capture_default_str()
         ->check(CLI::PositiveNumber);
-    CLI11_PARSE(app, argc, argv);
+    std::string plot_path;
+    std::string plot_output;
+    auto* plot = app.add_subcommand("plot", "PNG of forces and loop timing from a recorded CSV");
+    plot->add_option("file", plot_path, "CSV written by 'record'")->required();
+    plot->add_option("-o,--output", plot_output, "PNG to write (default: <file>.png)");
+
+    using haptic::msgs::CommandKind;
+    struct Simple {
+        const char* name;
+        const char* help;
+        CommandKind kind;
+        CLI::App* sub{nullptr};
+    };
+    Simple simple[] = {
+        {"enable", "start rendering (IDLE -> RENDERING)", CommandKind::kEnable},
+        {"disable", "stop rendering, forces to zero (RENDERING -> IDLE)", CommandKind::kDisable},
+        {"estop", "emergency stop: forces off until 'clear'", CommandKind::kEstop},
+        {"clear", "clear a latched fault or an emergency stop (-> IDLE)", CommandKind::kClearFault},
+    };
+    for (auto& entry : simple) {
+        entry.sub = app.add_subcommand(entry.name, entry.help);
+    }
+    std::string method_name;
+    auto* method = app.add_subcommand("method", "choose the rendering method (only in IDLE)");
+    method->add_option("name", method_name, "rendering method, as in the device YAML")->required();
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& error) {
+        // --help is exit 0; any usage error is exit 1 like every other error.
+        return app.exit(error) == 0 ? EXIT_SUCCESS : kExitError;
+    }
 
     try {
         auto cfg = haptic::config::loadDaemonConfig(config_path);
@@ -82,8 +368,30 @@ int main(int argc, char** argv) {
             cfg.dds.domain_id = dds_domain;
         }
         haptic::process::setupLogging("hapticctl", "warn");
+        const bool is_command =
+            !status->parsed() && !watch->parsed() && !record->parsed() && !plot->parsed();
+        if (timeout_s <= 0.0) {
+            timeout_s = is_command ? 5.0 : 2.0;
+        }
         if (status->parsed()) {
             return printStatus(cfg, timeout_s);
+        }
+        if (watch->parsed()) {
+            return watchStatus(cfg, interval_s, count);
+        }
+        if (record->parsed()) {
+            return recordTelemetry(cfg, record_path, record_duration_s, timeout_s);
+        }
+        if (plot->parsed()) {
+            return plotTelemetry(plot_path, plot_output);
+        }
+        if (method->parsed()) {
+            return sendCommand(cfg, CommandKind::kSetMethod, method_name, timeout_s);
+        }
+        for (const auto& entry : simple) {
+            if (entry.sub->parsed()) {
+                return sendCommand(cfg, entry.kind, "", timeout_s);
+            }
         }
     } catch (const haptic::config::ConfigError& error) {
         std::fprintf(stderr, "hapticctl: configuration error: %s\n", error.what());

@@ -10,6 +10,9 @@
 #include <vector>
 
 #include "HapticStatusPubSubTypes.h"
+#include "HapticTelemetryPubSubTypes.h"
+#include "command_relay.hpp"
+#include "haptic/daemon/command_channel.hpp"
 #include "haptic/daemon/daemon_core.hpp"
 #include "haptic/daemon/seqlock.hpp"
 #include "haptic/ipc/dds_participant.hpp"
@@ -32,6 +35,11 @@ iox::capro::ServiceDescription serviceFor(const std::string& device, std::string
             iox::capro::IdString_t(iox::cxx::TruncateToCapacity, device.c_str()),
             iox::capro::IdString_t(iox::cxx::TruncateToCapacity, event_name.c_str())};
 }
+
+// One sample per device per tick, drained every ~10 ms by the non-RT thread. Telemetry is
+// best effort (the RT thread never waits for it): 2048 slots hold about one second of two
+// devices, so only a non-RT thread stalled that long loses samples, and they are counted.
+using TelemetryQueue = iox::concurrent::LockFreeQueue<msgs::TelemetrySample, 2048>;
 
 iox::popo::SubscriberOptions latestValueOptions() {
     // Control data: only the newest sample matters, so a queue of one that drops the oldest.
@@ -58,6 +66,9 @@ daemon::CoreSettings coreSettings(const config::DaemonConfig& cfg) {
     settings.sim_transport = cfg.sim_link.transport == config::SimTransport::kDds
                                  ? msgs::SimTransport::kDds
                                  : msgs::SimTransport::kIceoryx;
+    for (const auto& entry : config::EnumTraits<config::RenderingMethod>::kEntries) {
+        settings.known_methods.emplace_back(entry.name);
+    }
     for (const auto& device : cfg.devices) {
         if (device.isExoskeleton()) {
             settings.rendering_method =
@@ -90,9 +101,12 @@ std::vector<daemon::DeviceDescriptor> deviceDescriptors(const config::DaemonConf
 // Everything the RT thread touches, built before it starts.
 class RealtimeLoop {
   public:
-    RealtimeLoop(const config::DaemonConfig& cfg, std::vector<DeviceEndpoints>& endpoints)
+    RealtimeLoop(const config::DaemonConfig& cfg, std::vector<DeviceEndpoints>& endpoints,
+                 daemon::CommandChannel& commands, TelemetryQueue& telemetry)
         : core_(coreSettings(cfg), deviceDescriptors(cfg)),
           endpoints_(endpoints),
+          commands_(commands),
+          telemetry_(telemetry),
           realtime_{cfg.loop.realtime == config::RealtimeMode::kEnforce
                         ? daemon::RealtimePolicy::kEnforce
                         : daemon::RealtimePolicy::kIgnore,
@@ -120,6 +134,9 @@ class RealtimeLoop {
     [[nodiscard]] const std::string& setupReport() const noexcept { return setup_report_; }
     [[nodiscard]] std::uint64_t ticks() const noexcept {
         return ticks_.load(std::memory_order_relaxed);
+    }
+    [[nodiscard]] std::uint64_t telemetryDropped() const noexcept {
+        return telemetry_dropped_.load(std::memory_order_relaxed);
     }
     [[nodiscard]] const daemon::SeqLock<msgs::HapticStatus>& status() const noexcept {
         return status_;
@@ -149,6 +166,7 @@ class RealtimeLoop {
             previous_wake = wake;
 
             takeSimInputs(wake);
+            takeCommands(wake);
             const std::int64_t read_done = monotonicNowNs();
             core_.update(read_done, timing);
             if (core_.snapshotDue(read_done)) {
@@ -164,6 +182,7 @@ class RealtimeLoop {
             timing.read_us = static_cast<double>(read_done - wake) * 1e-3;
             timing.compute_us = static_cast<double>(compute_done - read_done) * 1e-3;
             timing.write_us = static_cast<double>(write_done - compute_done) * 1e-3;
+            queueTelemetry(ticks_.load(std::memory_order_relaxed), wake, timing);
             ticks_.fetch_add(1, std::memory_order_relaxed);
         }
     }
@@ -186,6 +205,25 @@ class RealtimeLoop {
         }
     }
 
+    void takeCommands(std::int64_t now_ns) noexcept {
+        while (commands_.takeCommand(command_scratch_)) {
+            core_.applyCommand(command_scratch_, now_ns, reply_scratch_);
+            // The command took effect either way; a reply lost to a stalled non-RT side
+            // is visible in haptic/status.
+            (void)commands_.postReply(reply_scratch_);
+        }
+    }
+
+    void queueTelemetry(std::uint64_t tick, std::int64_t now_ns,
+                        const daemon::TickTiming& timing) noexcept {
+        for (std::size_t i = 0; i < endpoints_.size(); ++i) {
+            core_.fillTelemetry(i, tick, now_ns, timing, telemetry_scratch_);
+            if (!telemetry_.tryPush(telemetry_scratch_)) {
+                telemetry_dropped_.fetch_add(1, std::memory_order_relaxed);
+            }
+        }
+    }
+
     void publishDeviceStates(std::int64_t now_ns) noexcept {
         for (std::size_t i = 0; i < endpoints_.size(); ++i) {
             endpoints_[i].device_state->loan().and_then([&](auto& sample) {
@@ -197,6 +235,11 @@ class RealtimeLoop {
 
     daemon::DaemonCore core_;
     std::vector<DeviceEndpoints>& endpoints_;
+    daemon::CommandChannel& commands_;
+    msgs::HapticCommand command_scratch_{};
+    msgs::HapticCommandReply reply_scratch_{};
+    TelemetryQueue& telemetry_;
+    msgs::TelemetrySample telemetry_scratch_{};
     daemon::RealtimeSettings realtime_;
     std::int64_t period_ns_;
     msgs::HapticStatus status_scratch_{};
@@ -204,6 +247,7 @@ class RealtimeLoop {
     std::atomic<bool> stop_requested_{false};
     std::atomic<int> start_state_{0};
     std::atomic<std::uint64_t> ticks_{0};
+    std::atomic<std::uint64_t> telemetry_dropped_{0};
     std::string setup_report_;
     std::thread thread_;
 };
@@ -248,7 +292,33 @@ int runDaemon(const DaemonOptions& options) {
     auto status_writer = participant.createWriter<idl::HapticStatusPubSubType>(
         ipc::kStatusTopic, ipc::TopicKind::kLatestState);
 
-    RealtimeLoop loop(cfg, endpoints);
+    daemon::CommandChannel commands;
+    CommandRelay command_relay(participant, commands);
+    auto telemetry_writer = participant.createWriter<idl::HapticTelemetryPubSubType>(
+        ipc::kTelemetryTopic, ipc::TopicKind::kStream);
+    auto telemetry = std::make_unique<TelemetryQueue>();
+    std::uint64_t telemetry_seq = 0;
+    msgs::HapticTelemetry batch;
+    const auto publishTelemetry = [&] {
+        while (true) {
+            batch = msgs::HapticTelemetry{};
+            while (batch.samples.size() < msgs::kMaxTelemetrySamples) {
+                auto sample = telemetry->pop();
+                if (!sample.has_value()) {
+                    break;
+                }
+                batch.samples.push_back(*sample);
+            }
+            if (batch.samples.size() == 0) {
+                return;
+            }
+            batch.header.seq = ++telemetry_seq;
+            batch.header.stamp_ns = monotonicNowNs();
+            batch.header.source_id.assign("hapticd");
+            telemetry_writer.write(msgs::toIdl(batch));
+        }
+    };
+    RealtimeLoop loop(cfg, endpoints, commands, *telemetry);
     loop.start();
     while (loop.startState() == 0) {
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -272,13 +342,16 @@ int runDaemon(const DaemonOptions& options) {
     std::uint64_t last_ticks = 0;
     auto last_watchdog = started;
     msgs::HapticStatus status;
-    // Wake often enough for both jobs: publishing status and, under systemd, pinging the
-    // watchdog at least twice per WatchdogSec however low status_rate_hz is.
-    auto wake_period = std::chrono::duration_cast<std::chrono::nanoseconds>(status_period);
+    // Wake often enough for every job: commands within ~10 ms, each status snapshot, and,
+    // under systemd, the watchdog at least twice per WatchdogSec.
+    auto wake_period = std::min(std::chrono::duration_cast<std::chrono::nanoseconds>(status_period),
+                                std::chrono::nanoseconds(10'000'000));
     if (watchdog) {
         wake_period = std::min(wake_period, std::chrono::nanoseconds(watchdog_usec * 1000 / 4));
     }
     while (process::sleepUnlessShutdown(wake_period)) {
+        command_relay.poll();
+        publishTelemetry();
         // The RT thread produces a snapshot per status period; publish each one once.
         const auto& snapshots = loop.status();
         if (snapshots.version() != last_version && snapshots.load(status)) {
@@ -301,7 +374,8 @@ int runDaemon(const DaemonOptions& options) {
     }
     sd_notify(0, "STOPPING=1");
     loop.stop();
-    spdlog::info("stopped after {} ticks", loop.ticks());
+    spdlog::info("stopped after {} ticks ({} telemetry samples dropped)", loop.ticks(),
+                 loop.telemetryDropped());
     return EXIT_SUCCESS;
 }
 

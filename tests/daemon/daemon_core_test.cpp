@@ -42,8 +42,13 @@ msgs::ContactSurface validContactSurface(std::string_view device) {
 class DaemonCoreTest : public ::testing::Test {
   protected:
     DaemonCoreTest()
-        : sut(CoreSettings{1000.0, 20 * kMs, 100 * kMs, 50 * kMs, "subspace",
-                           msgs::SimTransport::kIceoryx},
+        : sut(CoreSettings{1000.0,
+                           20 * kMs,
+                           100 * kMs,
+                           50 * kMs,
+                           "subspace",
+                           msgs::SimTransport::kIceoryx,
+                           {"subspace"}},
               {DeviceDescriptor{"exo_index", msgs::DeviceKind::kExoskeleton, 3, 1},
                DeviceDescriptor{"thimble_index", msgs::DeviceKind::kThimble, 3, 3}}) {
         sut.markStarted(0);
@@ -190,6 +195,25 @@ TEST_F(DaemonCoreTest, StatusReportsDevicesLinkRateAndLoopWindow) {
     EXPECT_THAT(status.loop.period_us.p50, DoubleNear(1000.0, 1.0));
     EXPECT_THAT(status.loop.overruns, Eq(0U));
     EXPECT_THAT(status.rendering_method.view(), Eq("subspace"));
+}
+
+TEST_F(DaemonCoreTest, ForceGainFollowsTheFadeOnlyWhileRendering) {
+    std::int64_t t = 0;
+    for (int i = 0; i < 200; ++i) {
+        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), t);
+        t = runTicks(t, 1);
+    }
+    ASSERT_THAT(sut.simFade(0), Eq(1.0));
+    EXPECT_THAT(sut.outputGain(0), Eq(0.0)) << "IDLE renders nothing";
+
+    msgs::HapticCommand command;
+    msgs::HapticCommandReply reply;
+    command.kind = msgs::CommandKind::kEnable;
+    ASSERT_TRUE(sut.applyCommand(command, t, reply).accepted);
+    EXPECT_THAT(sut.outputGain(0), Eq(1.0));
+    command.kind = msgs::CommandKind::kEstop;
+    ASSERT_TRUE(sut.applyCommand(command, t, reply).accepted);
+    EXPECT_THAT(sut.outputGain(0), Eq(0.0)) << "E-STOP drops force at once";
 }
 
 TEST_F(DaemonCoreTest, TicksDoNotAllocate) {

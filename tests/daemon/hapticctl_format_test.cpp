@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "status_format.hpp"
+#include "telemetry_csv.hpp"
 
 namespace haptic::ctl {
 namespace {
@@ -55,6 +56,33 @@ TEST(StatusFormat, SaysWhenTheSimIsNotConnected) {
     EXPECT_THAT(text, Not(HasSubstr(" old)"))) << "an unknown age is not shown";
     EXPECT_THAT(text, HasSubstr("NOT CONNECTED, last input never"));
     EXPECT_THAT(text, HasSubstr("Faults: none"));
+}
+
+}  // namespace
+}  // namespace haptic::ctl
+
+namespace haptic::ctl {
+namespace {
+
+TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
+    msgs::TelemetrySample sample;
+    sample.tick = 1234;
+    sample.stamp_ns = 3'500'000'000;
+    sample.device_index = 1;
+    sample.actuator_force_cmd = {1.5, -0.25, 0.0, 2.0};
+    sample.compute_us = 7.3;
+    sample.wakeup_latency_us = 55.5;
+    EXPECT_EQ(telemetryCsvHeader(),
+              "tick,time_s,device,force_cmd_0_n,force_cmd_1_n,force_cmd_2_n,force_cmd_3_n,"
+              "compute_us,wakeup_latency_us\n");
+    EXPECT_EQ(telemetryCsvRow(sample, 1'000'000'000),
+              "1234,2.500000,1,1.5000,-0.2500,0.0000,2.0000,7.30,55.50\n");
+}
+
+TEST(TelemetryCsv, PlotScriptQuotesPathsForGnuplot) {
+    const auto script = telemetryPlotScript("/tmp/it's.csv", "/tmp/out.png");
+    EXPECT_NE(script.find("set output '/tmp/out.png'"), std::string::npos) << script;
+    EXPECT_NE(script.find("plot '/tmp/it''s.csv'"), std::string::npos) << script;
 }
 
 }  // namespace

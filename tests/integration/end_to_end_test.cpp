@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <memory>
 #include <regex>
 #include <thread>
@@ -153,6 +155,119 @@ TEST_F(RoudiTest, MissingRoudiIsAOneLineErrorNotAHang) {
         EXPECT_THAT(result.err, HasSubstr("RouDi is not running")) << command[0];
         EXPECT_EQ(lineCount(result.err), 1U) << command[0] << ":\n" << result.err;
     }
+}
+
+// Operator commands from hapticctl over haptic/command to the real daemon, and the state they
+// leave in haptic/status. Exit codes: 0 accepted, 2 refused (reason on stderr).
+TEST_F(RoudiTest, EstopAndClearFromHapticctlDriveTheDaemonStateMachine) {
+    startRoudi();
+    ChildProcess daemon({HAPTICD_PATH, "--realtime", "ignore", "--dds-domain", domainArgument()},
+                        "hapticd");
+    const auto ctl = [](std::vector<std::string> args) {
+        std::vector<std::string> argv{HAPTICCTL_PATH, "--dds-domain", domainArgument(), "--timeout",
+                                      "10"};
+        argv.insert(argv.end(), args.begin(), args.end());
+        return runCommand(argv, 20s);
+    };
+    const auto state = [&] {
+        const auto status = ctl({"status"});
+        EXPECT_EQ(status.exit_code, 0) << status.err;
+        std::smatch match;
+        return std::regex_search(status.out, match, std::regex(R"(State: (\S+))")) ? match[1].str()
+                                                                                   : status.out;
+    };
+
+    // The daemon answers once it is IDLE.
+    const auto deadline = std::chrono::steady_clock::now() + 20s;
+    while (state() != "IDLE" && std::chrono::steady_clock::now() < deadline) {
+        ASSERT_TRUE(daemon.running()) << daemon.stderrText();
+    }
+    ASSERT_EQ(state(), "IDLE");
+
+    // Each hapticctl run costs a DDS discovery (~1 s under ASan), so the status is checked
+    // after the transitions that matter most: E-STOP and clear.
+    auto result = ctl({"enable"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_THAT(result.out, HasSubstr("rendering enabled"));
+
+    result = ctl({"estop"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_EQ(state(), "E-STOP");
+
+    result = ctl({"enable"});
+    EXPECT_EQ(result.exit_code, 2) << "enable must be refused during E-STOP";
+    EXPECT_THAT(result.err, HasSubstr("refused: emergency stop is active"));
+    EXPECT_EQ(lineCount(result.err), 1U) << result.err;
+    EXPECT_EQ(state(), "E-STOP");
+
+    result = ctl({"clear"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_EQ(state(), "IDLE") << "clear re-arms to IDLE, never straight to RENDERING";
+
+    result = ctl({"clear"});
+    EXPECT_EQ(result.exit_code, 2);
+    EXPECT_THAT(result.err, HasSubstr("nothing to clear"));
+
+    result = ctl({"method", "no_such_method"});
+    EXPECT_EQ(result.exit_code, 2);
+    EXPECT_THAT(result.err, HasSubstr("unknown rendering method"));
+    result = ctl({"method", "naive"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+
+    // watch redraws the screen (home + clear, then the status); --count bounds it here.
+    result = ctl({"watch", "--interval", "0.2", "--count", "2"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_EQ(std::count(result.out.begin(), result.out.end(), '\033'), 4) << "two redraws";
+    EXPECT_THAT(result.out, HasSubstr("State: IDLE   rendering method: naive"));
+
+    // Telemetry: one CSV row per device per tick, no tick missing, and a PNG from gnuplot.
+    const std::string csv = "/tmp/haptic-e2e-telemetry-" + std::to_string(::getpid()) + ".csv";
+    result = ctl({"record", csv, "--duration", "0.5"});
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    std::ifstream rows(csv);
+    std::string line;
+    std::getline(rows, line);
+    EXPECT_THAT(line, HasSubstr("tick,time_s,device,force_cmd_0_n"));
+    std::map<int, std::vector<unsigned long>> ticks_by_device;
+    while (std::getline(rows, line)) {
+        const auto first = line.find(',');
+        const auto second = line.find(',', first + 1);
+        const auto third = line.find(',', second + 1);
+        ticks_by_device[std::stoi(line.substr(second + 1, third - second - 1))].push_back(
+            std::stoul(line.substr(0, first)));
+    }
+    ASSERT_EQ(ticks_by_device.size(), 2U);
+    for (const auto& [device, ticks] : ticks_by_device) {
+        EXPECT_GT(ticks.size(), 400U) << "device " << device;
+        EXPECT_TRUE(std::is_sorted(ticks.begin(), ticks.end())) << "device " << device;
+        // Telemetry is best effort (the RT thread never waits for it); on a loaded CI machine
+        // a stalled non-RT thread may lose a few samples, but not a tenth of them.
+        EXPECT_GT(ticks.size(), (ticks.back() - ticks.front() + 1) * 9 / 10) << "device " << device;
+    }
+    const std::string png = csv + ".png";
+    result = runCommand({HAPTICCTL_PATH, "plot", csv, "--output", png}, 30s);
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    std::ifstream image(png, std::ios::binary);
+    std::string magic(8, '\0');
+    image.read(magic.data(), 8);
+    EXPECT_EQ(magic, std::string("\x89PNG\r\n\x1a\n", 8));
+    std::filesystem::remove(csv);
+    std::filesystem::remove(png);
+
+    EXPECT_EQ(daemon.terminate(), std::optional<int>(0)) << daemon.stderrText();
+    EXPECT_THAT(daemon.stderrText(), HasSubstr("estop"));
+    EXPECT_THAT(daemon.stderrText(), HasSubstr(" telemetry samples dropped)"));
+    EXPECT_EQ(roudi_->terminate(), std::optional<int>(0)) << roudi_->stderrText();
+    expectNoIceoryxLeftovers();
+}
+
+TEST(FailFast, CommandWithoutDaemonExitsThreeWithinTheTimeout) {
+    const auto result = runCommand(
+        {HAPTICCTL_PATH, "--dds-domain", domainArgument(), "--timeout", "1", "estop"}, 10s);
+    EXPECT_EQ(result.exit_code, 3);
+    EXPECT_LT(result.seconds, 3.0);
+    EXPECT_THAT(result.err, HasSubstr("no hapticd listening on 'haptic/command'"));
+    EXPECT_EQ(lineCount(result.err), 1U) << result.err;
 }
 
 TEST(FailFast, MissingDaemonIsAOneLineErrorWithinTheTimeout) {

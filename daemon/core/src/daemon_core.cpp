@@ -12,6 +12,7 @@ constexpr double kFadeFraction = 0.25;
 
 DaemonCore::DaemonCore(CoreSettings settings, std::vector<DeviceDescriptor> devices)
     : settings_(std::move(settings)),
+      machine_(settings_.known_methods, settings_.rendering_method),
       statistics_(settings_.rate_hz),
       window_ticks_(static_cast<std::uint64_t>(std::max(1.0, settings_.rate_hz))) {
     devices_.reserve(devices.size());
@@ -24,7 +25,20 @@ void DaemonCore::markStarted(std::int64_t now_ns) noexcept {
     started_ns_ = now_ns;
     last_tick_ns_ = now_ns;
     last_snapshot_ns_ = now_ns;
-    state_ = msgs::DaemonState::kIdle;
+    machine_.started();
+}
+
+CommandOutcome DaemonCore::applyCommand(const msgs::HapticCommand& command, std::int64_t now_ns,
+                                        msgs::HapticCommandReply& reply) noexcept {
+    const CommandOutcome outcome = machine_.apply(command.kind, command.argument.view());
+    reply = msgs::HapticCommandReply{};
+    reply.header.seq = ++reply_seq_;
+    reply.header.stamp_ns = now_ns;
+    reply.header.source_id.assign("hapticd");
+    reply.request_id = command.request_id;
+    reply.accepted = outcome.accepted;
+    reply.message.assign(outcome.reason);
+    return outcome;
 }
 
 InputRejection DaemonCore::account(DeviceSlot& slot, InputRejection reason,
@@ -110,6 +124,17 @@ std::uint64_t DaemonCore::rejectedCount(std::size_t device, InputRejection reaso
     return devices_[device].rejected_by[static_cast<std::size_t>(reason)];
 }
 
+void DaemonCore::fillTelemetry(std::size_t device, std::uint64_t tick, std::int64_t now_ns,
+                               const TickTiming& timing,
+                               msgs::TelemetrySample& out) const noexcept {
+    out = msgs::TelemetrySample{};
+    out.tick = tick;
+    out.stamp_ns = now_ns;
+    out.device_index = static_cast<std::uint16_t>(device);
+    out.compute_us = timing.read_us + timing.compute_us + timing.write_us;
+    out.wakeup_latency_us = timing.wakeup_latency_us;
+}
+
 bool DaemonCore::snapshotDue(std::int64_t now_ns) const noexcept {
     return now_ns - last_snapshot_ns_ >= settings_.status_period_ns;
 }
@@ -119,8 +144,8 @@ void DaemonCore::fillStatus(std::int64_t now_ns, msgs::HapticStatus& out) noexce
     out.header.seq = ++status_seq_;
     out.header.stamp_ns = now_ns;
     out.header.source_id.assign("hapticd");
-    out.state = state_;
-    out.rendering_method.assign(settings_.rendering_method);
+    out.state = machine_.state();
+    out.rendering_method = machine_.method();
     out.uptime_s = static_cast<double>(now_ns - started_ns_) * 1e-9;
     // Percentiles cover the last full one-second window; counters are live.
     out.loop = last_window_;
@@ -139,6 +164,10 @@ void DaemonCore::fillStatus(std::int64_t now_ns, msgs::HapticStatus& out) noexce
         received += slot.received;
         rejected += slot.rejected;
         newest_age_ms = std::min(newest_age_ms, ageMs(slot, now_ns));
+    }
+
+    for (std::size_t i = 0; i < machine_.faultCount(); ++i) {
+        out.faults.push_back(machine_.fault(i));
     }
 
     const double window_s = static_cast<double>(now_ns - last_snapshot_ns_) * 1e-9;

@@ -5,9 +5,8 @@
 // once per tick and publishes what it fills in. Everything after construction is noexcept
 // and allocation-free.
 //
-// State machine (documented in full in README "Reading hapticctl status"):
-//   INIT -> IDLE once every transport is up. RENDERING, FAULT (latched) and E-STOP arrive
-//   with the runtime issue; until then the daemon stays IDLE and renders nothing.
+// State machine: see state_machine.hpp. Commands reach the core through applyCommand() on
+// the RT thread (hapticd hands them over through a lock-free queue).
 
 #include <array>
 #include <cstdint>
@@ -16,6 +15,7 @@
 
 #include "haptic/daemon/loop_statistics.hpp"
 #include "haptic/daemon/sim_input_validation.hpp"
+#include "haptic/daemon/state_machine.hpp"
 #include "haptic/msgs/messages.hpp"
 
 namespace haptic::daemon {
@@ -36,6 +36,8 @@ struct CoreSettings {
     std::int64_t status_period_ns{50'000'000};
     std::string rendering_method;
     msgs::SimTransport sim_transport{msgs::SimTransport::kIceoryx};
+    // Names a set-method command may choose from (the configured method must be one).
+    std::vector<std::string> known_methods;
 };
 
 class DaemonCore {
@@ -70,11 +72,32 @@ class DaemonCore {
     [[nodiscard]] std::uint64_t rejectedCount(std::size_t device,
                                               InputRejection reason) const noexcept;
 
+    // One telemetry sample for the device at this tick. The commanded force is the rendered
+    // force times outputGain(); no renderer is attached yet, so it is zero.
+    void fillTelemetry(std::size_t device, std::uint64_t tick, std::int64_t now_ns,
+                       const TickTiming& timing, msgs::TelemetrySample& out) const noexcept;
+
     // Every status period, fills `out` and returns true.
     bool snapshotDue(std::int64_t now_ns) const noexcept;
     void fillStatus(std::int64_t now_ns, msgs::HapticStatus& out) noexcept;
 
-    [[nodiscard]] msgs::DaemonState state() const noexcept { return state_; }
+    [[nodiscard]] msgs::DaemonState state() const noexcept { return machine_.state(); }
+    [[nodiscard]] const DaemonStateMachine& stateMachine() const noexcept { return machine_; }
+
+    // An operator command: applies it to the state machine and fills the reply.
+    CommandOutcome applyCommand(const msgs::HapticCommand& command, std::int64_t now_ns,
+                                msgs::HapticCommandReply& reply) noexcept;
+    // A safety fault (device, bus, loop); latches FAULT. See DaemonStateMachine::raiseFault.
+    void raiseFault(std::uint32_t code, std::string_view device_id,
+                    std::string_view message) noexcept {
+        machine_.raiseFault(code, device_id, message);
+    }
+
+    // The factor on the device's rendered force: the sim fade while RENDERING, 0 otherwise,
+    // so IDLE, FAULT and E-STOP hold every device at zero force.
+    [[nodiscard]] double outputGain(std::size_t device) const noexcept {
+        return machine_.rendering() ? devices_[device].fade : 0.0;
+    }
 
   private:
     struct DeviceSlot {
@@ -92,7 +115,8 @@ class DaemonCore {
 
     CoreSettings settings_;
     std::vector<DeviceSlot> devices_;
-    msgs::DaemonState state_{msgs::DaemonState::kInit};
+    DaemonStateMachine machine_;
+    std::uint64_t reply_seq_{0};
     std::int64_t started_ns_{0};
     std::int64_t last_tick_ns_{0};
     LoopStatisticsCollector statistics_;

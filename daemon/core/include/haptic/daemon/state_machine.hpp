@@ -1,0 +1,83 @@
+#pragma once
+
+// hapticd's state machine, free of I/O and allocation after construction, so the RT thread
+// applies operator commands and faults directly and tests drive every transition.
+//
+//   INIT ──started──▶ IDLE ──enable──▶ RENDERING
+//                      ▲  ◀──disable──    │
+//                      │                  │ fault
+//                    clear                ▼
+//   any but INIT ─estop─▶ E-STOP   IDLE/RENDERING ──fault──▶ FAULT (latched)
+//   E-STOP ──clear──▶ IDLE         FAULT ──clear──▶ IDLE
+//
+// - Only RENDERING sends force to the devices; every other state holds them safe.
+// - FAULT is latched: the fault stays listed and the daemon stays safe until an operator
+//   clears it, even if the cause is gone. Clearing re-arms to IDLE, never straight to
+//   RENDERING: rendering always needs an explicit enable.
+// - E-STOP wins over everything and is left only by clear (then IDLE). A fault raised during
+//   E-STOP is recorded but does not leave E-STOP.
+// - The rendering method may change only in IDLE, so a running coupling is never swapped
+//   under the user's finger.
+// - Idempotent commands (enable while RENDERING, disable while IDLE, estop while E-STOP) are
+//   accepted and change nothing. Every refusal carries a reason for the operator.
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "haptic/msgs/messages.hpp"
+
+namespace haptic::daemon {
+
+struct CommandOutcome {
+    bool accepted{false};
+    // Static text, safe to copy on the RT thread.
+    const char* reason{""};
+};
+
+class DaemonStateMachine {
+  public:
+    static constexpr std::size_t kMaxFaults = msgs::kMaxStatusFaults;
+
+    // known_methods: the rendering methods a set-method command may name.
+    DaemonStateMachine(std::vector<std::string> known_methods, std::string_view initial_method);
+
+    [[nodiscard]] msgs::DaemonState state() const noexcept { return state_; }
+    [[nodiscard]] const msgs::DeviceId& method() const noexcept { return method_; }
+    [[nodiscard]] bool rendering() const noexcept {
+        return state_ == msgs::DaemonState::kRendering;
+    }
+
+    // INIT -> IDLE once the loop runs. Ignored in any other state.
+    void started() noexcept;
+
+    // Applies an operator command; the state changes only when the outcome is accepted.
+    CommandOutcome apply(msgs::CommandKind kind, std::string_view argument) noexcept;
+
+    // A safety fault from a device or the loop: IDLE and RENDERING go to FAULT. The fault is
+    // listed until cleared (the list keeps the first kMaxFaults; later ones are counted).
+    void raiseFault(std::uint32_t code, std::string_view device_id,
+                    std::string_view message) noexcept;
+
+    [[nodiscard]] std::size_t faultCount() const noexcept { return fault_count_; }
+    [[nodiscard]] const msgs::Fault& fault(std::size_t index) const noexcept {
+        return faults_[index];
+    }
+    [[nodiscard]] std::uint64_t droppedFaults() const noexcept { return dropped_faults_; }
+
+  private:
+    CommandOutcome setMethod(std::string_view name) noexcept;
+
+    std::vector<std::string> known_methods_;
+    msgs::DaemonState state_{msgs::DaemonState::kInit};
+    msgs::DeviceId method_{};
+    std::array<msgs::Fault, kMaxFaults> faults_{};
+    std::size_t fault_count_{0};
+    std::uint64_t dropped_faults_{0};
+};
+
+[[nodiscard]] const char* toString(msgs::DaemonState state) noexcept;
+
+}  // namespace haptic::daemon
