@@ -20,10 +20,37 @@ constexpr int kQpMaxIterations = 12;
 constexpr int kLineSearchMaxHalvings = 12;
 // Forward-difference steps in scaled coordinates (metres).
 constexpr double kDifferenceStepM = 1e-7;
+constexpr double kMaxStepM = 0.002;
 // Levenberg damping of the Gauss-Newton matrix (not part of E).
 constexpr double kDamping = 1e-9;
 
 using Matrix14x3 = Eigen::Matrix<double, kConstraintCount, 3>;
+
+// Per-sample pad energy in units of weight x m^2, as a function of the signed distance d of the
+// matched point to the plate (negative: plate past it). For the exponential pad law
+// p(delta) = p0 (exp(delta / s) - 1) and stiffness weights w = A dp/d(delta) at the virtual
+// indentation, A [U(delta_d) - p(delta_v) delta_d] (U' = p, delta_d = delta_v - d) equals, up
+// to a constant, w s^2 (exp(-d / s) - 1 + d / s). Its gradient over the platform DoFs is the
+// mismatch of the generalised pad forces; s -> infinity gives the quadratic w d^2 / 2.
+struct PadEnergy {
+    double value;  // psi(d)
+    double slope;  // psi'(d)
+    // psi''(d) = exp(-d / s), floored at 1 (the virtual contact stiffness the weight carries):
+    // where the plate has left a point (d > 0) the energy is almost linear, and a Newton step
+    // on that flat curvature would overshoot by orders of magnitude. The floor only changes
+    // the step metric, not the stationary point.
+    double curvature;
+};
+
+PadEnergy padEnergy(double d, double inverse_depth) noexcept {
+    if (inverse_depth == 0.0) {
+        return {0.5 * d * d, d, 1.0};
+    }
+    const double s = 1.0 / inverse_depth;
+    const double x = -d * inverse_depth;
+    const double growth = std::exp(x);
+    return {s * s * (std::expm1(x) - x), -s * std::expm1(x), growth};
+}
 using KktMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
 using KktVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
 
@@ -176,6 +203,10 @@ ContactSurfaceOptimiser::ContactSurfaceOptimiser(const ThimbleKinematics& kinema
     settings_.max_samples =
         std::clamp(settings_.max_samples, 0, static_cast<int>(msgs::kMaxContactSamples));
     settings_.max_iterations = std::max(settings_.max_iterations, 1);
+    inverse_stiffening_depth_ =
+        std::isfinite(settings_.pad_stiffening_depth_m) && settings_.pad_stiffening_depth_m > 0.0
+            ? 1.0 / settings_.pad_stiffening_depth_m
+            : 0.0;
 }
 
 Eigen::Vector3d ContactSurfaceOptimiser::scaled(const PlatformDofs& dofs) const noexcept {
@@ -210,14 +241,13 @@ ContactSurfaceOptimiser::Evaluation ContactSurfaceOptimiser::evaluate(
         const Eigen::Vector3d rel = t.point_m - pose.position_m;
         const double d = normal.dot(rel);
         const double weight = rimWeight((rel - d * normal).norm());
+        const double w = t.sqrt_weight * t.sqrt_weight * weight * weight;
         if (t.contact) {
-            const double r = t.sqrt_weight * weight * d;
-            e.objective += r * r;
-            e.contact_sq_sum += r * r;
-            e.contact_weight += t.sqrt_weight * t.sqrt_weight * weight * weight;
+            e.objective += 2.0 * w * padEnergy(d, inverse_stiffening_depth_).value;
+            e.contact_sq_sum += w * d * d;
+            e.contact_weight += w;
         } else if (d < 0.0 && weight > 0.0) {
-            const double r = t.sqrt_weight * weight * d;
-            e.objective += r * r;
+            e.objective += 2.0 * w * padEnergy(d, inverse_stiffening_depth_).value;
             e.overlap_m = std::max(e.overlap_m, -d);
         }
     }
@@ -264,17 +294,23 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
     report.outcome = SolveOutcome::kMatched;
 
     // A new contact starts from the plane through the contact centroid with the average
-    // normal (the geometric baseline) when that plane is reachable: fewer iterations. A
-    // projected start would sit exactly on a bound, where backtracking stalls; the retract
-    // pose is the better start then.
+    // normal (the geometric baseline). When that plane is not reachable (usually too much
+    // tilt), the largest reachable fraction of its tilt at the same height: a start on the
+    // right side of the pad, strictly inside the workspace (a start projected onto a bound
+    // stalls the backtracking). The retract pose is the last resort.
     PlatformDofs dofs = kinematics_.projectToWorkspace(warm_start_);
     ConstraintValues values{};
     PlatformPose pose;
     if (!previous_matched_ && contact_normal.norm() > 1e-12) {
         const PlatformDofs plane =
             poseForPlane(kinematics_, contact_normal, contact_centroid / contact_weight);
-        if (kinematics_.constraints(plane, values) && ThimbleKinematics::feasible(values)) {
-            dofs = plane;
+        for (const double tilt_fraction : {1.0, 0.8, 0.6, 0.4, 0.2, 0.0}) {
+            const PlatformDofs start{plane.height_m, tilt_fraction * plane.tilt_x_rad,
+                                     tilt_fraction * plane.tilt_y_rad};
+            if (kinematics_.constraints(start, values) && ThimbleKinematics::feasible(values)) {
+                dofs = start;
+                break;
+            }
         }
     }
     if (!kinematics_.constraints(dofs, values, &pose) || !ThimbleKinematics::feasible(values)) {
@@ -323,11 +359,17 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
                 row(k) = weight * (pk.plateNormal().dot(t.point_m - pk.position_m) - d) /
                          kDifferenceStepM;
             }
-            H.noalias() += row * row.transpose();
-            g += row * (weight * d);
+            const PadEnergy energy = padEnergy(d, inverse_stiffening_depth_);
+            H.noalias() += energy.curvature * (row * row.transpose());
+            g += row * (weight * energy.slope);
         }
 
-        const Eigen::Vector3d step = solveStepQp(H, g, G, values);
+        Eigen::Vector3d step = solveStepQp(H, g, G, values);
+        // Trust region: where the plate has left the points (d > 0) the pad energy is almost
+        // linear and the Newton step would overshoot by orders of magnitude.
+        if (step.norm() > kMaxStepM) {
+            step *= kMaxStepM / step.norm();
+        }
         const double slope = g.dot(step);
         const double predicted = -(slope + 0.5 * step.dot(H * step));
         bool accepted = false;

@@ -3,8 +3,14 @@
 // Contact-surface matching for the thimble (ALGORITHMS §3.3-3.5): find the platform DoFs
 // xi = (height, tilt_x, tilt_y) whose plate best reproduces the virtual contact surface,
 //
-//   E(xi) = sum_{i in C} w_i d(x_i)^2 + eta sum_{j not in C} w_j min(d(x_j), 0)^2
+//   E(xi) = sum_{i in C} w_i 2 psi(d(x_i)) + eta sum_{j not in C} w_j 2 psi(min(d(x_j), 0))
 //           + lambda |S (xi - xi_prev)|^2,      subject to c_w(xi) >= 0,
+//
+// psi(d) = s^2 (exp(-d / s) - 1 + d / s) is the energy of the exponential pad law
+// p(delta) = p0 (exp(delta / s) - 1) per unit stiffness weight w = A dp/d(delta) (taken at
+// the virtual indentation), so dE/dxi is the mismatch between the generalised pad forces of
+// the plate and of the virtual contact [DER]. psi(d) -> d^2 / 2 as s -> infinity (linear pad:
+// the quadratic matched-point objective of ALGORITHMS §3.3).
 //
 // with d(y) = nu . (y - p) the signed distance of y to the plate (positive on the finger
 // side), applied with a smooth weight that fades to zero at the plate rim; S = diag(1, r_d,
@@ -12,9 +18,9 @@
 // at their projection onto the virtual object, x_i = p_i - signed_distance_i n_i; non-contact
 // samples are kept on the finger side of the plate.
 //
-// Solver: Gauss-Newton with a 3-variable active-set QP on the linearised workspace
-// constraints, then a backtracking line search that only accepts feasible poses with lower E.
-// Warm started from the previous solution; iterations bounded by optimiser.max_iterations.
+// Solver: Gauss-Newton (curvature psi'') with a 3-variable active-set QP on the linearised
+// workspace constraints, then a backtracking line search that only accepts feasible poses with
+// lower E. Warm started from the previous solution; iterations bounded by optimiser.max_iterations.
 // solve() is noexcept, allocation-free and bounded: it runs on the 1 kHz path.
 
 #include <cstdint>
@@ -30,6 +36,10 @@ struct OptimiserSettings {
     double non_contact_weight{1.0};  // eta
     double smoothness_weight{1e-6};  // lambda, relative to a total sample weight of 1
     double rim_blend_m{0.001};       // the rim weight falls from 1 to 0 over this width
+    // s of the pad's exponential stiffening p(delta) = p0 (exp(delta / s) - 1) (1 mm for the
+    // stand-in pad model, a finger_calibration value once measured). Infinity or <= 0: a
+    // linear pad, i.e. the quadratic objective.
+    double pad_stiffening_depth_m{0.001};
     // Converged when the scaled step is below this: 1 um, far below what a hobby servo can
     // resolve (0.1 degree on a 10 mm crank is ~17 um).
     double step_tolerance_m{1e-6};
@@ -131,6 +141,7 @@ class ContactSurfaceOptimiser {
     std::array<Target, msgs::kMaxContactSamples> targets_{};
     int target_count_{0};
     double lambda_{0.0};
+    double inverse_stiffening_depth_{0.0};
     PlatformDofs warm_start_;
     // The smoothness term only ties a solve to a previous matched pose; leaving the retract
     // pose should not be slowed down.
