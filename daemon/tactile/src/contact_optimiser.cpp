@@ -1,6 +1,6 @@
 #include "haptic/tactile/contact_optimiser.hpp"
 
-#include <Eigen/LU>
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 
@@ -18,8 +18,6 @@ constexpr double kActiveTolerance = 1e-3;
 constexpr double kQpMargin = 1e-4;
 constexpr int kQpMaxIterations = 12;
 constexpr int kLineSearchMaxHalvings = 12;
-// Forward-difference steps in scaled coordinates (metres).
-constexpr double kDifferenceStepM = 1e-7;
 constexpr double kMaxStepM = 0.002;
 // Levenberg damping of the Gauss-Newton matrix (not part of E).
 constexpr double kDamping = 1e-9;
@@ -48,38 +46,46 @@ PadEnergy padEnergy(double d, double inverse_depth) noexcept {
     }
     const double s = 1.0 / inverse_depth;
     const double x = -d * inverse_depth;
-    const double growth = std::exp(x);
-    return {s * s * (std::expm1(x) - x), -s * std::expm1(x), growth};
+    const double growth_minus_one = std::expm1(x);
+    return {s * s * (growth_minus_one - x), -s * growth_minus_one, 1.0 + growth_minus_one};
 }
-using KktMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
-using KktVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
 
 // min 1/2 D'HD + g'D  s.t.  c_j + G_j D >= margin, by a small active-set loop (at most three
-// constraints active in three variables). Falls back to the last solvable working set.
+// constraints active in three variables). Range-space form: with the working rows A,
+// D = H^-1 (A' l - g) and (A H^-1 A') l = margin - c_A + A H^-1 g, at most 3x3 systems.
+// Falls back to the last solvable working set.
 Eigen::Vector3d solveStepQp(const Eigen::Matrix3d& H, const Eigen::Vector3d& g, const Matrix14x3& G,
                             const ConstraintValues& c) noexcept {
+    const Eigen::Matrix3d H_inverse = H.ldlt().solve(Eigen::Matrix3d::Identity());
+    const Eigen::Vector3d unconstrained = -H_inverse * g;
     std::array<int, 3> working{};
     int working_count = 0;
-    Eigen::Vector3d step = H.ldlt().solve(-g);
+    Eigen::Vector3d step = unconstrained;
+    Eigen::Vector3d multipliers = Eigen::Vector3d::Zero();
     for (int iteration = 0; iteration < kQpMaxIterations; ++iteration) {
-        const int n = 3 + working_count;
-        KktMatrix kkt = KktMatrix::Zero(n, n);
-        KktVector rhs = KktVector::Zero(n);
-        kkt.topLeftCorner<3, 3>() = H;
-        rhs.head<3>() = -g;
-        for (int k = 0; k < working_count; ++k) {
-            const auto j = static_cast<std::size_t>(working[static_cast<std::size_t>(k)]);
-            kkt.block<1, 3>(3 + k, 0) = G.row(static_cast<Eigen::Index>(j));
-            kkt.block<3, 1>(0, 3 + k) = -G.row(static_cast<Eigen::Index>(j)).transpose();
-            rhs(3 + k) = kQpMargin - c[j];
+        if (working_count > 0) {
+            // Unused rows stay zero; the identity there keeps the 3x3 system regular.
+            Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+            Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+            for (int k = 0; k < working_count; ++k) {
+                const auto j = static_cast<std::size_t>(working[static_cast<std::size_t>(k)]);
+                A.row(k) = G.row(static_cast<Eigen::Index>(j));
+                rhs(k) = kQpMargin - c[j] - A.row(k).dot(unconstrained);
+            }
+            Eigen::Matrix3d schur = A * H_inverse * A.transpose();
+            const double scale = schur.diagonal().head(working_count).maxCoeff();
+            for (int k = working_count; k < 3; ++k) {
+                schur(k, k) = scale > 0.0 ? scale : 1.0;
+            }
+            const Eigen::LDLT<Eigen::Matrix3d> ldlt(schur);
+            const double smallest = ldlt.vectorD().cwiseAbs().minCoeff();
+            if (ldlt.info() != Eigen::Success || !(scale > 0.0) || smallest <= 1e-12 * scale) {
+                --working_count;  // dependent bounds: keep the previous solution
+                break;
+            }
+            multipliers = ldlt.solve(rhs);
+            step = unconstrained + H_inverse * (A.transpose() * multipliers);
         }
-        const Eigen::FullPivLU<KktMatrix> lu(kkt);
-        if (!lu.isInvertible()) {
-            --working_count;  // dependent bounds: keep the previous solution
-            break;
-        }
-        const KktVector solution = lu.solve(rhs);
-        step = solution.head<3>();
 
         int most_violated = -1;
         double worst = -1e-12;
@@ -99,8 +105,8 @@ Eigen::Vector3d solveStepQp(const Eigen::Matrix3d& H, const Eigen::Vector3d& g, 
         int most_negative = -1;
         double lowest = 0.0;
         for (int k = 0; k < working_count; ++k) {
-            if (solution(3 + k) < lowest) {
-                lowest = solution(3 + k);
+            if (multipliers(k) < lowest) {
+                lowest = multipliers(k);
                 most_negative = k;
             }
         }
@@ -109,6 +115,11 @@ Eigen::Vector3d solveStepQp(const Eigen::Matrix3d& H, const Eigen::Vector3d& g, 
         }
         working[static_cast<std::size_t>(most_negative)] =
             working[static_cast<std::size_t>(--working_count)];
+        multipliers(most_negative) = multipliers(working_count);
+        multipliers(working_count) = 0.0;
+        if (working_count == 0) {
+            step = unconstrained;
+        }
     }
     return step;
 }
@@ -219,15 +230,17 @@ PlatformDofs ContactSurfaceOptimiser::unscaled(const Eigen::Vector3d& z) const n
     return {z.x(), z.y() / r, z.z() / r};
 }
 
-double ContactSurfaceOptimiser::rimWeight(double in_plane_radius_m) const noexcept {
+double ContactSurfaceOptimiser::rimWeight(double in_plane_radius_sq_m2) const noexcept {
+    // Squared radii: most samples are well inside or outside, no square root needed.
     const double outer = kinematics_.config().plate_radius_m;
     const double inner = outer - settings_.rim_blend_m;
-    if (in_plane_radius_m <= inner) {
+    if (in_plane_radius_sq_m2 <= inner * inner) {
         return 1.0;
     }
-    if (in_plane_radius_m >= outer) {
+    if (in_plane_radius_sq_m2 >= outer * outer) {
         return 0.0;
     }
+    const double in_plane_radius_m = std::sqrt(in_plane_radius_sq_m2);
     const double t = (outer - in_plane_radius_m) / settings_.rim_blend_m;
     return t * t * (3.0 - 2.0 * t);  // smoothstep
 }
@@ -240,7 +253,7 @@ ContactSurfaceOptimiser::Evaluation ContactSurfaceOptimiser::evaluate(
         const Target& t = targets_[static_cast<std::size_t>(i)];
         const Eigen::Vector3d rel = t.point_m - pose.position_m;
         const double d = normal.dot(rel);
-        const double weight = rimWeight((rel - d * normal).norm());
+        const double weight = rimWeight(rel.squaredNorm() - d * d);
         const double w = t.sqrt_weight * t.sqrt_weight * weight * weight;
         if (t.contact) {
             e.objective += 2.0 * w * padEnergy(d, inverse_stiffening_depth_).value;
@@ -320,45 +333,40 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
     Evaluation current = evaluate(dofs, pose);
     lambda_ = previous_matched_ ? settings_.smoothness_weight : 0.0;
 
+    const double plate_radius = kinematics_.config().plate_radius_m;
     for (report.iterations = 0; report.iterations < settings_.max_iterations;) {
         ++report.iterations;
         const Eigen::Vector3d z = scaled(dofs);
-        std::array<PlatformPose, 3> shifted_pose;
+        // Analytic Jacobians over xi, then to the scaled z = (h, r tilt_x, r tilt_y).
         Matrix14x3 G;
-        for (int k = 0; k < 3; ++k) {
-            Eigen::Vector3d zk = z;
-            zk(k) += kDifferenceStepM;
-            ConstraintValues shifted{};
-            if (!kinematics_.constraints(unscaled(zk), shifted,
-                                         &shifted_pose[static_cast<std::size_t>(k)], &pose)) {
-                shifted_pose[static_cast<std::size_t>(k)] = pose;  // at the assembly limit
-                shifted = values;
-            }
-            for (int j = 0; j < kConstraintCount; ++j) {
-                const auto jj = static_cast<std::size_t>(j);
-                G(j, k) = (shifted[jj] - values[jj]) / kDifferenceStepM;
-            }
+        PoseJacobian pose_rate;
+        if (!kinematics_.constraintJacobian(dofs, pose, G, pose_rate)) {
+            break;  // cannot happen on a feasible pose; not converged then
         }
+        const Eigen::DiagonalMatrix<double, 3> to_scaled(1.0, 1.0 / plate_radius,
+                                                         1.0 / plate_radius);
+        G = G * to_scaled;
 
         // Gauss-Newton normal equations, accumulated per sample (no residual storage).
         // kDamping keeps H definite with fewer than three independent contact points.
         Eigen::Matrix3d H = (lambda_ + kDamping) * Eigen::Matrix3d::Identity();
         Eigen::Vector3d g = lambda_ * (z - scaled(warm_start_));
         const Eigen::Vector3d normal = pose.plateNormal();
+        // d(x) = n . (x - p), so d d / d z_k = dn_k . x - (dn_k . p + n . dp_k): two numbers per
+        // direction serve every sample.
+        const Eigen::Matrix3d normal_change = (pose_rate.normal * to_scaled).transpose();
+        const Eigen::Vector3d offset_change =
+            normal_change * pose.position_m +
+            (pose_rate.position_m * to_scaled).transpose() * normal;
         for (int i = 0; i < target_count_; ++i) {
             const Target& t = targets_[static_cast<std::size_t>(i)];
             const Eigen::Vector3d rel = t.point_m - pose.position_m;
             const double d = normal.dot(rel);
-            const double weight = t.sqrt_weight * rimWeight((rel - d * normal).norm());
+            const double weight = t.sqrt_weight * rimWeight(rel.squaredNorm() - d * d);
             if (weight == 0.0 || (!t.contact && d >= 0.0)) {
                 continue;
             }
-            Eigen::Vector3d row;
-            for (int k = 0; k < 3; ++k) {
-                const PlatformPose& pk = shifted_pose[static_cast<std::size_t>(k)];
-                row(k) = weight * (pk.plateNormal().dot(t.point_m - pk.position_m) - d) /
-                         kDifferenceStepM;
-            }
+            const Eigen::Vector3d row = weight * (normal_change * t.point_m - offset_change);
             const PadEnergy energy = padEnergy(d, inverse_stiffening_depth_);
             H.noalias() += energy.curvature * (row * row.transpose());
             g += row * (weight * energy.slope);

@@ -223,6 +223,95 @@ bool ThimbleKinematics::constraints(const PlatformDofs& dofs, ConstraintValues& 
     return true;
 }
 
+bool ThimbleKinematics::constraintJacobian(const PlatformDofs& dofs, const PlatformPose& pose,
+                                           ConstraintJacobian& jacobian,
+                                           PoseJacobian& pose_jacobian) const noexcept {
+    // Tilt part of the rotation: central differences of the closed form (no iteration,
+    // truncation ~1e-12); the rest is exact.
+    constexpr double kTiltStep = 1e-6;
+    const double tx = dofs.tilt_x_rad;
+    const double ty = dofs.tilt_y_rad;
+    const Eigen::Matrix3d yaw = yawRotation(pose.yaw_rad);
+    const std::array<Eigen::Matrix3d, 3> tilt_rate{
+        Eigen::Matrix3d::Zero(),
+        ((tiltRotation(tx + kTiltStep, ty) - tiltRotation(tx - kTiltStep, ty)) / (2 * kTiltStep)) *
+            yaw,
+        ((tiltRotation(tx, ty + kTiltStep) - tiltRotation(tx, ty - kTiltStep)) / (2 * kTiltStep)) *
+            yaw};
+    // Parasitic motion u = (p_x, p_y, yaw) from a_i . (p + R s_i) = 0: J_u du = -dr/dxi.
+    Eigen::Matrix3d j_u;
+    Eigen::Matrix3d r_xi;
+    for (int i = 0; i < 3; ++i) {
+        const auto leg = static_cast<std::size_t>(i);
+        const Eigen::Vector3d& a = servo_axis_[leg];
+        j_u(i, 0) = a.x();
+        j_u(i, 1) = a.y();
+        j_u(i, 2) = a.dot(pose.rotation * kZ.cross(platform_arm_[leg]));
+        r_xi(i, 0) = a.z();
+        r_xi(i, 1) = a.dot(tilt_rate[1] * platform_arm_[leg]);
+        r_xi(i, 2) = a.dot(tilt_rate[2] * platform_arm_[leg]);
+    }
+    const Eigen::Matrix3d u_xi = -j_u.partialPivLu().solve(r_xi);
+    std::array<Eigen::Matrix3d, 3> rotation_rate;
+    const Eigen::Matrix3d yaw_rate = pose.rotation * skew(kZ);  // dR/d yaw = R [z]x
+    for (int k = 0; k < 3; ++k) {
+        const auto kk = static_cast<std::size_t>(k);
+        rotation_rate[kk] = tilt_rate[kk] + u_xi(2, k) * yaw_rate;
+        pose_jacobian.position_m.col(k) = Eigen::Vector3d(u_xi(0, k), u_xi(1, k), k == 0);
+        pose_jacobian.normal.col(k) = -rotation_rate[kk].col(2);
+    }
+
+    const double tilt = std::sqrt(tx * tx + ty * ty);
+    jacobian.row(0) =
+        tilt > 0.0 ? Eigen::RowVector3d(0.0, -tx / tilt, -ty / tilt) : Eigen::RowVector3d::Zero();
+    jacobian.row(1) = Eigen::RowVector3d(1.0 / config_.plate_radius_m, 0.0, 0.0);
+    const double crank = config_.geometry.crank_length_m;
+    const Eigen::Vector3d towards_body = pose.plateNormal();
+    for (int leg = 0; leg < 3; ++leg) {
+        LegSolution s;
+        if (!solveLeg(leg, pose, s)) {
+            return false;
+        }
+        const auto i = static_cast<std::size_t>(leg);
+        const Eigen::Vector3d rel = s.joint_m - base_joint_[i];
+        const double u = radial_[i].dot(rel);
+        const double w = rel.z();
+        const double rho2 = u * u + w * w;
+        const double rho = std::sqrt(rho2);
+        const double kappa = (rho2 + crank * crank -
+                              config_.geometry.link_length_m * config_.geometry.link_length_m) /
+                             (2.0 * crank);
+        const double q = kappa / rho;
+        const double acos_rate = 1.0 / std::sqrt(std::max(1.0 - q * q, 1e-300));
+        const Eigen::Vector3d link = s.elbow_m - s.joint_m;
+        const double link_length = link.norm();
+        const Eigen::Vector3d l = link / link_length;
+        const double cosine = std::clamp(l.dot(towards_body), -1.0, 1.0);
+        const double cone_rate = 1.0 / std::sqrt(std::max(1.0 - cosine * cosine, 1e-300));
+        const Eigen::Vector3d elbow_rate =
+            crank * (-std::sin(s.servo_rad) * radial_[i] + std::cos(s.servo_rad) * kZ);
+        for (int k = 0; k < 3; ++k) {
+            const auto kk = static_cast<std::size_t>(k);
+            const Eigen::Vector3d joint_rate =
+                pose_jacobian.position_m.col(k) + rotation_rate[kk] * platform_arm_[i];
+            const double du = radial_[i].dot(joint_rate);
+            const double dw = joint_rate.z();
+            const double drho = (u * du + w * dw) / rho;
+            const double dkappa = (u * du + w * dw) / crank;
+            const double dq = (dkappa * rho - kappa * drho) / rho2;
+            const double dservo = (u * dw - w * du) / rho2 + acos_rate * dq;
+            const Eigen::Vector3d dlink = elbow_rate * dservo - joint_rate;
+            const Eigen::Vector3d dl = (dlink - l * l.dot(dlink)) / link_length;
+            const double dcosine = dl.dot(towards_body) + l.dot(pose_jacobian.normal.col(k));
+            jacobian(2 + leg, k) = dservo;
+            jacobian(5 + leg, k) = -dservo;
+            jacobian(8 + leg, k) = -(q < 0.0 ? -dq : dq);
+            jacobian(11 + leg, k) = cone_rate * dcosine;
+        }
+    }
+    return true;
+}
+
 bool ThimbleKinematics::feasible(const ConstraintValues& values) noexcept {
     return std::all_of(values.begin(), values.end(), [](double v) { return v >= 0.0; });
 }

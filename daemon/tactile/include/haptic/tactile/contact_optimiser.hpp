@@ -131,7 +131,7 @@ class ContactSurfaceOptimiser {
 
     [[nodiscard]] Evaluation evaluate(const PlatformDofs& dofs,
                                       const PlatformPose& pose) const noexcept;
-    [[nodiscard]] double rimWeight(double in_plane_radius_m) const noexcept;
+    [[nodiscard]] double rimWeight(double in_plane_radius_sq_m2) const noexcept;
     [[nodiscard]] TactileCommand finish(const PlatformDofs& dofs, SolveReport report) noexcept;
     [[nodiscard]] Eigen::Vector3d scaled(const PlatformDofs& dofs) const noexcept;
     [[nodiscard]] PlatformDofs unscaled(const Eigen::Vector3d& z) const noexcept;
