@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "haptic/tactile/baselines.hpp"
 
@@ -246,7 +247,7 @@ double ContactSurfaceOptimiser::rimWeight(double in_plane_radius_sq_m2) const no
 }
 
 ContactSurfaceOptimiser::Evaluation ContactSurfaceOptimiser::evaluate(
-    const PlatformDofs& dofs, const PlatformPose& pose) const noexcept {
+    const PlatformDofs& dofs, const PlatformPose& pose, SampleStates& states) const noexcept {
     Evaluation e;
     const Eigen::Vector3d normal = pose.plateNormal();
     for (int i = 0; i < target_count_; ++i) {
@@ -255,12 +256,21 @@ ContactSurfaceOptimiser::Evaluation ContactSurfaceOptimiser::evaluate(
         const double d = normal.dot(rel);
         const double weight = rimWeight(rel.squaredNorm() - d * d);
         const double w = t.sqrt_weight * t.sqrt_weight * weight * weight;
+        SampleState& state = states[static_cast<std::size_t>(i)];
+        state.d = d;
+        state.weight = 0.0;
+        if (weight == 0.0 || (!t.contact && d >= 0.0)) {
+            continue;
+        }
+        const PadEnergy energy = padEnergy(d, inverse_stiffening_depth_);
+        state.weight = t.sqrt_weight * weight;
+        state.slope = energy.slope;
+        state.curvature = energy.curvature;
+        e.objective += 2.0 * w * energy.value;
         if (t.contact) {
-            e.objective += 2.0 * w * padEnergy(d, inverse_stiffening_depth_).value;
             e.contact_sq_sum += w * d * d;
             e.contact_weight += w;
-        } else if (d < 0.0 && weight > 0.0) {
-            e.objective += 2.0 * w * padEnergy(d, inverse_stiffening_depth_).value;
+        } else {
             e.overlap_m = std::max(e.overlap_m, -d);
         }
     }
@@ -330,7 +340,11 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
         dofs = kinematics_.retractPose();
         (void)kinematics_.constraints(dofs, values, &pose);
     }
-    Evaluation current = evaluate(dofs, pose);
+    // Per-sample state at the current pose (the Gauss-Newton loop reuses it) and at the
+    // line-search candidate; swapped on acceptance.
+    SampleStates* current_states = &sample_states_[0];
+    SampleStates* candidate_states = &sample_states_[1];
+    Evaluation current = evaluate(dofs, pose, *current_states);
     lambda_ = previous_matched_ ? settings_.smoothness_weight : 0.0;
 
     const double plate_radius = kinematics_.config().plate_radius_m;
@@ -359,17 +373,15 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
             normal_change * pose.position_m +
             (pose_rate.position_m * to_scaled).transpose() * normal;
         for (int i = 0; i < target_count_; ++i) {
-            const Target& t = targets_[static_cast<std::size_t>(i)];
-            const Eigen::Vector3d rel = t.point_m - pose.position_m;
-            const double d = normal.dot(rel);
-            const double weight = t.sqrt_weight * rimWeight(rel.squaredNorm() - d * d);
-            if (weight == 0.0 || (!t.contact && d >= 0.0)) {
+            const SampleState& state = (*current_states)[static_cast<std::size_t>(i)];
+            if (state.weight == 0.0) {
                 continue;
             }
-            const Eigen::Vector3d row = weight * (normal_change * t.point_m - offset_change);
-            const PadEnergy energy = padEnergy(d, inverse_stiffening_depth_);
-            H.noalias() += energy.curvature * (row * row.transpose());
-            g += row * (weight * energy.slope);
+            const Eigen::Vector3d row =
+                state.weight *
+                (normal_change * targets_[static_cast<std::size_t>(i)].point_m - offset_change);
+            H.noalias() += state.curvature * (row * row.transpose());
+            g += row * (state.weight * state.slope);
         }
 
         Eigen::Vector3d step = solveStepQp(H, g, G, values);
@@ -377,6 +389,10 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
         // linear and the Newton step would overshoot by orders of magnitude.
         if (step.norm() > kMaxStepM) {
             step *= kMaxStepM / step.norm();
+        }
+        if (step.norm() < settings_.step_tolerance_m) {
+            report.converged = true;  // within tolerance of the stationary point already
+            break;
         }
         const double slope = g.dot(step);
         const double predicted = -(slope + 0.5 * step.dot(H * step));
@@ -390,12 +406,13 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
                 !ThimbleKinematics::feasible(candidate_values)) {
                 continue;
             }
-            const Evaluation e = evaluate(candidate, candidate_pose);
+            const Evaluation e = evaluate(candidate, candidate_pose, *candidate_states);
             if (e.objective <= current.objective + 1e-4 * alpha * std::min(slope, 0.0)) {
                 dofs = candidate;
                 values = candidate_values;
                 pose = candidate_pose;
                 current = e;
+                std::swap(current_states, candidate_states);
                 accepted = true;
                 break;
             }

@@ -129,8 +129,18 @@ class ContactSurfaceOptimiser {
         double overlap_m{0.0};
     };
 
-    [[nodiscard]] Evaluation evaluate(const PlatformDofs& dofs,
-                                      const PlatformPose& pose) const noexcept;
+    // Distance to the plate and pad-energy derivatives of one sample at one pose; weight 0
+    // when the sample does not enter E there.
+    struct SampleState {
+        double d{0.0};
+        double weight{0.0};  // sqrt(w_i) times the rim weight
+        double slope{0.0};
+        double curvature{0.0};
+    };
+    using SampleStates = std::array<SampleState, msgs::kMaxContactSamples>;
+
+    [[nodiscard]] Evaluation evaluate(const PlatformDofs& dofs, const PlatformPose& pose,
+                                      SampleStates& states) const noexcept;
     [[nodiscard]] double rimWeight(double in_plane_radius_sq_m2) const noexcept;
     [[nodiscard]] TactileCommand finish(const PlatformDofs& dofs, SolveReport report) noexcept;
     [[nodiscard]] Eigen::Vector3d scaled(const PlatformDofs& dofs) const noexcept;
@@ -139,6 +149,7 @@ class ContactSurfaceOptimiser {
     const ThimbleKinematics& kinematics_;
     OptimiserSettings settings_;
     std::array<Target, msgs::kMaxContactSamples> targets_{};
+    std::array<SampleStates, 2> sample_states_{};
     int target_count_{0};
     double lambda_{0.0};
     double inverse_stiffening_depth_{0.0};
