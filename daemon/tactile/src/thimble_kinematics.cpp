@@ -47,6 +47,46 @@ Eigen::Matrix3d tiltRotation(double tilt_x_rad, double tilt_y_rad) noexcept {
     return Eigen::Matrix3d::Identity() + a * K + b * K * K;
 }
 
+namespace {
+
+// d tiltRotation / d tilt_x and d tilt_y, differentiating R = I + a K + b K^2 with
+// a = sin t / t, b = (1 - cos t) / t^2, K = [k]x, k = (tilt_x, tilt_y, 0).
+std::array<Eigen::Matrix3d, 2> tiltRotationRates(double tilt_x_rad, double tilt_y_rad) noexcept {
+    const Eigen::Vector3d k(tilt_x_rad, tilt_y_rad, 0.0);
+    const double t2 = k.squaredNorm();
+    const double t = std::sqrt(t2);
+    double a = 0.0;
+    double b = 0.0;
+    double a_rate_over_t = 0.0;  // (da/dt) / t
+    double b_rate_over_t = 0.0;  // (db/dt) / t
+    if (t < 1e-4) {
+        a = 1.0 - t2 / 6.0;
+        b = 0.5 - t2 / 24.0;
+        a_rate_over_t = -1.0 / 3.0 + t2 / 30.0;
+        b_rate_over_t = -1.0 / 12.0 + t2 / 180.0;
+    } else {
+        const double sine = std::sin(t);
+        const double cosine = std::cos(t);
+        a = sine / t;
+        b = (1.0 - cosine) / t2;
+        a_rate_over_t = (t * cosine - sine) / (t2 * t);
+        b_rate_over_t = (t * sine - 2.0 * (1.0 - cosine)) / (t2 * t2);
+    }
+    const Eigen::Matrix3d K = skew(k);
+    const Eigen::Matrix3d K2 = K * K;
+    std::array<Eigen::Matrix3d, 2> rates;
+    for (int axis = 0; axis < 2; ++axis) {
+        const double component = k(axis);
+        const Eigen::Matrix3d dK = skew(Eigen::Vector3d::Unit(axis));
+        rates[static_cast<std::size_t>(axis)] = component * a_rate_over_t * K + a * dK +
+                                                component * b_rate_over_t * K2 +
+                                                b * (dK * K + K * dK);
+    }
+    return rates;
+}
+
+}  // namespace
+
 std::array<double, 2> tiltForNormal(const Eigen::Vector3d& normal) noexcept {
     const Eigen::Vector3d m = -normal.normalized();   // R_tilt z
     const Eigen::Vector3d axis_scaled = kZ.cross(m);  // (-m_y, m_x, 0)
@@ -226,18 +266,12 @@ bool ThimbleKinematics::constraints(const PlatformDofs& dofs, ConstraintValues& 
 bool ThimbleKinematics::constraintJacobian(const PlatformDofs& dofs, const PlatformPose& pose,
                                            ConstraintJacobian& jacobian,
                                            PoseJacobian& pose_jacobian) const noexcept {
-    // Tilt part of the rotation: central differences of the closed form (no iteration,
-    // truncation ~1e-12); the rest is exact.
-    constexpr double kTiltStep = 1e-6;
     const double tx = dofs.tilt_x_rad;
     const double ty = dofs.tilt_y_rad;
     const Eigen::Matrix3d yaw = yawRotation(pose.yaw_rad);
-    const std::array<Eigen::Matrix3d, 3> tilt_rate{
-        Eigen::Matrix3d::Zero(),
-        ((tiltRotation(tx + kTiltStep, ty) - tiltRotation(tx - kTiltStep, ty)) / (2 * kTiltStep)) *
-            yaw,
-        ((tiltRotation(tx, ty + kTiltStep) - tiltRotation(tx, ty - kTiltStep)) / (2 * kTiltStep)) *
-            yaw};
+    const auto tilt_rates = tiltRotationRates(tx, ty);
+    const std::array<Eigen::Matrix3d, 3> tilt_rate{Eigen::Matrix3d::Zero(), tilt_rates[0] * yaw,
+                                                   tilt_rates[1] * yaw};
     // Parasitic motion u = (p_x, p_y, yaw) from a_i . (p + R s_i) = 0: J_u du = -dr/dxi.
     Eigen::Matrix3d j_u;
     Eigen::Matrix3d r_xi;
