@@ -10,15 +10,14 @@
 // p(delta) = p0 (exp(delta / s) - 1) per unit stiffness weight w = A dp/d(delta) (taken at
 // the virtual indentation), so dE/dxi is the mismatch between the generalised pad forces of
 // the plate and of the virtual contact [DER]. psi(d) -> d^2 / 2 as s -> infinity (linear pad:
-// the quadratic matched-point objective of ALGORITHMS §3.3).
+// the quadratic matched-point objective of ALGORITHMS §3.3). Here d(y) = nu . (y - p) is the signed
+// distance of y to the plate (positive on the finger side), applied with a smooth weight that fades
+// to zero at the plate rim; S = diag(1, r_d, r_d) puts the tilts in metres at the rim. Contact
+// samples (signed_distance < 0) are matched at their projection onto the virtual object, x_i = p_i
+// - signed_distance_i n_i; non-contact samples are kept on the finger side of the plate.
 //
-// with d(y) = nu . (y - p) the signed distance of y to the plate (positive on the finger
-// side), applied with a smooth weight that fades to zero at the plate rim; S = diag(1, r_d,
-// r_d) puts the tilts in metres at the rim. Contact samples (signed_distance < 0) are matched
-// at their projection onto the virtual object, x_i = p_i - signed_distance_i n_i; non-contact
-// samples are kept on the finger side of the plate.
-//
-// Solver: Gauss-Newton (curvature psi'') with a 3-variable active-set QP on the linearised
+// Solver: Gauss-Newton (curvature psi'', analytic Jacobians from
+// ThimbleKinematics::constraintJacobian) with a 3-variable active-set QP on the linearised
 // workspace constraints, then a backtracking line search that only accepts feasible poses with
 // lower E. Warm started from the previous solution; iterations bounded by optimiser.max_iterations.
 // solve() is noexcept, allocation-free and bounded: it runs on the 1 kHz path.
