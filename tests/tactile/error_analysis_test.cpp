@@ -40,8 +40,8 @@ TEST_F(ErrorAnalysisTest, OptimiserMatchesReachableContactsAtLeastAsWellAsTheBas
         EXPECT_LT(r.optimiser.force_error, 1e-3) << plane;
         EXPECT_LT(r.optimiser.force_error, r.force_normal.force_error) << plane;
     }
-    // The 5 mm sphere is the documented exception: the plane fit is closer there.
-    for (const char* curved : {"sphere r=10 mm", "sphere r=20 mm", "edge 90 deg"}) {
+    for (const char* curved :
+         {"sphere r=5 mm", "sphere r=10 mm", "sphere r=20 mm", "edge 90 deg"}) {
         const CaseResult& r = results.at(curved);
         EXPECT_TRUE(r.reachable()) << curved;
         EXPECT_LT(r.optimiser.force_error, r.geometric.force_error) << curved;

@@ -83,6 +83,42 @@ TEST_F(ThimbleKinematicsTest, EverySphericalJointStaysInItsLegPlaneAndLinksKeepT
     }
 }
 
+TEST_F(ThimbleKinematicsTest, AnalyticJacobiansMatchCentralDifferences) {
+    std::mt19937_64 rng(11);
+    constexpr double kStep = 1e-7;  // rad, or m for the height
+    for (int trial = 0; trial < 200; ++trial) {
+        const PlatformDofs dofs = randomReachablePose(rng);
+        ConstraintValues values{};
+        PlatformPose pose;
+        ASSERT_TRUE(sut.constraints(dofs, values, &pose));
+        ConstraintJacobian jacobian;
+        PoseJacobian pose_jacobian;
+        ASSERT_TRUE(sut.constraintJacobian(dofs, pose, jacobian, pose_jacobian));
+        for (int k = 0; k < 3; ++k) {
+            PlatformDofs plus = dofs;
+            PlatformDofs minus = dofs;
+            (k == 0 ? plus.height_m : k == 1 ? plus.tilt_x_rad : plus.tilt_y_rad) += kStep;
+            (k == 0 ? minus.height_m : k == 1 ? minus.tilt_x_rad : minus.tilt_y_rad) -= kStep;
+            ConstraintValues vp{};
+            ConstraintValues vm{};
+            PlatformPose pp;
+            PlatformPose pm;
+            ASSERT_TRUE(sut.constraints(plus, vp, &pp));
+            ASSERT_TRUE(sut.constraints(minus, vm, &pm));
+            for (int j = 0; j < kConstraintCount; ++j) {
+                const auto jj = static_cast<std::size_t>(j);
+                const double numeric = (vp[jj] - vm[jj]) / (2 * kStep);
+                EXPECT_NEAR(jacobian(j, k), numeric, 1e-5 * (1.0 + std::fabs(numeric)))
+                    << "constraint " << j << " direction " << k << " trial " << trial;
+            }
+            const Eigen::Vector3d position_rate = (pp.position_m - pm.position_m) / (2 * kStep);
+            const Eigen::Vector3d normal_rate = (pp.plateNormal() - pm.plateNormal()) / (2 * kStep);
+            EXPECT_LT((pose_jacobian.position_m.col(k) - position_rate).norm(), 1e-6);
+            EXPECT_LT((pose_jacobian.normal.col(k) - normal_rate).norm(), 1e-6);
+        }
+    }
+}
+
 TEST_F(ThimbleKinematicsTest, SymmetricLayoutHasNoParasiticMotionWithoutTilt) {
     PlatformPose pose;
     ASSERT_EQ(sut.platformPose({0.02, 0.0, 0.0}, pose), KinematicsError::kNone);

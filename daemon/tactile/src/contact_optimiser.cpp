@@ -1,8 +1,9 @@
 #include "haptic/tactile/contact_optimiser.hpp"
 
-#include <Eigen/LU>
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "haptic/tactile/baselines.hpp"
 
@@ -18,41 +19,74 @@ constexpr double kActiveTolerance = 1e-3;
 constexpr double kQpMargin = 1e-4;
 constexpr int kQpMaxIterations = 12;
 constexpr int kLineSearchMaxHalvings = 12;
-// Forward-difference steps in scaled coordinates (metres).
-constexpr double kDifferenceStepM = 1e-7;
+constexpr double kMaxStepM = 0.002;
 // Levenberg damping of the Gauss-Newton matrix (not part of E).
 constexpr double kDamping = 1e-9;
 
 using Matrix14x3 = Eigen::Matrix<double, kConstraintCount, 3>;
-using KktMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
-using KktVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
+
+// Per-sample pad energy in units of weight x m^2, as a function of the signed distance d of the
+// matched point to the plate (negative: plate past it). For the exponential pad law
+// p(delta) = p0 (exp(delta / s) - 1) and stiffness weights w = A dp/d(delta) at the virtual
+// indentation, A [U(delta_d) - p(delta_v) delta_d] (U' = p, delta_d = delta_v - d) equals, up
+// to a constant, w s^2 (exp(-d / s) - 1 + d / s). Its gradient over the platform DoFs is the
+// mismatch of the generalised pad forces; s -> infinity gives the quadratic w d^2 / 2.
+struct PadEnergy {
+    double value;  // psi(d)
+    double slope;  // psi'(d)
+    // psi''(d) = exp(-d / s), floored at 1 (the virtual contact stiffness the weight carries):
+    // where the plate has left a point (d > 0) the energy is almost linear, and a Newton step
+    // on that flat curvature would overshoot by orders of magnitude. The floor only changes
+    // the step metric, not the stationary point.
+    double curvature;
+};
+
+PadEnergy padEnergy(double d, double inverse_depth) noexcept {
+    if (inverse_depth == 0.0) {
+        return {0.5 * d * d, d, 1.0};
+    }
+    const double s = 1.0 / inverse_depth;
+    const double x = -d * inverse_depth;
+    const double growth_minus_one = std::expm1(x);
+    return {s * s * (growth_minus_one - x), -s * growth_minus_one, 1.0 + growth_minus_one};
+}
 
 // min 1/2 D'HD + g'D  s.t.  c_j + G_j D >= margin, by a small active-set loop (at most three
-// constraints active in three variables). Falls back to the last solvable working set.
+// constraints active in three variables). Range-space form: with the working rows A,
+// D = H^-1 (A' l - g) and (A H^-1 A') l = margin - c_A + A H^-1 g, at most 3x3 systems.
+// Falls back to the last solvable working set.
 Eigen::Vector3d solveStepQp(const Eigen::Matrix3d& H, const Eigen::Vector3d& g, const Matrix14x3& G,
                             const ConstraintValues& c) noexcept {
+    const Eigen::Matrix3d H_inverse = H.ldlt().solve(Eigen::Matrix3d::Identity());
+    const Eigen::Vector3d unconstrained = -H_inverse * g;
     std::array<int, 3> working{};
     int working_count = 0;
-    Eigen::Vector3d step = H.ldlt().solve(-g);
+    Eigen::Vector3d step = unconstrained;
+    Eigen::Vector3d multipliers = Eigen::Vector3d::Zero();
     for (int iteration = 0; iteration < kQpMaxIterations; ++iteration) {
-        const int n = 3 + working_count;
-        KktMatrix kkt = KktMatrix::Zero(n, n);
-        KktVector rhs = KktVector::Zero(n);
-        kkt.topLeftCorner<3, 3>() = H;
-        rhs.head<3>() = -g;
-        for (int k = 0; k < working_count; ++k) {
-            const auto j = static_cast<std::size_t>(working[static_cast<std::size_t>(k)]);
-            kkt.block<1, 3>(3 + k, 0) = G.row(static_cast<Eigen::Index>(j));
-            kkt.block<3, 1>(0, 3 + k) = -G.row(static_cast<Eigen::Index>(j)).transpose();
-            rhs(3 + k) = kQpMargin - c[j];
+        if (working_count > 0) {
+            // Unused rows stay zero; the identity there keeps the 3x3 system regular.
+            Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+            Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+            for (int k = 0; k < working_count; ++k) {
+                const auto j = static_cast<std::size_t>(working[static_cast<std::size_t>(k)]);
+                A.row(k) = G.row(static_cast<Eigen::Index>(j));
+                rhs(k) = kQpMargin - c[j] - A.row(k).dot(unconstrained);
+            }
+            Eigen::Matrix3d schur = A * H_inverse * A.transpose();
+            const double scale = schur.diagonal().head(working_count).maxCoeff();
+            for (int k = working_count; k < 3; ++k) {
+                schur(k, k) = scale > 0.0 ? scale : 1.0;
+            }
+            const Eigen::LDLT<Eigen::Matrix3d> ldlt(schur);
+            const double smallest = ldlt.vectorD().cwiseAbs().minCoeff();
+            if (ldlt.info() != Eigen::Success || !(scale > 0.0) || smallest <= 1e-12 * scale) {
+                --working_count;  // dependent bounds: keep the previous solution
+                break;
+            }
+            multipliers = ldlt.solve(rhs);
+            step = unconstrained + H_inverse * (A.transpose() * multipliers);
         }
-        const Eigen::FullPivLU<KktMatrix> lu(kkt);
-        if (!lu.isInvertible()) {
-            --working_count;  // dependent bounds: keep the previous solution
-            break;
-        }
-        const KktVector solution = lu.solve(rhs);
-        step = solution.head<3>();
 
         int most_violated = -1;
         double worst = -1e-12;
@@ -72,8 +106,8 @@ Eigen::Vector3d solveStepQp(const Eigen::Matrix3d& H, const Eigen::Vector3d& g, 
         int most_negative = -1;
         double lowest = 0.0;
         for (int k = 0; k < working_count; ++k) {
-            if (solution(3 + k) < lowest) {
-                lowest = solution(3 + k);
+            if (multipliers(k) < lowest) {
+                lowest = multipliers(k);
                 most_negative = k;
             }
         }
@@ -82,6 +116,11 @@ Eigen::Vector3d solveStepQp(const Eigen::Matrix3d& H, const Eigen::Vector3d& g, 
         }
         working[static_cast<std::size_t>(most_negative)] =
             working[static_cast<std::size_t>(--working_count)];
+        multipliers(most_negative) = multipliers(working_count);
+        multipliers(working_count) = 0.0;
+        if (working_count == 0) {
+            step = unconstrained;
+        }
     }
     return step;
 }
@@ -176,6 +215,10 @@ ContactSurfaceOptimiser::ContactSurfaceOptimiser(const ThimbleKinematics& kinema
     settings_.max_samples =
         std::clamp(settings_.max_samples, 0, static_cast<int>(msgs::kMaxContactSamples));
     settings_.max_iterations = std::max(settings_.max_iterations, 1);
+    inverse_stiffening_depth_ =
+        std::isfinite(settings_.pad_stiffening_depth_m) && settings_.pad_stiffening_depth_m > 0.0
+            ? 1.0 / settings_.pad_stiffening_depth_m
+            : 0.0;
 }
 
 Eigen::Vector3d ContactSurfaceOptimiser::scaled(const PlatformDofs& dofs) const noexcept {
@@ -188,36 +231,46 @@ PlatformDofs ContactSurfaceOptimiser::unscaled(const Eigen::Vector3d& z) const n
     return {z.x(), z.y() / r, z.z() / r};
 }
 
-double ContactSurfaceOptimiser::rimWeight(double in_plane_radius_m) const noexcept {
+double ContactSurfaceOptimiser::rimWeight(double in_plane_radius_sq_m2) const noexcept {
+    // Squared radii: most samples are well inside or outside, no square root needed.
     const double outer = kinematics_.config().plate_radius_m;
     const double inner = outer - settings_.rim_blend_m;
-    if (in_plane_radius_m <= inner) {
+    if (in_plane_radius_sq_m2 <= inner * inner) {
         return 1.0;
     }
-    if (in_plane_radius_m >= outer) {
+    if (in_plane_radius_sq_m2 >= outer * outer) {
         return 0.0;
     }
+    const double in_plane_radius_m = std::sqrt(in_plane_radius_sq_m2);
     const double t = (outer - in_plane_radius_m) / settings_.rim_blend_m;
     return t * t * (3.0 - 2.0 * t);  // smoothstep
 }
 
 ContactSurfaceOptimiser::Evaluation ContactSurfaceOptimiser::evaluate(
-    const PlatformDofs& dofs, const PlatformPose& pose) const noexcept {
+    const PlatformDofs& dofs, const PlatformPose& pose, SampleStates& states) const noexcept {
     Evaluation e;
     const Eigen::Vector3d normal = pose.plateNormal();
     for (int i = 0; i < target_count_; ++i) {
         const Target& t = targets_[static_cast<std::size_t>(i)];
         const Eigen::Vector3d rel = t.point_m - pose.position_m;
         const double d = normal.dot(rel);
-        const double weight = rimWeight((rel - d * normal).norm());
+        const double weight = rimWeight(rel.squaredNorm() - d * d);
+        const double w = t.sqrt_weight * t.sqrt_weight * weight * weight;
+        SampleState& state = states[static_cast<std::size_t>(i)];
+        state.d = d;
+        state.weight = 0.0;
+        if (weight == 0.0 || (!t.contact && d >= 0.0)) {
+            continue;
+        }
+        const PadEnergy energy = padEnergy(d, inverse_stiffening_depth_);
+        state.weight = t.sqrt_weight * weight;
+        state.slope = energy.slope;
+        state.curvature = energy.curvature;
+        e.objective += 2.0 * w * energy.value;
         if (t.contact) {
-            const double r = t.sqrt_weight * weight * d;
-            e.objective += r * r;
-            e.contact_sq_sum += r * r;
-            e.contact_weight += t.sqrt_weight * t.sqrt_weight * weight * weight;
-        } else if (d < 0.0 && weight > 0.0) {
-            const double r = t.sqrt_weight * weight * d;
-            e.objective += r * r;
+            e.contact_sq_sum += w * d * d;
+            e.contact_weight += w;
+        } else {
             e.overlap_m = std::max(e.overlap_m, -d);
         }
     }
@@ -264,70 +317,83 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
     report.outcome = SolveOutcome::kMatched;
 
     // A new contact starts from the plane through the contact centroid with the average
-    // normal (the geometric baseline) when that plane is reachable: fewer iterations. A
-    // projected start would sit exactly on a bound, where backtracking stalls; the retract
-    // pose is the better start then.
+    // normal (the geometric baseline). When that plane is not reachable (usually too much
+    // tilt), the largest reachable fraction of its tilt at the same height: a start on the
+    // right side of the pad, strictly inside the workspace (a start projected onto a bound
+    // stalls the backtracking). The retract pose is the last resort.
     PlatformDofs dofs = kinematics_.projectToWorkspace(warm_start_);
     ConstraintValues values{};
     PlatformPose pose;
     if (!previous_matched_ && contact_normal.norm() > 1e-12) {
         const PlatformDofs plane =
             poseForPlane(kinematics_, contact_normal, contact_centroid / contact_weight);
-        if (kinematics_.constraints(plane, values) && ThimbleKinematics::feasible(values)) {
-            dofs = plane;
+        for (const double tilt_fraction : {1.0, 0.8, 0.6, 0.4, 0.2, 0.0}) {
+            const PlatformDofs start{plane.height_m, tilt_fraction * plane.tilt_x_rad,
+                                     tilt_fraction * plane.tilt_y_rad};
+            if (kinematics_.constraints(start, values) && ThimbleKinematics::feasible(values)) {
+                dofs = start;
+                break;
+            }
         }
     }
     if (!kinematics_.constraints(dofs, values, &pose) || !ThimbleKinematics::feasible(values)) {
         dofs = kinematics_.retractPose();
         (void)kinematics_.constraints(dofs, values, &pose);
     }
-    Evaluation current = evaluate(dofs, pose);
+    // Per-sample state at the current pose (the Gauss-Newton loop reuses it) and at the
+    // line-search candidate; swapped on acceptance.
+    SampleStates* current_states = &sample_states_[0];
+    SampleStates* candidate_states = &sample_states_[1];
+    Evaluation current = evaluate(dofs, pose, *current_states);
     lambda_ = previous_matched_ ? settings_.smoothness_weight : 0.0;
 
+    const double plate_radius = kinematics_.config().plate_radius_m;
     for (report.iterations = 0; report.iterations < settings_.max_iterations;) {
         ++report.iterations;
         const Eigen::Vector3d z = scaled(dofs);
-        std::array<PlatformPose, 3> shifted_pose;
+        // Analytic Jacobians over xi, then to the scaled z = (h, r tilt_x, r tilt_y).
         Matrix14x3 G;
-        for (int k = 0; k < 3; ++k) {
-            Eigen::Vector3d zk = z;
-            zk(k) += kDifferenceStepM;
-            ConstraintValues shifted{};
-            if (!kinematics_.constraints(unscaled(zk), shifted,
-                                         &shifted_pose[static_cast<std::size_t>(k)], &pose)) {
-                shifted_pose[static_cast<std::size_t>(k)] = pose;  // at the assembly limit
-                shifted = values;
-            }
-            for (int j = 0; j < kConstraintCount; ++j) {
-                const auto jj = static_cast<std::size_t>(j);
-                G(j, k) = (shifted[jj] - values[jj]) / kDifferenceStepM;
-            }
+        PoseJacobian pose_rate;
+        if (!kinematics_.constraintJacobian(dofs, pose, G, pose_rate)) {
+            break;  // cannot happen on a feasible pose; not converged then
         }
+        const Eigen::DiagonalMatrix<double, 3> to_scaled(1.0, 1.0 / plate_radius,
+                                                         1.0 / plate_radius);
+        G = G * to_scaled;
 
         // Gauss-Newton normal equations, accumulated per sample (no residual storage).
         // kDamping keeps H definite with fewer than three independent contact points.
         Eigen::Matrix3d H = (lambda_ + kDamping) * Eigen::Matrix3d::Identity();
         Eigen::Vector3d g = lambda_ * (z - scaled(warm_start_));
         const Eigen::Vector3d normal = pose.plateNormal();
+        // d(x) = n . (x - p), so d d / d z_k = dn_k . x - (dn_k . p + n . dp_k): two numbers per
+        // direction serve every sample.
+        const Eigen::Matrix3d normal_change = (pose_rate.normal * to_scaled).transpose();
+        const Eigen::Vector3d offset_change =
+            normal_change * pose.position_m +
+            (pose_rate.position_m * to_scaled).transpose() * normal;
         for (int i = 0; i < target_count_; ++i) {
-            const Target& t = targets_[static_cast<std::size_t>(i)];
-            const Eigen::Vector3d rel = t.point_m - pose.position_m;
-            const double d = normal.dot(rel);
-            const double weight = t.sqrt_weight * rimWeight((rel - d * normal).norm());
-            if (weight == 0.0 || (!t.contact && d >= 0.0)) {
+            const SampleState& state = (*current_states)[static_cast<std::size_t>(i)];
+            if (state.weight == 0.0) {
                 continue;
             }
-            Eigen::Vector3d row;
-            for (int k = 0; k < 3; ++k) {
-                const PlatformPose& pk = shifted_pose[static_cast<std::size_t>(k)];
-                row(k) = weight * (pk.plateNormal().dot(t.point_m - pk.position_m) - d) /
-                         kDifferenceStepM;
-            }
-            H.noalias() += row * row.transpose();
-            g += row * (weight * d);
+            const Eigen::Vector3d row =
+                state.weight *
+                (normal_change * targets_[static_cast<std::size_t>(i)].point_m - offset_change);
+            H.noalias() += state.curvature * (row * row.transpose());
+            g += row * (state.weight * state.slope);
         }
 
-        const Eigen::Vector3d step = solveStepQp(H, g, G, values);
+        Eigen::Vector3d step = solveStepQp(H, g, G, values);
+        // Trust region: where the plate has left the points (d > 0) the pad energy is almost
+        // linear and the Newton step would overshoot by orders of magnitude.
+        if (step.norm() > kMaxStepM) {
+            step *= kMaxStepM / step.norm();
+        }
+        if (step.norm() < settings_.step_tolerance_m) {
+            report.converged = true;  // within tolerance of the stationary point already
+            break;
+        }
         const double slope = g.dot(step);
         const double predicted = -(slope + 0.5 * step.dot(H * step));
         bool accepted = false;
@@ -340,12 +406,13 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
                 !ThimbleKinematics::feasible(candidate_values)) {
                 continue;
             }
-            const Evaluation e = evaluate(candidate, candidate_pose);
+            const Evaluation e = evaluate(candidate, candidate_pose, *candidate_states);
             if (e.objective <= current.objective + 1e-4 * alpha * std::min(slope, 0.0)) {
                 dofs = candidate;
                 values = candidate_values;
                 pose = candidate_pose;
                 current = e;
+                std::swap(current_states, candidate_states);
                 accepted = true;
                 break;
             }

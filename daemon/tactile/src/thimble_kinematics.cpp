@@ -47,6 +47,46 @@ Eigen::Matrix3d tiltRotation(double tilt_x_rad, double tilt_y_rad) noexcept {
     return Eigen::Matrix3d::Identity() + a * K + b * K * K;
 }
 
+namespace {
+
+// d tiltRotation / d tilt_x and d tilt_y, differentiating R = I + a K + b K^2 with
+// a = sin t / t, b = (1 - cos t) / t^2, K = [k]x, k = (tilt_x, tilt_y, 0).
+std::array<Eigen::Matrix3d, 2> tiltRotationRates(double tilt_x_rad, double tilt_y_rad) noexcept {
+    const Eigen::Vector3d k(tilt_x_rad, tilt_y_rad, 0.0);
+    const double t2 = k.squaredNorm();
+    const double t = std::sqrt(t2);
+    double a = 0.0;
+    double b = 0.0;
+    double a_rate_over_t = 0.0;  // (da/dt) / t
+    double b_rate_over_t = 0.0;  // (db/dt) / t
+    if (t < 1e-4) {
+        a = 1.0 - t2 / 6.0;
+        b = 0.5 - t2 / 24.0;
+        a_rate_over_t = -1.0 / 3.0 + t2 / 30.0;
+        b_rate_over_t = -1.0 / 12.0 + t2 / 180.0;
+    } else {
+        const double sine = std::sin(t);
+        const double cosine = std::cos(t);
+        a = sine / t;
+        b = (1.0 - cosine) / t2;
+        a_rate_over_t = (t * cosine - sine) / (t2 * t);
+        b_rate_over_t = (t * sine - 2.0 * (1.0 - cosine)) / (t2 * t2);
+    }
+    const Eigen::Matrix3d K = skew(k);
+    const Eigen::Matrix3d K2 = K * K;
+    std::array<Eigen::Matrix3d, 2> rates;
+    for (int axis = 0; axis < 2; ++axis) {
+        const double component = k(axis);
+        const Eigen::Matrix3d dK = skew(Eigen::Vector3d::Unit(axis));
+        rates[static_cast<std::size_t>(axis)] = component * a_rate_over_t * K + a * dK +
+                                                component * b_rate_over_t * K2 +
+                                                b * (dK * K + K * dK);
+    }
+    return rates;
+}
+
+}  // namespace
+
 std::array<double, 2> tiltForNormal(const Eigen::Vector3d& normal) noexcept {
     const Eigen::Vector3d m = -normal.normalized();   // R_tilt z
     const Eigen::Vector3d axis_scaled = kZ.cross(m);  // (-m_y, m_x, 0)
@@ -219,6 +259,89 @@ bool ThimbleKinematics::constraints(const PlatformDofs& dofs, ConstraintValues& 
     }
     if (pose_out != nullptr) {
         *pose_out = pose;
+    }
+    return true;
+}
+
+bool ThimbleKinematics::constraintJacobian(const PlatformDofs& dofs, const PlatformPose& pose,
+                                           ConstraintJacobian& jacobian,
+                                           PoseJacobian& pose_jacobian) const noexcept {
+    const double tx = dofs.tilt_x_rad;
+    const double ty = dofs.tilt_y_rad;
+    const Eigen::Matrix3d yaw = yawRotation(pose.yaw_rad);
+    const auto tilt_rates = tiltRotationRates(tx, ty);
+    const std::array<Eigen::Matrix3d, 3> tilt_rate{Eigen::Matrix3d::Zero(), tilt_rates[0] * yaw,
+                                                   tilt_rates[1] * yaw};
+    // Parasitic motion u = (p_x, p_y, yaw) from a_i . (p + R s_i) = 0: J_u du = -dr/dxi.
+    Eigen::Matrix3d j_u;
+    Eigen::Matrix3d r_xi;
+    for (int i = 0; i < 3; ++i) {
+        const auto leg = static_cast<std::size_t>(i);
+        const Eigen::Vector3d& a = servo_axis_[leg];
+        j_u(i, 0) = a.x();
+        j_u(i, 1) = a.y();
+        j_u(i, 2) = a.dot(pose.rotation * kZ.cross(platform_arm_[leg]));
+        r_xi(i, 0) = a.z();
+        r_xi(i, 1) = a.dot(tilt_rate[1] * platform_arm_[leg]);
+        r_xi(i, 2) = a.dot(tilt_rate[2] * platform_arm_[leg]);
+    }
+    const Eigen::Matrix3d u_xi = -j_u.partialPivLu().solve(r_xi);
+    std::array<Eigen::Matrix3d, 3> rotation_rate;
+    const Eigen::Matrix3d yaw_rate = pose.rotation * skew(kZ);  // dR/d yaw = R [z]x
+    for (int k = 0; k < 3; ++k) {
+        const auto kk = static_cast<std::size_t>(k);
+        rotation_rate[kk] = tilt_rate[kk] + u_xi(2, k) * yaw_rate;
+        pose_jacobian.position_m.col(k) = Eigen::Vector3d(u_xi(0, k), u_xi(1, k), k == 0);
+        pose_jacobian.normal.col(k) = -rotation_rate[kk].col(2);
+    }
+
+    const double tilt = std::sqrt(tx * tx + ty * ty);
+    jacobian.row(0) =
+        tilt > 0.0 ? Eigen::RowVector3d(0.0, -tx / tilt, -ty / tilt) : Eigen::RowVector3d::Zero();
+    jacobian.row(1) = Eigen::RowVector3d(1.0 / config_.plate_radius_m, 0.0, 0.0);
+    const double crank = config_.geometry.crank_length_m;
+    const Eigen::Vector3d towards_body = pose.plateNormal();
+    for (int leg = 0; leg < 3; ++leg) {
+        LegSolution s;
+        if (!solveLeg(leg, pose, s)) {
+            return false;
+        }
+        const auto i = static_cast<std::size_t>(leg);
+        const Eigen::Vector3d rel = s.joint_m - base_joint_[i];
+        const double u = radial_[i].dot(rel);
+        const double w = rel.z();
+        const double rho2 = u * u + w * w;
+        const double rho = std::sqrt(rho2);
+        const double kappa = (rho2 + crank * crank -
+                              config_.geometry.link_length_m * config_.geometry.link_length_m) /
+                             (2.0 * crank);
+        const double q = kappa / rho;
+        const double acos_rate = 1.0 / std::sqrt(std::max(1.0 - q * q, 1e-300));
+        const Eigen::Vector3d link = s.elbow_m - s.joint_m;
+        const double link_length = link.norm();
+        const Eigen::Vector3d l = link / link_length;
+        const double cosine = std::clamp(l.dot(towards_body), -1.0, 1.0);
+        const double cone_rate = 1.0 / std::sqrt(std::max(1.0 - cosine * cosine, 1e-300));
+        const Eigen::Vector3d elbow_rate =
+            crank * (-std::sin(s.servo_rad) * radial_[i] + std::cos(s.servo_rad) * kZ);
+        for (int k = 0; k < 3; ++k) {
+            const auto kk = static_cast<std::size_t>(k);
+            const Eigen::Vector3d joint_rate =
+                pose_jacobian.position_m.col(k) + rotation_rate[kk] * platform_arm_[i];
+            const double du = radial_[i].dot(joint_rate);
+            const double dw = joint_rate.z();
+            const double drho = (u * du + w * dw) / rho;
+            const double dkappa = (u * du + w * dw) / crank;
+            const double dq = (dkappa * rho - kappa * drho) / rho2;
+            const double dservo = (u * dw - w * du) / rho2 + acos_rate * dq;
+            const Eigen::Vector3d dlink = elbow_rate * dservo - joint_rate;
+            const Eigen::Vector3d dl = (dlink - l * l.dot(dlink)) / link_length;
+            const double dcosine = dl.dot(towards_body) + l.dot(pose_jacobian.normal.col(k));
+            jacobian(2 + leg, k) = dservo;
+            jacobian(5 + leg, k) = -dservo;
+            jacobian(8 + leg, k) = -(q < 0.0 ? -dq : dq);
+            jacobian(11 + leg, k) = cone_rate * dcosine;
+        }
     }
     return true;
 }

@@ -3,18 +3,23 @@
 // Contact-surface matching for the thimble (ALGORITHMS §3.3-3.5): find the platform DoFs
 // xi = (height, tilt_x, tilt_y) whose plate best reproduces the virtual contact surface,
 //
-//   E(xi) = sum_{i in C} w_i d(x_i)^2 + eta sum_{j not in C} w_j min(d(x_j), 0)^2
+//   E(xi) = sum_{i in C} w_i 2 psi(d(x_i)) + eta sum_{j not in C} w_j 2 psi(min(d(x_j), 0))
 //           + lambda |S (xi - xi_prev)|^2,      subject to c_w(xi) >= 0,
 //
-// with d(y) = nu . (y - p) the signed distance of y to the plate (positive on the finger
-// side), applied with a smooth weight that fades to zero at the plate rim; S = diag(1, r_d,
-// r_d) puts the tilts in metres at the rim. Contact samples (signed_distance < 0) are matched
-// at their projection onto the virtual object, x_i = p_i - signed_distance_i n_i; non-contact
-// samples are kept on the finger side of the plate.
+// psi(d) = s^2 (exp(-d / s) - 1 + d / s) is the energy of the exponential pad law
+// p(delta) = p0 (exp(delta / s) - 1) per unit stiffness weight w = A dp/d(delta) (taken at
+// the virtual indentation), so dE/dxi is the mismatch between the generalised pad forces of
+// the plate and of the virtual contact [DER]. psi(d) -> d^2 / 2 as s -> infinity (linear pad:
+// the quadratic matched-point objective of ALGORITHMS §3.3). Here d(y) = nu . (y - p) is the signed
+// distance of y to the plate (positive on the finger side), applied with a smooth weight that fades
+// to zero at the plate rim; S = diag(1, r_d, r_d) puts the tilts in metres at the rim. Contact
+// samples (signed_distance < 0) are matched at their projection onto the virtual object, x_i = p_i
+// - signed_distance_i n_i; non-contact samples are kept on the finger side of the plate.
 //
-// Solver: Gauss-Newton with a 3-variable active-set QP on the linearised workspace
-// constraints, then a backtracking line search that only accepts feasible poses with lower E.
-// Warm started from the previous solution; iterations bounded by optimiser.max_iterations.
+// Solver: Gauss-Newton (curvature psi'', analytic Jacobians from
+// ThimbleKinematics::constraintJacobian) with a 3-variable active-set QP on the linearised
+// workspace constraints, then a backtracking line search that only accepts feasible poses with
+// lower E. Warm started from the previous solution; iterations bounded by optimiser.max_iterations.
 // solve() is noexcept, allocation-free and bounded: it runs on the 1 kHz path.
 
 #include <cstdint>
@@ -30,6 +35,10 @@ struct OptimiserSettings {
     double non_contact_weight{1.0};  // eta
     double smoothness_weight{1e-6};  // lambda, relative to a total sample weight of 1
     double rim_blend_m{0.001};       // the rim weight falls from 1 to 0 over this width
+    // s of the pad's exponential stiffening p(delta) = p0 (exp(delta / s) - 1) (1 mm for the
+    // stand-in pad model, a finger_calibration value once measured). Infinity or <= 0: a
+    // linear pad, i.e. the quadratic objective.
+    double pad_stiffening_depth_m{0.001};
     // Converged when the scaled step is below this: 1 um, far below what a hobby servo can
     // resolve (0.1 degree on a 10 mm crank is ~17 um).
     double step_tolerance_m{1e-6};
@@ -119,9 +128,19 @@ class ContactSurfaceOptimiser {
         double overlap_m{0.0};
     };
 
-    [[nodiscard]] Evaluation evaluate(const PlatformDofs& dofs,
-                                      const PlatformPose& pose) const noexcept;
-    [[nodiscard]] double rimWeight(double in_plane_radius_m) const noexcept;
+    // Distance to the plate and pad-energy derivatives of one sample at one pose; weight 0
+    // when the sample does not enter E there.
+    struct SampleState {
+        double d{0.0};
+        double weight{0.0};  // sqrt(w_i) times the rim weight
+        double slope{0.0};
+        double curvature{0.0};
+    };
+    using SampleStates = std::array<SampleState, msgs::kMaxContactSamples>;
+
+    [[nodiscard]] Evaluation evaluate(const PlatformDofs& dofs, const PlatformPose& pose,
+                                      SampleStates& states) const noexcept;
+    [[nodiscard]] double rimWeight(double in_plane_radius_sq_m2) const noexcept;
     [[nodiscard]] TactileCommand finish(const PlatformDofs& dofs, SolveReport report) noexcept;
     [[nodiscard]] Eigen::Vector3d scaled(const PlatformDofs& dofs) const noexcept;
     [[nodiscard]] PlatformDofs unscaled(const Eigen::Vector3d& z) const noexcept;
@@ -129,8 +148,10 @@ class ContactSurfaceOptimiser {
     const ThimbleKinematics& kinematics_;
     OptimiserSettings settings_;
     std::array<Target, msgs::kMaxContactSamples> targets_{};
+    std::array<SampleStates, 2> sample_states_{};
     int target_count_{0};
     double lambda_{0.0};
+    double inverse_stiffening_depth_{0.0};
     PlatformDofs warm_start_;
     // The smoothness term only ties a solve to a previous matched pose; leaving the retract
     // pose should not be slowed down.

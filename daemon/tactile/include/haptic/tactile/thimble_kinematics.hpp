@@ -71,6 +71,14 @@ enum class Constraint : std::uint8_t {
 };
 inline constexpr int kConstraintCount = 14;
 using ConstraintValues = std::array<double, kConstraintCount>;
+// d c_w / d(height, tilt_x, tilt_y), per constraint row.
+using ConstraintJacobian = Eigen::Matrix<double, kConstraintCount, 3>;
+
+// Derivatives of the plate pose over (height, tilt_x, tilt_y), parasitic motion included.
+struct PoseJacobian {
+    Eigen::Matrix3d position_m;  // column k: d position_m / d xi_k
+    Eigen::Matrix3d normal;      // column k: d plateNormal() / d xi_k
+};
 
 [[nodiscard]] const char* constraintName(int index) noexcept;
 
@@ -135,6 +143,12 @@ class ThimbleKinematics {
                                    PlatformPose* pose = nullptr,
                                    const PlatformPose* guess = nullptr) const noexcept;
     [[nodiscard]] static bool feasible(const ConstraintValues& values) noexcept;
+    // Analytic d c_w / d xi at `pose` = platformPose(dofs) (implicit-function derivative of the
+    // parasitic motion, then the leg chain); costs about one constraints() call. False if a
+    // leg cannot be assembled there.
+    [[nodiscard]] bool constraintJacobian(const PlatformDofs& dofs, const PlatformPose& pose,
+                                          ConstraintJacobian& jacobian,
+                                          PoseJacobian& pose_jacobian) const noexcept;
 
     // The pose farthest from the pad (zero tilt, largest reachable height): the no-contact pose.
     [[nodiscard]] const PlatformDofs& retractPose() const noexcept { return retract_; }
