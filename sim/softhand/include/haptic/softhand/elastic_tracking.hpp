@@ -24,7 +24,7 @@ struct BonePose {
 struct TrackingSettings {
     double linear_stiffness_n_per_m{500.0};    // k_l: intermediate bone -> tracked bone
     double angular_stiffness_nm_per_rad{0.5};  // k_r
-    int gauss_newton_iterations{2};
+    int gauss_newton_iterations{3};
     double max_target_speed_m_per_s{1.5};  // per step; faster input is clamped
 };
 
