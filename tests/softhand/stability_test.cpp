@@ -122,7 +122,7 @@ TEST(SofthandStability, InvertedElementsRecover) {
     const double initial_energy = sim.totalEnergy();
     StepReport first = sim.step(0.01);
     EXPECT_GT(first.inverted_elements, 0);
-    const RunSummary summary = run(model, bone, 0.01, 0.5, [&](double) { return start; });
+    const RunSummary summary = run(model, bone, 0.01, 1.0, [&](double) { return start; });
     EXPECT_TRUE(summary.finite);
     EXPECT_EQ(summary.final_inverted, 0);
     // The inversion stores energy; recovering releases it and must never add to it.
