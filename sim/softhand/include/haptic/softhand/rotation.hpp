@@ -1,0 +1,98 @@
+#pragma once
+
+// Small rotation and decomposition helpers shared by the energy terms (ALGORITHMS.md §1.1-1.2).
+
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <cmath>
+
+namespace haptic::softhand {
+
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+
+[[nodiscard]] inline Mat3 skew(const Vec3& a) {
+    Mat3 s;
+    s << 0.0, -a.z(), a.y(), a.z(), 0.0, -a.x(), -a.y(), a.x(), 0.0;
+    return s;
+}
+
+// exp([w]x) via the angle-axis form; exact for any angle.
+[[nodiscard]] inline Mat3 expMap(const Vec3& w) {
+    const double angle = w.norm();
+    if (angle < 1e-12) {
+        return Mat3::Identity() + skew(w);
+    }
+    return Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
+}
+
+// log(R)^v, the rotation vector (axis * angle) of a rotation matrix.
+[[nodiscard]] inline Vec3 logMap(const Mat3& rotation) {
+    const Eigen::AngleAxisd aa(rotation);
+    return aa.axis() * aa.angle();
+}
+
+// Re-orthonormalises a rotation that drifted through repeated products.
+[[nodiscard]] inline Mat3 orthonormalized(const Mat3& rotation) {
+    return Eigen::Quaterniond(rotation).normalized().toRotationMatrix();
+}
+
+// Inversion-safe SVD F = U diag(sigma) V^T with U, V proper rotations: when det F < 0 the
+// smallest singular value carries the sign (Irving et al. 2004), so an inverted element
+// reports sigma_min < 0 and the strain-limit penalty pushes it back out.
+struct RotationVariantSvd {
+    Mat3 u;
+    Vec3 sigma;
+    Mat3 v;
+
+    [[nodiscard]] Mat3 rotation() const { return u * v.transpose(); }
+};
+
+[[nodiscard]] inline RotationVariantSvd jacobiRotationVariantSvd(const Mat3& f) {
+    const Eigen::JacobiSVD<Mat3> svd(f, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    RotationVariantSvd out{svd.matrixU(), svd.singularValues(), svd.matrixV()};
+    if (out.u.determinant() < 0.0) {
+        out.u.col(2) *= -1.0;
+        out.sigma(2) *= -1.0;
+    }
+    if (out.v.determinant() < 0.0) {
+        out.v.col(2) *= -1.0;
+        out.sigma(2) *= -1.0;
+    }
+    return out;
+}
+
+// Closed-form path (eigen-decomposition of F^T F), several times faster than JacobiSVD,
+// which dominated the step time. Falls back to JacobiSVD for inverted elements and when
+// a singular value is close to zero, where F^T F loses the precision.
+[[nodiscard]] inline RotationVariantSvd rotationVariantSvd(const Mat3& f) {
+    Eigen::SelfAdjointEigenSolver<Mat3> eigen;
+    eigen.computeDirect(f.transpose() * f);
+    const Vec3 lambda = eigen.eigenvalues();  // ascending
+    // Inverted or nearly flat elements take the careful path.
+    if (!(f.determinant() > 0.0) || !(lambda(2) > 0.0) || !(lambda(0) > 1e-8 * lambda(2)) ||
+        !lambda.allFinite()) {
+        return jacobiRotationVariantSvd(f);
+    }
+    RotationVariantSvd out;
+    out.v.col(0) = eigen.eigenvectors().col(2);
+    out.v.col(1) = eigen.eigenvectors().col(1);
+    out.v.col(2) = out.v.col(0).cross(out.v.col(1));  // proper rotation
+    out.sigma(0) = std::sqrt(lambda(2));
+    out.sigma(1) = std::sqrt(lambda(1));
+    out.u.col(0) = (f * out.v.col(0)).normalized();
+    Vec3 u1 = f * out.v.col(1);
+    u1 -= out.u.col(0).dot(u1) * out.u.col(0);
+    out.u.col(1) = u1.normalized();
+    out.u.col(2) = out.u.col(0).cross(out.u.col(1));
+    // Signed: negative when F is inverted, since U and V are both proper rotations.
+    out.sigma(2) = out.u.col(2).dot(f * out.v.col(2));
+    if (!out.u.allFinite() || !out.v.allFinite()) {
+        return jacobiRotationVariantSvd(f);
+    }
+    return out;
+}
+
+}  // namespace haptic::softhand

@@ -1,0 +1,257 @@
+#pragma once
+
+// Soft hand simulation core (ALGORITHMS.md §2, thesis ch. 3): tissue nodes and rigid bodies
+// (bones, object duplicates) advanced together by backward Euler with one Newton step per
+// step, solved by block-Jacobi PCG, guarded by an energy check that backtracks and substeps.
+//
+// Units: SI (m, kg, s, N, Pa). Frames: world, z up. No I/O; bad input is rejected with a
+// reason in the step report, never thrown from step().
+
+#include <Eigen/Core>
+#include <array>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "haptic/softhand/collider.hpp"
+#include "haptic/softhand/rotation.hpp"
+#include "haptic/softhand/tet_mesh.hpp"
+
+namespace haptic::softhand {
+
+struct TissueMaterial {
+    double youngs_modulus_pa{5.0e4};
+    double poisson_ratio{0.45};
+    double density_kg_per_m3{1100.0};
+    // Strain limits on the singular values of F as a stiff penalty (ALGORITHMS §2.4.3, DER):
+    // k_sl = ratio * E. Values are a starting point, not fitted to finger data.
+    bool strain_limits{true};
+    double strain_min{0.7};
+    double strain_max{1.3};
+    double strain_limit_stiffness_ratio{100.0};
+};
+
+struct SolverSettings {
+    Vec3 gravity_m_per_s2{0.0, 0.0, -9.81};
+    double mass_damping_per_s{2.0};     // Rayleigh alpha
+    double stiffness_damping_s{0.002};  // Rayleigh gamma
+    int pcg_max_iterations{200};
+    double pcg_relative_tolerance{1e-4};
+    int max_backtracks{10};                     // halvings of the Newton step before substepping
+    int max_substep_depth{3};                   // 2^3 = 8 substeps at most
+    double max_speed_m_per_s{5.0};              // node and body speed clamp
+    double contact_stiffness_n_per_m{2000.0};   // per skin node
+    double friction_stiffness_n_per_m{2000.0};  // per skin node, tangential
+};
+
+struct RigidBodyDesc {
+    double mass_kg{0.01};
+    Mat3 inertia_body_kg_m2{Mat3::Identity() * 1e-6};
+    Vec3 position_m{Vec3::Zero()};
+    Mat3 rotation{Mat3::Identity()};
+    bool kinematic{false};  // pose set from outside only; infinite mass in the solve
+    bool gravity{true};
+};
+
+enum class JointType { kBall, kHinge, kUniversal };
+
+// Soft joint (ALGORITHMS §2.4.1). Anchors and axes are in each body's local frame at build
+// time; the flexion angle is measured about `axis_a_local` relative to the build-time pose.
+struct JointDesc {
+    JointType type{JointType::kBall};
+    int body_a{-1};
+    int body_b{-1};
+    Vec3 anchor_world_m{Vec3::Zero()};
+    Vec3 axis_world{Vec3::UnitY()};   // hinge / flexion axis (world, at build time)
+    Vec3 twist_world{Vec3::UnitX()};  // universal joints: the axis whose twist is penalised
+    double positional_stiffness_n_per_m{1.0e3};
+    double alignment_stiffness_nm_per_rad{1.0};
+    double limit_min_rad{-1.0e9};
+    double limit_max_rad{1.0e9};
+    double limit_stiffness_nm_per_rad{10.0};
+};
+
+struct ColliderDesc {
+    ColliderShape shape;
+    Vec3 position_m{Vec3::Zero()};
+    Mat3 rotation{Mat3::Identity()};
+    double friction{0.5};
+    int body{-1};  // rigid body carrying the shape (object duplicate); -1 = fixed in world
+};
+
+// What the solver did in one step(). Every case ends in a finite state; these say how.
+struct StepReport {
+    bool rejected_input{false};  // an input (target, dt) was refused and the old one kept
+    std::string rejection_reason;
+    bool clamped{false};  // speed clamp, target-rate clamp, PCG cap or a step zeroed
+    bool substepped{false};
+    int substeps{1};
+    int backtracks{0};
+    int pcg_iterations{0};  // summed over substeps
+    bool pcg_capped{false};
+    double pcg_relative_residual{0.0};  // of the last solve
+    int active_contacts{0};
+    int strain_limited_elements{0};
+    int inverted_elements{0};
+    double energy_j{0.0};  // kinetic + potential after the step
+};
+
+class Simulation {
+  public:
+    explicit Simulation(SolverSettings settings = {});
+
+    // --- building ---
+    // Appends the mesh as tissue; returns the index of its first node. Boundary nodes become
+    // skin (contact candidates).
+    int addTissue(const TetMesh& mesh, const TissueMaterial& material);
+    int addBody(const RigidBodyDesc& desc);
+    int addJoint(const JointDesc& desc);
+    // Couples a node to a body at the node's current position (ALGORITHMS §2.4.4).
+    void attachNode(int node, int body, double stiffness_n_per_m);
+    // Dirichlet condition on the node's axes (x, y, z): they keep their current position.
+    void pinNode(int node, std::array<bool, 3> axes = {true, true, true});
+    int addCollider(const ColliderDesc& desc);
+    // Elastic tracking spring of a body towards its target (ALGORITHMS §2.3, U_crb).
+    void setTrackingStiffness(int body, double linear_n_per_m, double angular_nm_per_rad);
+
+    // --- inputs between steps ---
+    // Rejects non-finite or non-rotation targets (reason in the next report).
+    bool setTrackingTarget(int body, const Vec3& position_m, const Mat3& rotation);
+    void setNodeForce(int node, const Vec3& force_n);
+    void setColliderPose(int collider, const Vec3& position_m, const Mat3& rotation);
+    void setNodePosition(int node, const Vec3& position_m);
+    void setBodyPose(int body, const Vec3& position_m, const Mat3& rotation);
+    void setBodyVelocity(int body, const Vec3& linear_m_per_s, const Vec3& angular_rad_per_s);
+
+    // Advances by dt_s (one step, or substeps when the energy check demands it).
+    StepReport step(double dt_s);
+    // Quasi-static relaxation for validation: steps of dt_s started from rest (a Newton
+    // iteration on the potential, regularised by M/dt^2) until no node or body moves more
+    // than tolerance in a step. Returns the steps taken (max_steps if not converged).
+    int relax(double dt_s, int max_steps, double displacement_tolerance_m);
+
+    // --- state ---
+    [[nodiscard]] int nodeCount() const { return static_cast<int>(x_.size()); }
+    [[nodiscard]] int bodyCount() const { return static_cast<int>(bodies_.size()); }
+    [[nodiscard]] int tetCount() const { return static_cast<int>(tets_.size()); }
+    [[nodiscard]] const Vec3& nodePosition(int node) const { return x_[node]; }
+    [[nodiscard]] const Vec3& nodeRestPosition(int node) const { return rest_[node]; }
+    [[nodiscard]] const Vec3& nodeVelocity(int node) const { return v_[node]; }
+    [[nodiscard]] double nodeMass(int node) const { return node_mass_[node]; }
+    [[nodiscard]] const std::vector<int>& skinNodes() const { return skin_; }
+    [[nodiscard]] const Vec3& bodyPosition(int body) const { return bodies_[body].c; }
+    [[nodiscard]] const Mat3& bodyRotation(int body) const { return bodies_[body].rotation; }
+    [[nodiscard]] const Vec3& bodyLinearVelocity(int body) const { return bodies_[body].v; }
+    [[nodiscard]] int jointCount() const { return static_cast<int>(joints_.size()); }
+    [[nodiscard]] const JointDesc& jointDesc(int joint) const { return joints_[joint].desc; }
+    // Force each collider exerts on each skin node in contact after the last step.
+    struct ContactForce {
+        int node;
+        int collider;
+        Vec3 force_n;
+        bool sliding;  // the friction anchor was dragged this step (Coulomb limit reached)
+    };
+    [[nodiscard]] const std::vector<ContactForce>& contactForces() const { return contact_forces_; }
+    // Sum of contact forces the tissue applies to a collider (reaction, world frame).
+    [[nodiscard]] Vec3 forceOnCollider(int collider) const;
+    [[nodiscard]] double totalEnergy() const;
+    [[nodiscard]] const SolverSettings& settings() const { return settings_; }
+    SolverSettings& settings() { return settings_; }
+
+    // Internal layout, shared with the energy terms (src/).
+    struct Tet {
+        std::array<int, 4> nodes;
+        Mat3 rest_inverse;  // D_m^-1
+        double volume_m3;
+        double mu;
+        double lambda;
+        double limit_stiffness;
+        double strain_min;
+        double strain_max;
+        bool strain_limits;
+    };
+    struct Body {
+        double mass;
+        Mat3 inertia_body;
+        Vec3 c;
+        Mat3 rotation;
+        Vec3 v{Vec3::Zero()};
+        Vec3 w{Vec3::Zero()};
+        bool kinematic;
+        bool gravity;
+        double track_linear{0.0};
+        double track_angular{0.0};
+        Vec3 target_c;
+        Mat3 target_rotation;
+    };
+    [[nodiscard]] const Body& body(int index) const { return bodies_[index]; }
+
+    struct Joint {
+        JointDesc desc;
+        Vec3 anchor_a_local;
+        Vec3 anchor_b_local;
+        Vec3 axis_a_local;
+        Vec3 twist_a_local;
+        Mat3 rest_relative;  // R_a^T R_b at build time
+    };
+    struct Attachment {
+        int node;
+        int body;
+        Vec3 offset_local;
+        double stiffness;
+    };
+    struct Collider {
+        ColliderDesc desc;
+        Vec3 offset_local;  // fixed offset of the shape frame in its body frame
+        Mat3 rotation_local;
+    };
+    struct Contact {
+        int node;
+        int collider;
+        Vec3 normal;              // world, at detection
+        Vec3 anchor_local;        // friction anchor in the collider frame
+        double friction_limit_n;  // mu * normal force at detection (lagged one step)
+        bool sliding;             // the anchor was dragged at the end of the last step
+    };
+    struct Anchor {
+        Vec3 local;  // collider frame
+        bool sliding;
+    };
+    // Positions of every DoF, the argument of the potential.
+    struct Configuration {
+        std::vector<Vec3> x;
+        std::vector<Vec3> c;
+        std::vector<Mat3> rotation;
+    };
+
+  private:
+    bool advance(double dt_s, int depth, StepReport& report);
+    void detectContacts(const Configuration& q);
+    void updateAnchors();
+    [[nodiscard]] Configuration currentConfiguration() const;
+    [[nodiscard]] std::pair<Vec3, Mat3> colliderPose(const Configuration& q, int collider) const;
+
+    SolverSettings settings_;
+    std::vector<Vec3> rest_;
+    std::vector<Vec3> x_;
+    std::vector<Vec3> v_;
+    std::vector<double> node_mass_;
+    std::vector<Vec3> node_force_;
+    std::vector<std::array<bool, 3>> pinned_;
+    std::vector<int> skin_;
+    std::vector<Tet> tets_;
+    std::vector<Body> bodies_;
+    std::vector<Joint> joints_;
+    std::vector<Attachment> attachments_;
+    std::vector<Collider> colliders_;
+    std::vector<Contact> contacts_;
+    std::map<std::pair<int, int>, Anchor> anchors_;  // by (node, collider)
+    std::vector<ContactForce> contact_forces_;
+    Eigen::VectorXd warm_start_;
+    StepReport pending_;  // input rejections and clamps waiting for the next report
+
+    friend struct EnergyTerms;
+};
+
+}  // namespace haptic::softhand

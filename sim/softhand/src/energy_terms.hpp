@@ -1,0 +1,91 @@
+#pragma once
+
+// Internal: the potential energy terms of ALGORITHMS.md §2.4, each able to return its energy
+// alone (energy check) or also add its gradient and Gauss-Newton Hessian (Newton step).
+
+#include <Eigen/Sparse>
+#include <span>
+#include <vector>
+
+#include "haptic/softhand/simulation.hpp"
+
+namespace haptic::softhand {
+
+// Gradient and PSD Hessian blocks of the potential over the stacked DoFs: 3 per node, then
+// 6 per body (linear, angular).
+class Assembler {
+  public:
+    explicit Assembler(int dof_count) : gradient(Eigen::VectorXd::Zero(dof_count)) {}
+
+    void addBlock(int row, int col, const Mat3& block) {
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j) {
+                if (block(i, j) != 0.0) {
+                    (collecting_tissue ? tissue_triplets : triplets)
+                        .emplace_back(row + i, col + j, block(i, j));
+                }
+            }
+        }
+    }
+    void addGradient(int dof, const Vec3& g) { gradient.segment<3>(dof) += g; }
+
+    Eigen::VectorXd gradient;
+    // Tissue blocks are kept apart: Rayleigh stiffness damping applies to them only. Damping
+    // the contact and friction springs would turn Coulomb sliding into viscous creep.
+    bool collecting_tissue{false};
+    std::vector<Eigen::Triplet<double>> tissue_triplets;
+    std::vector<Eigen::Triplet<double>> triplets;
+};
+
+// One Jacobian block d(residual)/d(dof .. dof+2).
+struct JacobianBlock {
+    int dof;
+    Mat3 jacobian;
+};
+
+// Adds J_i^T g to the gradient and J_i^T H J_j to the Hessian for a term whose gradient and
+// Hessian with respect to a 3-vector are g and H.
+void addLinearizedTerm(Assembler* assembler, const Vec3& gradient, const Mat3& hessian,
+                       std::span<const JacobianBlock> blocks);
+
+// E = 1/2 e^T W e with e linearised as e + sum J_i dz_i. Returns E; adds J^T W e and J^T W J.
+double addResidualTerm(Assembler* assembler, const Mat3& weight, const Vec3& residual,
+                       std::span<const JacobianBlock> blocks);
+
+struct TermStats {
+    int strain_limited_elements{0};
+    int inverted_elements{0};
+};
+
+struct EnergyTerms {
+    using Sim = Simulation;
+    static int nodeDof(int node) { return 3 * node; }
+    static int bodyDof(const Sim& sim, int body) { return 3 * sim.nodeCount() + 6 * body; }
+
+    // Co-rotational FEM plus strain-limit penalty (§2.4.2-2.4.3). With an assembler the
+    // co-rotation is frozen at q for the Newton step.
+    static double tissue(const Sim& sim, const Sim::Configuration& q, Assembler* assembler,
+                         TermStats* stats);
+    // Gravity and applied node forces.
+    static double external(const Sim& sim, const Sim::Configuration& q, Assembler* assembler);
+    // Bone-tissue coupling (§2.4.4), joints (§2.4.1), tracking springs (§2.3).
+    static double skeleton(const Sim& sim, const Sim::Configuration& q, Assembler* assembler);
+    // Normal penalty and anchored friction for the detected contacts (§2.4.6-2.4.7). Energy
+    // evaluation uses the true signed distance at q, so a step that digs deeper is caught.
+    static double contact(const Sim& sim, const Sim::Configuration& q, Assembler* assembler);
+
+    static double potential(const Sim& sim, const Sim::Configuration& q, Assembler* assembler,
+                            TermStats* stats) {
+        return tissue(sim, q, assembler, stats) + external(sim, q, assembler) +
+               skeleton(sim, q, assembler) + contact(sim, q, assembler);
+    }
+};
+
+// 3x3 Jacobian blocks of a body-fixed point with world lever arm r: [I, -[r]x] (§1.1).
+inline void appendBodyPoint(std::vector<JacobianBlock>& out, int body_dof, const Vec3& lever,
+                            double sign) {
+    out.push_back({body_dof, sign * Mat3::Identity()});
+    out.push_back({body_dof + 3, -sign * skew(lever)});
+}
+
+}  // namespace haptic::softhand

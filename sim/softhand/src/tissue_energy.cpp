@@ -1,0 +1,134 @@
+#include "energy_terms.hpp"
+
+namespace haptic::softhand {
+
+void addLinearizedTerm(Assembler* assembler, const Vec3& gradient, const Mat3& hessian,
+                       std::span<const JacobianBlock> blocks) {
+    if (assembler == nullptr) {
+        return;
+    }
+    for (const auto& bi : blocks) {
+        assembler->addGradient(bi.dof, bi.jacobian.transpose() * gradient);
+        const Eigen::Matrix3d left = bi.jacobian.transpose() * hessian;
+        for (const auto& bj : blocks) {
+            assembler->addBlock(bi.dof, bj.dof, left * bj.jacobian);
+        }
+    }
+}
+
+double addResidualTerm(Assembler* assembler, const Mat3& weight, const Vec3& residual,
+                       std::span<const JacobianBlock> blocks) {
+    const Vec3 weighted = weight * residual;
+    addLinearizedTerm(assembler, weighted, weight, blocks);
+    return 0.5 * residual.dot(weighted);
+}
+
+double EnergyTerms::tissue(const Sim& sim, const Sim::Configuration& q, Assembler* assembler,
+                           TermStats* stats) {
+    if (assembler != nullptr) {
+        assembler->collecting_tissue = true;
+    }
+    double energy = 0.0;
+    for (const auto& tet : sim.tets_) {
+        const auto& n = tet.nodes;
+        Mat3 ds;
+        ds.col(0) = q.x[n[1]] - q.x[n[0]];
+        ds.col(1) = q.x[n[2]] - q.x[n[0]];
+        ds.col(2) = q.x[n[3]] - q.x[n[0]];
+        const Mat3 f = ds * tet.rest_inverse;
+        const RotationVariantSvd svd = rotationVariantSvd(f);
+        const Mat3 rotation = svd.rotation();
+        const Mat3 strain = rotation.transpose() * f - Mat3::Identity();
+        const double trace = strain.trace();
+        energy += tet.volume_m3 *
+                  (tet.mu * (f - rotation).squaredNorm() + 0.5 * tet.lambda * trace * trace);
+
+        // Shape-function gradients g_j: rows of D_m^-1, g_0 = -(g_1 + g_2 + g_3).
+        std::array<Vec3, 4> g;
+        g[1] = tet.rest_inverse.row(0).transpose();
+        g[2] = tet.rest_inverse.row(1).transpose();
+        g[3] = tet.rest_inverse.row(2).transpose();
+        g[0] = -(g[1] + g[2] + g[3]);
+
+        // Strain-limit penalty on the singular values (inversion-safe: sigma_3 < 0 when
+        // inverted, which is far below strain_min, so the penalty restores orientation).
+        Vec3 excess = Vec3::Zero();
+        bool limited = false;
+        if (tet.strain_limits) {
+            for (int i = 0; i < 3; ++i) {
+                const double s = svd.sigma(i);
+                if (s > tet.strain_max) {
+                    excess(i) = s - tet.strain_max;
+                } else if (s < tet.strain_min) {
+                    excess(i) = s - tet.strain_min;
+                }
+                limited = limited || excess(i) != 0.0;
+            }
+            energy += 0.5 * tet.limit_stiffness * tet.volume_m3 * excess.squaredNorm();
+        }
+        if (stats != nullptr) {
+            stats->strain_limited_elements += limited ? 1 : 0;
+            stats->inverted_elements += svd.sigma(2) < 0.0 ? 1 : 0;
+        }
+        if (assembler == nullptr) {
+            continue;
+        }
+        // First Piola stress of the co-rotational model with R frozen, plus the penalty.
+        Mat3 piola = 2.0 * tet.mu * (f - rotation) + tet.lambda * trace * rotation;
+        if (limited) {
+            piola += svd.u * (tet.limit_stiffness * excess).asDiagonal() * svd.v.transpose();
+        }
+        for (int j = 0; j < 4; ++j) {
+            assembler->addGradient(nodeDof(n[j]), tet.volume_m3 * piola * g[j]);
+        }
+        for (int i = 0; i < 4; ++i) {
+            for (int j = 0; j < 4; ++j) {
+                Mat3 k = tet.mu * g[i].dot(g[j]) * Mat3::Identity() +
+                         tet.mu * g[j] * g[i].transpose() + tet.lambda * g[i] * g[j].transpose();
+                Mat3 block = tet.volume_m3 * rotation * k * rotation.transpose();
+                if (limited) {
+                    for (int a = 0; a < 3; ++a) {
+                        if (excess(a) == 0.0) {
+                            continue;
+                        }
+                        const Vec3 va = svd.v.col(a);
+                        const Vec3 ua = svd.u.col(a);
+                        block += tet.limit_stiffness * tet.volume_m3 * va.dot(g[i]) * va.dot(g[j]) *
+                                 ua * ua.transpose();
+                    }
+                }
+                assembler->addBlock(nodeDof(n[i]), nodeDof(n[j]), block);
+            }
+        }
+    }
+    if (assembler != nullptr) {
+        assembler->collecting_tissue = false;
+    }
+    return energy;
+}
+
+double EnergyTerms::external(const Sim& sim, const Sim::Configuration& q, Assembler* assembler) {
+    const Vec3& gravity = sim.settings_.gravity_m_per_s2;
+    double energy = 0.0;
+    for (int i = 0; i < sim.nodeCount(); ++i) {
+        const Vec3 load = sim.node_mass_[i] * gravity + sim.node_force_[i];
+        energy -= load.dot(q.x[i]);
+        if (assembler != nullptr) {
+            assembler->addGradient(nodeDof(i), -load);
+        }
+    }
+    for (int b = 0; b < sim.bodyCount(); ++b) {
+        const auto& body = sim.bodies_[b];
+        if (!body.gravity || body.kinematic) {
+            continue;
+        }
+        const Vec3 load = body.mass * gravity;
+        energy -= load.dot(q.c[b]);
+        if (assembler != nullptr) {
+            assembler->addGradient(bodyDof(sim, b), -load);
+        }
+    }
+    return energy;
+}
+
+}  // namespace haptic::softhand
