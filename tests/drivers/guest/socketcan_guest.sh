@@ -97,7 +97,8 @@ if [[ ! -f $kdir/vmlinux ]]; then
 fi
 
 out=$(mktemp -d "${TMPDIR:-/tmp}/haptic-guest.XXXXXX")
-# The guest sees the host's / read-only; the test binary's folder is shared writable so that
+# The guest sees the host's / read-only and the host's /tmp writable (a tmpfs there would hide
+# a checkout or build under /tmp); the test binary's folder is shared writable so that
 # results (--gtest_output) come back. Paths must not contain spaces (kernel command line).
 results=$(dirname "$test_binary")
 [[ $out != *" "* && $results != *" "* ]] || skip "paths with spaces cannot be passed to the guest: $out $results"
@@ -125,7 +126,8 @@ out=$(sed -n 's/.*haptic\.out=\([^ ]*\).*/\1/p' /proc/cmdline)
 results=$(sed -n 's/.*haptic\.results=\([^ ]*\).*/\1/p' /proc/cmdline)
 if mount -t 9p -o trans=virtio,version=9p2000.L,ro,msize=512000,cache=loose hostroot /host &&
    mount -t proc proc /host/proc && mount -t sysfs sysfs /host/sys &&
-   mount -t devtmpfs devtmpfs /host/dev && mount -t tmpfs tmpfs /host/tmp &&
+   mount -t devtmpfs devtmpfs /host/dev &&
+   mount -t 9p -o trans=virtio,version=9p2000.L,msize=512000 hosttmp /host/tmp &&
    mount -t tmpfs tmpfs /host/run && mkdir -p "/host$out" &&
    mount -t 9p -o trans=virtio,version=9p2000.L,msize=512000 results "/host$results" &&
    mount -t 9p -o trans=virtio,version=9p2000.L,msize=512000 out "/host$out"; then
@@ -161,6 +163,7 @@ timeout --kill-after=10 "$GUEST_TIMEOUT_S" qemu-system-x86_64 \
   -append "console=ttyS0 quiet loglevel=3 panic=-1 haptic.out=$out haptic.results=$results" \
   -display none -nodefaults -no-user-config -no-reboot -serial stdio -monitor none \
   -virtfs "local,path=/,mount_tag=hostroot,security_model=none,readonly=on,multidevs=remap" \
+  -virtfs "local,path=/tmp,mount_tag=hosttmp,security_model=none,multidevs=remap" \
   -virtfs "local,path=$out,mount_tag=out,security_model=none" \
   -virtfs "local,path=$results,mount_tag=results,security_model=none" </dev/null
 qemu_status=$?
