@@ -8,17 +8,9 @@ ExoskeletonDriver::ExoskeletonDriver(const config::DeviceConfig& device, can::Ca
     : bus_(bus), codec_(device), link_(device.can) {}
 
 int ExoskeletonDriver::poll(std::int64_t now_ns) noexcept {
-    int handled = 0;
-    can::CanFrame frame;
-    for (int i = 0; i < kMaxFramesPerPoll; ++i) {
-        if (bus_.read(frame) != can::IoResult::kOk) {
-            break;
-        }
-        if (handleFrame(frame, now_ns)) {
-            ++handled;
-        }
-    }
-    return handled;
+    return pollFrames(bus_, now_ns, [this](const can::CanFrame& frame, std::int64_t now) {
+        return handleFrame(frame, now);
+    });
 }
 
 bool ExoskeletonDriver::handleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept {
@@ -41,13 +33,11 @@ bool ExoskeletonDriver::handleFrame(const can::CanFrame& frame, std::int64_t now
             break;
         case ExoskeletonMessage::Type::kHeartbeat:
             state_.heartbeat = message.heartbeat;
-            link_.onHeartbeat(now_ns);
-            device_fault_ = message.heartbeat.mode == protocol::DeviceMode::kFault ||
-                            message.heartbeat.active_fault != 0;
+            link_.onHeartbeat(message.heartbeat, now_ns);
             return true;
         case ExoskeletonMessage::Type::kFault:
             state_.last_fault = message.fault;
-            device_fault_ = message.fault.active;
+            link_.onFaultReport(message.fault);
             return true;
     }
     // The state is complete once both halves have arrived; its age is that of the older.
@@ -65,7 +55,7 @@ can::IoResult ExoskeletonDriver::sendCommand(const protocol::ExoskeletonCommand&
         return can::IoResult::kInvalid;
     }
     const can::IoResult result = bus_.write(frame);
-    transmit_failed_ = result != can::IoResult::kOk;
+    link_.onTransmit(result);
     if (result == can::IoResult::kOk) {
         last_counter_ = counter;
     }
@@ -73,17 +63,7 @@ can::IoResult ExoskeletonDriver::sendCommand(const protocol::ExoskeletonCommand&
 }
 
 std::uint32_t ExoskeletonDriver::faults(std::int64_t now_ns) noexcept {
-    std::uint32_t faults = link_.evaluate(now_ns);
-    if (device_fault_) {
-        faults |= kDeviceFault;
-    }
-    if (bus_.state() == can::BusState::kBusOff) {
-        faults |= kBusOff;
-    }
-    if (transmit_failed_) {
-        faults |= kTransmitFailed;
-    }
-    return faults;
+    return link_.faults(now_ns, bus_.state());
 }
 
 }  // namespace haptic::devices

@@ -24,9 +24,10 @@ LinkMonitor::LinkMonitor(const config::CanConfig& can) noexcept
     : heartbeat_timeout_ns_(static_cast<std::int64_t>(can.heartbeat_timeout_ms) * 1'000'000),
       state_timeout_ns_(static_cast<std::int64_t>(can.state_timeout_ms) * 1'000'000) {}
 
-void LinkMonitor::onHeartbeat(std::int64_t now_ns) noexcept {
+void LinkMonitor::onHeartbeat(const protocol::Heartbeat& heartbeat, std::int64_t now_ns) noexcept {
     heartbeat_seen_ = true;
     last_heartbeat_ns_ = now_ns;
+    device_fault_ = heartbeat.mode == protocol::DeviceMode::kFault || heartbeat.active_fault != 0;
 }
 
 void LinkMonitor::onState(std::int64_t now_ns) noexcept {
@@ -52,6 +53,20 @@ std::uint32_t LinkMonitor::evaluate(std::int64_t now_ns) noexcept {
         ++stale_events_;
     }
     previous_ = faults;
+    return faults;
+}
+
+std::uint32_t LinkMonitor::faults(std::int64_t now_ns, can::BusState bus_state) noexcept {
+    std::uint32_t faults = evaluate(now_ns);
+    if (device_fault_) {
+        faults |= kDeviceFault;
+    }
+    if (bus_state == can::BusState::kBusOff) {
+        faults |= kBusOff;
+    }
+    if (transmit_failed_) {
+        faults |= kTransmitFailed;
+    }
     return faults;
 }
 

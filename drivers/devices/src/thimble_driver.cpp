@@ -8,17 +8,9 @@ ThimbleDriver::ThimbleDriver(const config::DeviceConfig& device, can::CanBus& bu
     : bus_(bus), codec_(device), link_(device.can) {}
 
 int ThimbleDriver::poll(std::int64_t now_ns) noexcept {
-    int handled = 0;
-    can::CanFrame frame;
-    for (int i = 0; i < kMaxFramesPerPoll; ++i) {
-        if (bus_.read(frame) != can::IoResult::kOk) {
-            break;
-        }
-        if (handleFrame(frame, now_ns)) {
-            ++handled;
-        }
-    }
-    return handled;
+    return pollFrames(bus_, now_ns, [this](const can::CanFrame& frame, std::int64_t now) {
+        return handleFrame(frame, now);
+    });
 }
 
 bool ThimbleDriver::handleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept {
@@ -37,13 +29,11 @@ bool ThimbleDriver::handleFrame(const can::CanFrame& frame, std::int64_t now_ns)
             break;
         case ThimbleMessage::Type::kHeartbeat:
             state_.heartbeat = message.heartbeat;
-            link_.onHeartbeat(now_ns);
-            device_fault_ = message.heartbeat.mode == protocol::DeviceMode::kFault ||
-                            message.heartbeat.active_fault != 0;
+            link_.onHeartbeat(message.heartbeat, now_ns);
             break;
         case ThimbleMessage::Type::kFault:
             state_.last_fault = message.fault;
-            device_fault_ = message.fault.active;
+            link_.onFaultReport(message.fault);
             break;
     }
     return true;
@@ -55,22 +45,12 @@ can::IoResult ThimbleDriver::sendCommand(const protocol::ThimbleCommand& command
         return can::IoResult::kInvalid;
     }
     const can::IoResult result = bus_.write(frame);
-    transmit_failed_ = result != can::IoResult::kOk;
+    link_.onTransmit(result);
     return result;
 }
 
 std::uint32_t ThimbleDriver::faults(std::int64_t now_ns) noexcept {
-    std::uint32_t faults = link_.evaluate(now_ns);
-    if (device_fault_) {
-        faults |= kDeviceFault;
-    }
-    if (bus_.state() == can::BusState::kBusOff) {
-        faults |= kBusOff;
-    }
-    if (transmit_failed_) {
-        faults |= kTransmitFailed;
-    }
-    return faults;
+    return link_.faults(now_ns, bus_.state());
 }
 
 }  // namespace haptic::devices

@@ -17,8 +17,6 @@
 
 namespace haptic::devices {
 
-inline constexpr int kMaxFramesPerPoll = 64;
-
 struct ExoskeletonState {
     protocol::ExoskeletonActuatorState actuator;
     protocol::ExoskeletonEncoders encoders;
@@ -59,8 +57,6 @@ class ExoskeletonDriver {
     protocol::ExoskeletonCodec codec_;
     LinkMonitor link_;
     ExoskeletonState state_;
-    bool device_fault_{false};
-    bool transmit_failed_{false};
     std::uint8_t last_counter_{0};
 };
 

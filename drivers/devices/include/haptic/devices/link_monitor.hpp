@@ -1,11 +1,14 @@
 #pragma once
 
-// Heartbeat and state freshness for one device link. Times are CLOCK_MONOTONIC ns passed in
-// by the caller, so the loop decides what "now" is and tests drive it without waiting.
+// Health of one device link: heartbeat and state freshness, the device's own fault reports,
+// the last transmit and the bus state. Times are CLOCK_MONOTONIC ns passed in by the caller,
+// so the loop decides what "now" is and tests drive it without waiting.
 
 #include <cstdint>
 
+#include "haptic/can/bus.hpp"
 #include "haptic/config/device.hpp"
+#include "haptic/protocol/frame_codec.hpp"
 
 namespace haptic::devices {
 
@@ -21,15 +24,45 @@ enum LinkFault : std::uint32_t {
 
 [[nodiscard]] const char* linkFaultName(LinkFault fault) noexcept;
 
+// Bound on the frames one poll() handles, so a flooded bus cannot stretch a tick.
+inline constexpr int kMaxFramesPerPoll = 64;
+
+// Reads and hands at most kMaxFramesPerPoll pending frames to `handle_frame(frame, now_ns)`,
+// which returns true for frames of its device; returns how many were.
+template <typename HandleFrame>
+int pollFrames(can::CanBus& bus, std::int64_t now_ns, HandleFrame&& handle_frame) noexcept {
+    int handled = 0;
+    can::CanFrame frame;
+    for (int i = 0; i < kMaxFramesPerPoll; ++i) {
+        if (bus.read(frame) != can::IoResult::kOk) {
+            break;
+        }
+        if (handle_frame(frame, now_ns)) {
+            ++handled;
+        }
+    }
+    return handled;
+}
+
 class LinkMonitor {
   public:
     explicit LinkMonitor(const config::CanConfig& can) noexcept;
 
-    void onHeartbeat(std::int64_t now_ns) noexcept;
+    // A heartbeat in fault mode, or naming an active fault, marks the device faulted.
+    void onHeartbeat(const protocol::Heartbeat& heartbeat, std::int64_t now_ns) noexcept;
     void onState(std::int64_t now_ns) noexcept;
+    void onFaultReport(const protocol::FaultReport& fault) noexcept {
+        device_fault_ = fault.active;
+    }
+    void onTransmit(can::IoResult result) noexcept {
+        transmit_failed_ = result != can::IoResult::kOk;
+    }
+
     // Re-evaluates the timeouts; returns the timeout bits (kNoHeartbeatYet, kHeartbeatLost,
     // kStateStale). A newly raised bit is counted once per occurrence.
     std::uint32_t evaluate(std::int64_t now_ns) noexcept;
+    // All LinkFault bits: the timeouts plus device fault, bus-off and transmit failure.
+    std::uint32_t faults(std::int64_t now_ns, can::BusState bus_state) noexcept;
 
     [[nodiscard]] std::uint64_t heartbeatLossCount() const noexcept { return heartbeat_losses_; }
     [[nodiscard]] std::uint64_t staleCount() const noexcept { return stale_events_; }
@@ -44,6 +77,8 @@ class LinkMonitor {
     std::int64_t last_heartbeat_ns_{0};
     std::int64_t last_state_ns_{0};
     std::uint32_t previous_{kNoHeartbeatYet};
+    bool device_fault_{false};
+    bool transmit_failed_{false};
     std::uint64_t heartbeat_losses_{0};
     std::uint64_t stale_events_{0};
 };

@@ -7,7 +7,6 @@
 
 #include "haptic/can/bus.hpp"
 #include "haptic/config/device.hpp"
-#include "haptic/devices/exoskeleton_driver.hpp"
 #include "haptic/devices/link_monitor.hpp"
 #include "haptic/protocol/thimble_protocol.hpp"
 
@@ -41,8 +40,6 @@ class ThimbleDriver {
     protocol::ThimbleCodec codec_;
     LinkMonitor link_;
     ThimbleDriverState state_;
-    bool device_fault_{false};
-    bool transmit_failed_{false};
 };
 
 }  // namespace haptic::devices
