@@ -19,7 +19,7 @@ void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
         report.code = static_cast<protocol::FaultCode>(
             report.active ? faults_.deviceFault() : static_cast<std::uint8_t>(1));
         can::CanFrame frame;
-        encodeFault(report, frame);
+        codec_base_.encodeFault(report, frame);
         send(frame, now_ns);
     }
     if (now_ns >= next_heartbeat_ns_) {
@@ -34,7 +34,7 @@ void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
                                                          : protocol::DeviceMode::kOperational;
             heartbeat.uptime_ms = static_cast<std::uint32_t>((now_ns - start_ns_) / 1'000'000);
             can::CanFrame frame;
-            encodeHeartbeat(heartbeat, frame);
+            codec_base_.encodeHeartbeat(heartbeat, frame);
             send(frame, now_ns);
         }
     }
@@ -63,11 +63,19 @@ void DeviceEmulator::onCommandAccepted(std::int64_t now_ns) noexcept {
 
 namespace {
 
-class ExoskeletonEmulator final : public DeviceEmulator {
+// Base-from-member: listed before DeviceEmulator, so the codec exists when that base binds it.
+template <typename Codec>
+struct CodecOwner {
+    explicit CodecOwner(const config::DeviceConfig& device) : codec_(device) {}
+    Codec codec_;
+};
+
+class ExoskeletonEmulator final : private CodecOwner<protocol::ExoskeletonCodec>,
+                                  public DeviceEmulator {
   public:
     ExoskeletonEmulator(const config::DeviceConfig& device, can::CanBus& bus,
                         EmulatorOptions options)
-        : DeviceEmulator(bus, options), codec_(device), model_(device) {}
+        : CodecOwner(device), DeviceEmulator(bus, options, codec_), model_(device) {}
 
     void handleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept override {
         const protocol::ExoskeletonMessage message = codec_.decode(frame);
@@ -77,9 +85,6 @@ class ExoskeletonEmulator final : public DeviceEmulator {
         command_ = message.command;
         last_command_counter_ = message.counter;
         onCommandAccepted(now_ns);
-    }
-    [[nodiscard]] const protocol::RejectCounters& rejects() const noexcept override {
-        return codec_.rejects();
     }
 
   private:
@@ -106,24 +111,16 @@ class ExoskeletonEmulator final : public DeviceEmulator {
             send(frame, now_ns);
         }
     }
-    void encodeHeartbeat(const protocol::Heartbeat& heartbeat,
-                         can::CanFrame& frame) noexcept override {
-        codec_.encodeHeartbeat(heartbeat, frame);
-    }
-    void encodeFault(const protocol::FaultReport& fault, can::CanFrame& frame) noexcept override {
-        codec_.encodeFault(fault, frame);
-    }
 
-    protocol::ExoskeletonCodec codec_;
     ExoskeletonModel model_;
     protocol::ExoskeletonCommand command_;
     std::uint8_t last_command_counter_{0};
 };
 
-class ThimbleEmulator final : public DeviceEmulator {
+class ThimbleEmulator final : private CodecOwner<protocol::ThimbleCodec>, public DeviceEmulator {
   public:
     ThimbleEmulator(const config::DeviceConfig& device, can::CanBus& bus, EmulatorOptions options)
-        : DeviceEmulator(bus, options), codec_(device), model_(device) {
+        : CodecOwner(device), DeviceEmulator(bus, options, codec_), model_(device) {
         target_.servo_target_rad = model_.angleRad();
     }
 
@@ -134,9 +131,6 @@ class ThimbleEmulator final : public DeviceEmulator {
         }
         target_ = message.command;
         onCommandAccepted(now_ns);
-    }
-    [[nodiscard]] const protocol::RejectCounters& rejects() const noexcept override {
-        return codec_.rejects();
     }
 
   private:
@@ -153,15 +147,7 @@ class ThimbleEmulator final : public DeviceEmulator {
             send(frame, now_ns);
         }
     }
-    void encodeHeartbeat(const protocol::Heartbeat& heartbeat,
-                         can::CanFrame& frame) noexcept override {
-        codec_.encodeHeartbeat(heartbeat, frame);
-    }
-    void encodeFault(const protocol::FaultReport& fault, can::CanFrame& frame) noexcept override {
-        codec_.encodeFault(fault, frame);
-    }
 
-    protocol::ThimbleCodec codec_;
     ThimbleModel model_;
     protocol::ThimbleCommand target_;
 };

@@ -57,4 +57,13 @@ bool DeviceCodecBase::admit(const can::CanFrame& frame, FrameRole role,
     return false;
 }
 
+void DeviceCodecBase::encodeHeartbeat(const Heartbeat& heartbeat, can::CanFrame& frame) noexcept {
+    protocol::encodeHeartbeat(id(FrameRole::kHeartbeat), heartbeat,
+                              nextCounter(FrameRole::kHeartbeat), frame);
+}
+
+void DeviceCodecBase::encodeFault(const FaultReport& fault, can::CanFrame& frame) noexcept {
+    protocol::encodeFault(id(FrameRole::kFault), fault, nextCounter(FrameRole::kFault), frame);
+}
+
 }  // namespace haptic::protocol

@@ -79,15 +79,6 @@ bool ExoskeletonCodec::encodeEncoders(const ExoskeletonEncoders& encoders,
     return true;
 }
 
-void ExoskeletonCodec::encodeHeartbeat(const Heartbeat& heartbeat, can::CanFrame& frame) noexcept {
-    protocol::encodeHeartbeat(id(FrameRole::kHeartbeat), heartbeat,
-                              nextCounter(FrameRole::kHeartbeat), frame);
-}
-
-void ExoskeletonCodec::encodeFault(const FaultReport& fault, can::CanFrame& frame) noexcept {
-    protocol::encodeFault(id(FrameRole::kFault), fault, nextCounter(FrameRole::kFault), frame);
-}
-
 ExoskeletonMessage ExoskeletonCodec::decode(const can::CanFrame& frame) noexcept {
     using Type = ExoskeletonMessage::Type;
     ExoskeletonMessage message;

@@ -51,15 +51,6 @@ bool ThimbleCodec::encodeState(const ThimbleState& state, can::CanFrame& frame) 
     return encodeAngles(state.servo_angle_rad, kAngleMarginRad, FrameRole::kState, frame);
 }
 
-void ThimbleCodec::encodeHeartbeat(const Heartbeat& heartbeat, can::CanFrame& frame) noexcept {
-    protocol::encodeHeartbeat(id(FrameRole::kHeartbeat), heartbeat,
-                              nextCounter(FrameRole::kHeartbeat), frame);
-}
-
-void ThimbleCodec::encodeFault(const FaultReport& fault, can::CanFrame& frame) noexcept {
-    protocol::encodeFault(id(FrameRole::kFault), fault, nextCounter(FrameRole::kFault), frame);
-}
-
 ThimbleMessage ThimbleCodec::decode(const can::CanFrame& frame) noexcept {
     using Type = ThimbleMessage::Type;
     ThimbleMessage message;

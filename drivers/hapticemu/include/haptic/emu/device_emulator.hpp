@@ -17,7 +17,7 @@
 #include "haptic/can/bus.hpp"
 #include "haptic/config/device.hpp"
 #include "haptic/emu/fault_injector.hpp"
-#include "haptic/protocol/frame_codec.hpp"
+#include "haptic/protocol/device_codec.hpp"
 
 namespace haptic::emu {
 
@@ -41,16 +41,18 @@ class DeviceEmulator {
 
     FaultInjector& faults() noexcept { return faults_; }
     [[nodiscard]] std::uint64_t commandsAccepted() const noexcept { return commands_; }
-    [[nodiscard]] virtual const protocol::RejectCounters& rejects() const noexcept = 0;
+    [[nodiscard]] const protocol::RejectCounters& rejects() const noexcept {
+        return codec_base_.rejects();
+    }
 
   protected:
-    DeviceEmulator(can::CanBus& bus, EmulatorOptions options) noexcept
-        : bus_(bus), options_(options) {}
+    // `codec` must already be constructed: derived classes hold it in a base listed before
+    // DeviceEmulator (base-from-member), never in a member of their own.
+    DeviceEmulator(can::CanBus& bus, EmulatorOptions options,
+                   protocol::DeviceCodecBase& codec) noexcept
+        : bus_(bus), options_(options), codec_base_(codec) {}
     virtual void stepModel(double dt_s) noexcept = 0;
     virtual void sendState(std::int64_t now_ns) noexcept = 0;
-    virtual void encodeHeartbeat(const protocol::Heartbeat& heartbeat,
-                                 can::CanFrame& frame) noexcept = 0;
-    virtual void encodeFault(const protocol::FaultReport& fault, can::CanFrame& frame) noexcept = 0;
     // Lockstep: one tick per command, then reply.
     void onCommandAccepted(std::int64_t now_ns) noexcept;
     void send(const can::CanFrame& frame, std::int64_t now_ns) noexcept {
@@ -64,6 +66,7 @@ class DeviceEmulator {
     std::uint64_t commands_{0};
 
   private:
+    protocol::DeviceCodecBase& codec_base_;
     bool started_{false};
     std::int64_t start_ns_{0};
     std::int64_t next_heartbeat_ns_{0};

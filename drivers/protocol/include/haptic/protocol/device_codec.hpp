@@ -35,6 +35,10 @@ class DeviceCodecBase {
     // Which role an id has for this device, or false when the id is not ours.
     [[nodiscard]] bool roleOf(std::uint32_t id, FrameRole& role) const noexcept;
 
+    // Heartbeat and fault frames have the same layout on every device (frame_codec.hpp).
+    void encodeHeartbeat(const Heartbeat& heartbeat, can::CanFrame& frame) noexcept;
+    void encodeFault(const FaultReport& fault, can::CanFrame& frame) noexcept;
+
     // The counter the next frame of this role will carry.
     [[nodiscard]] std::uint8_t peekCounter(FrameRole role) const noexcept {
         return tx_counters_[static_cast<std::size_t>(role)];

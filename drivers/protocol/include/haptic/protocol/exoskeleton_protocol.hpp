@@ -81,8 +81,6 @@ class ExoskeletonCodec : public DeviceCodecBase {
                                            can::CanFrame& frame) noexcept;
     [[nodiscard]] bool encodeEncoders(const ExoskeletonEncoders& encoders,
                                       can::CanFrame& frame) noexcept;
-    void encodeHeartbeat(const Heartbeat& heartbeat, can::CanFrame& frame) noexcept;
-    void encodeFault(const FaultReport& fault, can::CanFrame& frame) noexcept;
 
     // Decodes any frame; frames with other ids come back as kNotForThisDevice.
     [[nodiscard]] ExoskeletonMessage decode(const can::CanFrame& frame) noexcept;

@@ -49,8 +49,6 @@ class ThimbleCodec : public DeviceCodecBase {
 
     [[nodiscard]] bool encodeCommand(const ThimbleCommand& command, can::CanFrame& frame) noexcept;
     [[nodiscard]] bool encodeState(const ThimbleState& state, can::CanFrame& frame) noexcept;
-    void encodeHeartbeat(const Heartbeat& heartbeat, can::CanFrame& frame) noexcept;
-    void encodeFault(const FaultReport& fault, can::CanFrame& frame) noexcept;
 
     [[nodiscard]] ThimbleMessage decode(const can::CanFrame& frame) noexcept;
 
