@@ -265,6 +265,7 @@ int runDaemon(const DaemonOptions& options) {
     }
 
     ipc::initIceoryxRuntime("hapticd");
+    const ipc::RoudiWatch roudi_watch;
     std::vector<DeviceEndpoints> endpoints(cfg.devices.size());
     for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
         const auto& device = cfg.devices[i];
@@ -341,6 +342,8 @@ int runDaemon(const DaemonOptions& options) {
     std::uint64_t last_version = 0;
     std::uint64_t last_ticks = 0;
     auto last_watchdog = started;
+    auto last_roudi_check = started;
+    int exit_code = EXIT_SUCCESS;
     msgs::HapticStatus status;
     // Wake often enough for every job: commands within ~10 ms, each status snapshot, and,
     // under systemd, the watchdog at least twice per WatchdogSec.
@@ -359,6 +362,17 @@ int runDaemon(const DaemonOptions& options) {
             status_writer.write(msgs::toIdl(status));
         }
         const auto now = std::chrono::steady_clock::now();
+        if (now - last_roudi_check >= std::chrono::milliseconds(200)) {
+            last_roudi_check = now;
+            if (const auto lost = roudi_watch.check()) {
+                // Stale sim input has already faded the forces to zero; stopping the loop
+                // below holds the devices safe. A fresh hapticd can register with the new
+                // RouDi, this one cannot.
+                spdlog::error("{}; stopping so that hapticd restarts with the new RouDi", *lost);
+                exit_code = ipc::kRoudiLostExitCode;
+                break;
+            }
+        }
         if (watchdog && now - last_watchdog >= std::chrono::microseconds(watchdog_usec / 2)) {
             const std::uint64_t ticks = loop.ticks();
             if (ticks != last_ticks) {
@@ -376,7 +390,7 @@ int runDaemon(const DaemonOptions& options) {
     loop.stop();
     spdlog::info("stopped after {} ticks ({} telemetry samples dropped)", loop.ticks(),
                  loop.telemetryDropped());
-    return EXIT_SUCCESS;
+    return exit_code;
 }
 
 }  // namespace haptic::hapticd

@@ -90,6 +90,7 @@ int runSim(const SimOptions& options) {
     }
 
     ipc::initIceoryxRuntime("handsim");
+    const ipc::RoudiWatch roudi_watch;
     std::vector<DeviceLink> links(cfg.devices.size());
     for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
         const auto& device = cfg.devices[i];
@@ -182,6 +183,10 @@ int runSim(const SimOptions& options) {
             status_writer.write(msgs::toIdl(status));
             step_times_us.clear();
             last_status = now;
+            if (const auto lost = roudi_watch.check()) {
+                spdlog::error("{}; exiting so that handsim restarts with the new RouDi", *lost);
+                return ipc::kRoudiLostExitCode;
+            }
         }
         if (options.duration_s > 0.0 &&
             now - started >= std::chrono::duration<double>(options.duration_s)) {

@@ -261,6 +261,72 @@ TEST_F(RoudiTest, EstopAndClearFromHapticctlDriveTheDaemonStateMachine) {
     expectNoIceoryxLeftovers();
 }
 
+// iceoryx 2.0 clients cannot re-register with a new RouDi, so hapticd and handsim notice a
+// lost or replaced broker themselves and exit with kRoudiLostExitCode; systemd then restarts
+// them (Restart=on-failure) against the new RouDi, which this test does by hand.
+TEST_F(RoudiTest, RoudiRestartMakesDaemonAndSimExitForARestartThatReconnects) {
+    startRoudi();
+    const auto startPair = [](const std::string& suffix) {
+        return std::make_pair(
+            std::make_unique<ChildProcess>(
+                std::vector<std::string>{HAPTICD_PATH, "--realtime", "ignore", "--dds-domain",
+                                         domainArgument()},
+                "hapticd" + suffix),
+            std::make_unique<ChildProcess>(
+                std::vector<std::string>{HANDSIM_PATH, "--dds-domain", domainArgument()},
+                "handsim" + suffix));
+    };
+    const auto waitConnected = [&](ChildProcess& daemon, ChildProcess& sim) {
+        const auto deadline = std::chrono::steady_clock::now() + 20s;
+        CommandResult status;
+        do {
+            ASSERT_TRUE(daemon.running()) << daemon.stderrText();
+            ASSERT_TRUE(sim.running()) << sim.stderrText();
+            status = hapticctlStatus();
+            if (status.out.find("Sim link: iceoryx, connected") != std::string::npos) {
+                return;
+            }
+            std::this_thread::sleep_for(200ms);
+        } while (std::chrono::steady_clock::now() < deadline);
+        FAIL() << "the sim link never connected:\n" << status.out << status.err;
+    };
+    const auto expectRestartExit = [](ChildProcess& process, const std::string& reason) {
+        const auto code = process.waitFor(10s);
+        ASSERT_TRUE(code.has_value()) << "still running after losing RouDi";
+        EXPECT_EQ(*code, ipc::kRoudiLostExitCode) << process.stderrText();
+        EXPECT_THAT(process.stderrText(), HasSubstr(reason));
+    };
+
+    // A RouDi replaced faster than the processes look (frozen here while it happens): the
+    // socket answers again, but the management segment is a new one.
+    auto [daemon, sim] = startPair("");
+    waitConnected(*daemon, *sim);
+    ::kill(daemon->pid(), SIGSTOP);
+    ::kill(sim->pid(), SIGSTOP);
+    ::kill(roudi_->pid(), SIGKILL);
+    ASSERT_TRUE(roudi_->waitFor(5s).has_value());
+    startRoudi();
+    ::kill(daemon->pid(), SIGCONT);
+    ::kill(sim->pid(), SIGCONT);
+    expectRestartExit(*daemon, "the iceoryx broker RouDi was restarted");
+    expectRestartExit(*sim, "the iceoryx broker RouDi was restarted");
+
+    // What systemd does next: fresh processes register with the new RouDi and work.
+    auto [daemon2, sim2] = startPair("2");
+    waitConnected(*daemon2, *sim2);
+
+    // A RouDi that dies and stays dead: its socket file is left with nobody bound to it.
+    ::kill(roudi_->pid(), SIGKILL);
+    ASSERT_TRUE(roudi_->waitFor(5s).has_value());
+    expectRestartExit(*daemon2, "the iceoryx broker RouDi went away");
+    expectRestartExit(*sim2, "the iceoryx broker RouDi went away");
+
+    // The next RouDi cleans up what the killed one left, and stops cleanly.
+    startRoudi();
+    EXPECT_EQ(roudi_->terminate(), std::optional<int>(0)) << roudi_->stderrText();
+    expectNoIceoryxLeftovers();
+}
+
 TEST(FailFast, CommandWithoutDaemonExitsThreeWithinTheTimeout) {
     const auto result = runCommand(
         {HAPTICCTL_PATH, "--dds-domain", domainArgument(), "--timeout", "1", "estop"}, 10s);
