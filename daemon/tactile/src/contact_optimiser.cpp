@@ -20,6 +20,8 @@ constexpr double kQpMargin = 1e-4;
 constexpr int kQpMaxIterations = 12;
 constexpr int kLineSearchMaxHalvings = 12;
 constexpr double kMaxStepM = 0.002;
+// Gauss-Newton stops once the predicted decrease of E falls below this fraction of E.
+constexpr double kNegligibleDecrease = 1e-6;
 // Levenberg damping of the Gauss-Newton matrix (not part of E).
 constexpr double kDamping = 1e-9;
 
@@ -57,7 +59,9 @@ PadEnergy padEnergy(double d, double inverse_depth) noexcept {
 // Falls back to the last solvable working set.
 Eigen::Vector3d solveStepQp(const Eigen::Matrix3d& H, const Eigen::Vector3d& g, const Matrix14x3& G,
                             const ConstraintValues& c) noexcept {
-    const Eigen::Matrix3d H_inverse = H.ldlt().solve(Eigen::Matrix3d::Identity());
+    // H is symmetric positive definite (damped); Eigen's closed-form 3x3 inverse avoids the
+    // blocked triangular solver an LDLT with a matrix right-hand side goes through.
+    const Eigen::Matrix3d H_inverse = H.inverse();
     const Eigen::Vector3d unconstrained = -H_inverse * g;
     std::array<int, 3> working{};
     int working_count = 0;
@@ -396,6 +400,12 @@ TactileCommand ContactSurfaceOptimiser::solve(const msgs::ContactSurface& surfac
         }
         const double slope = g.dot(step);
         const double predicted = -(slope + 0.5 * step.dot(H * step));
+        if (predicted <= kNegligibleDecrease * current.objective) {
+            // The model cannot lower E by more than a negligible fraction any more; on a
+            // pose held against a workspace bound this saves the last one or two iterations.
+            report.converged = true;
+            break;
+        }
         bool accepted = false;
         double alpha = 1.0;
         for (int halving = 0; halving < kLineSearchMaxHalvings; ++halving, alpha *= 0.5) {
