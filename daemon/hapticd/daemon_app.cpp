@@ -15,6 +15,7 @@
 #include "haptic/daemon/command_channel.hpp"
 #include "haptic/daemon/daemon_core.hpp"
 #include "haptic/daemon/seqlock.hpp"
+#include "haptic/daemon/watchdog_gate.hpp"
 #include "haptic/ipc/dds_participant.hpp"
 #include "haptic/ipc/iceoryx_runtime.hpp"
 #include "haptic/ipc/topics.hpp"
@@ -340,8 +341,7 @@ int runDaemon(const DaemonOptions& options) {
     const auto status_period = std::chrono::nanoseconds(1'000'000'000LL / cfg.loop.status_rate_hz);
     const auto started = std::chrono::steady_clock::now();
     std::uint64_t last_version = 0;
-    std::uint64_t last_ticks = 0;
-    auto last_watchdog = started;
+    daemon::WatchdogGate watchdog_gate(static_cast<std::int64_t>(watchdog_usec) * 1000 / 2);
     auto last_roudi_check = started;
     int exit_code = EXIT_SUCCESS;
     msgs::HapticStatus status;
@@ -373,13 +373,8 @@ int runDaemon(const DaemonOptions& options) {
                 break;
             }
         }
-        if (watchdog && now - last_watchdog >= std::chrono::microseconds(watchdog_usec / 2)) {
-            const std::uint64_t ticks = loop.ticks();
-            if (ticks != last_ticks) {
-                sd_notify(0, "WATCHDOG=1");
-                last_ticks = ticks;
-            }
-            last_watchdog = now;
+        if (watchdog && watchdog_gate.pingDue(monotonicNowNs(), loop.ticks())) {
+            sd_notify(0, "WATCHDOG=1");
         }
         if (options.duration_s > 0.0 &&
             now - started >= std::chrono::duration<double>(options.duration_s)) {

@@ -5,9 +5,14 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -257,6 +262,71 @@ TEST_F(RoudiTest, EstopAndClearFromHapticctlDriveTheDaemonStateMachine) {
     EXPECT_EQ(daemon.terminate(), std::optional<int>(0)) << daemon.stderrText();
     EXPECT_THAT(daemon.stderrText(), HasSubstr("estop"));
     EXPECT_THAT(daemon.stderrText(), HasSubstr(" telemetry samples dropped)"));
+    EXPECT_EQ(roudi_->terminate(), std::optional<int>(0)) << roudi_->stderrText();
+    expectNoIceoryxLeftovers();
+}
+
+// hapticd under systemd's notify protocol, with the test in systemd's place: the daemon must
+// report READY=1 only once its loop runs, ping WATCHDOG=1 at least twice per WatchdogSec
+// while the loop ticks, and say STOPPING=1 on the way out.
+TEST_F(RoudiTest, DaemonSpeaksSystemdNotifyAndPingsTheWatchdogWhileTheLoopTicks) {
+    startRoudi();
+    const std::string socket_path = "/tmp/haptic-notify-" + std::to_string(::getpid());
+    const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    ASSERT_GE(fd, 0);
+    sockaddr_un address{};
+    address.sun_family = AF_UNIX;
+    std::snprintf(address.sun_path, sizeof(address.sun_path), "%s", socket_path.c_str());
+    ::unlink(socket_path.c_str());
+    ASSERT_EQ(::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address)), 0);
+    const timeval receive_timeout{0, 200'000};
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &receive_timeout, sizeof(receive_timeout));
+
+    // WatchdogSec=0.4 s: pings are due every 0.2 s.
+    ::setenv("NOTIFY_SOCKET", socket_path.c_str(), 1);
+    ::setenv("WATCHDOG_USEC", "400000", 1);
+    ChildProcess daemon({HAPTICD_PATH, "--realtime", "ignore", "--dds-domain", domainArgument()},
+                        "hapticd");
+    ::unsetenv("NOTIFY_SOCKET");
+    ::unsetenv("WATCHDOG_USEC");
+
+    std::vector<std::pair<std::chrono::steady_clock::time_point, std::string>> messages;
+    const auto receiveFor = [&](std::chrono::milliseconds duration) {
+        const auto until = std::chrono::steady_clock::now() + duration;
+        std::array<char, 512> buffer{};
+        while (std::chrono::steady_clock::now() < until) {
+            const auto n = ::recv(fd, buffer.data(), buffer.size(), 0);
+            if (n > 0) {
+                messages.emplace_back(std::chrono::steady_clock::now(),
+                                      std::string(buffer.data(), static_cast<std::size_t>(n)));
+            }
+        }
+    };
+    const auto count = [&](const std::string& text) {
+        return std::count_if(messages.begin(), messages.end(), [&](const auto& message) {
+            return message.second.find(text) != std::string::npos;
+        });
+    };
+
+    // Registration with RouDi and DDS take a moment; READY=1 comes after the loop started.
+    const auto deadline = std::chrono::steady_clock::now() + 20s;
+    while (count("READY=1") == 0 && std::chrono::steady_clock::now() < deadline) {
+        ASSERT_TRUE(daemon.running()) << daemon.stderrText();
+        receiveFor(200ms);
+    }
+    ASSERT_EQ(count("READY=1"), 1) << "no READY=1 from hapticd";
+    messages.clear();
+    receiveFor(2000ms);
+    // Due every 0.2 s, checked by a thread that wakes every 0.1 s: about ten in 2 s. Fewer
+    // than five would let systemd's 0.4 s watchdog fire.
+    EXPECT_GE(count("WATCHDOG=1"), 5) << "watchdog pings in 2 s";
+    EXPECT_LE(count("WATCHDOG=1"), 21) << "pinging far too often";
+
+    EXPECT_EQ(daemon.terminate(), std::optional<int>(0)) << daemon.stderrText();
+    receiveFor(300ms);
+    EXPECT_EQ(count("STOPPING=1"), 1);
+    ::close(fd);
+    ::unlink(socket_path.c_str());
     EXPECT_EQ(roudi_->terminate(), std::optional<int>(0)) << roudi_->stderrText();
     expectNoIceoryxLeftovers();
 }
