@@ -74,6 +74,31 @@ CanConfig readCan(MapReader can) {
     out.heartbeat_timeout_ms =
         can.required("heartbeat_timeout_ms", spec::Integer<int>::closed(1, 1000));
     out.state_timeout_ms = can.required("state_timeout_ms", spec::Integer<int>::closed(1, 1000));
+
+    out.transport = can.optional("transport", CanTransport::kSocketCan, spec::Enum<CanTransport>{});
+    const auto udp_port = can.take("udp_port");
+    const auto udp_slots = can.take("udp_slots");
+    if (out.transport != CanTransport::kUdp) {
+        for (const auto* field : {&udp_port, &udp_slots}) {
+            if (field->has_value()) {
+                (*field)->fail(
+                    "can.transport: udp with this key (a SocketCAN bus is named by "
+                    "can.interface)",
+                    "can.transport: socketcan");
+            }
+        }
+    } else {
+        if (udp_slots) {
+            out.udp_slots = udp_slots->as(spec::Integer<std::uint16_t>::closed(2, 32));
+        }
+        if (udp_port) {
+            out.udp_port = udp_port->as(spec::Integer<std::uint16_t>::closed(1024, 65535));
+            if (static_cast<int>(out.udp_port) + out.udp_slots - 1 > 65535) {
+                udp_port->fail("a first port whose block of can.udp_slots (" +
+                               std::to_string(out.udp_slots) + ") ports ends at or below 65535");
+            }
+        }
+    }
     can.finish();
     return out;
 }

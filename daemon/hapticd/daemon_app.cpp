@@ -12,6 +12,7 @@
 #include "HapticStatusPubSubTypes.h"
 #include "HapticTelemetryPubSubTypes.h"
 #include "command_relay.hpp"
+#include "device_state_publisher.hpp"
 #include "haptic/daemon/command_channel.hpp"
 #include "haptic/daemon/daemon_core.hpp"
 #include "haptic/daemon/seqlock.hpp"
@@ -21,6 +22,7 @@
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
 #include "haptic/process/shutdown.hpp"
+#include "haptic/runtime/device_runtime.hpp"
 #include "iceoryx_posh/popo/publisher.hpp"
 #include "iceoryx_posh/popo/subscriber.hpp"
 
@@ -52,7 +54,8 @@ iox::popo::SubscriberOptions latestValueOptions() {
 }
 
 // The iceoryx endpoints of one device. Exactly one of the two subscribers exists, matching
-// the device kind.
+// the device kind. The RT thread takes from the subscribers; the publisher belongs to the
+// DeviceStatePublisher thread.
 struct DeviceEndpoints {
     std::unique_ptr<iox::popo::Subscriber<msgs::ConstraintSet>> constraint_sets;
     std::unique_ptr<iox::popo::Subscriber<msgs::ContactSurface>> contact_surfaces;
@@ -103,9 +106,13 @@ std::vector<daemon::DeviceDescriptor> deviceDescriptors(const config::DaemonConf
 class RealtimeLoop {
   public:
     RealtimeLoop(const config::DaemonConfig& cfg, std::vector<DeviceEndpoints>& endpoints,
-                 daemon::CommandChannel& commands, TelemetryQueue& telemetry)
+                 daemon::CommandChannel& commands, TelemetryQueue& telemetry,
+                 runtime::DeviceRuntime& devices,
+                 std::vector<std::unique_ptr<DeviceStateSnapshot>>& device_states)
         : core_(coreSettings(cfg), deviceDescriptors(cfg)),
           endpoints_(endpoints),
+          devices_(devices),
+          device_states_(device_states),
           commands_(commands),
           telemetry_(telemetry),
           realtime_{cfg.loop.realtime == config::RealtimeMode::kEnforce
@@ -166,16 +173,19 @@ class RealtimeLoop {
                                    : static_cast<double>(wake - previous_wake) * 1e-3;
             previous_wake = wake;
 
+            devices_.read(wake);
             takeSimInputs(wake);
             takeCommands(wake);
             const std::int64_t read_done = monotonicNowNs();
             core_.update(read_done, timing);
+            devices_.compute(core_, read_done);
             if (core_.snapshotDue(read_done)) {
                 core_.fillStatus(read_done, status_scratch_);
                 status_.store(status_scratch_);
             }
             const std::int64_t compute_done = monotonicNowNs();
-            publishDeviceStates(compute_done);
+            devices_.write();
+            storeDeviceStates(compute_done);
             const std::int64_t write_done = monotonicNowNs();
 
             // This tick's split is recorded by the next update(); the statistics trail by
@@ -225,17 +235,19 @@ class RealtimeLoop {
         }
     }
 
-    void publishDeviceStates(std::int64_t now_ns) noexcept {
-        for (std::size_t i = 0; i < endpoints_.size(); ++i) {
-            endpoints_[i].device_state->loan().and_then([&](auto& sample) {
-                core_.fillDeviceState(i, now_ns, *sample);
-                sample.publish();
-            });
+    // The DeviceStatePublisher thread puts these on iceoryx.
+    void storeDeviceStates(std::int64_t now_ns) noexcept {
+        for (std::size_t i = 0; i < device_states_.size(); ++i) {
+            core_.fillDeviceState(i, now_ns, device_state_scratch_);
+            device_states_[i]->store(device_state_scratch_);
         }
     }
 
     daemon::DaemonCore core_;
     std::vector<DeviceEndpoints>& endpoints_;
+    runtime::DeviceRuntime& devices_;
+    std::vector<std::unique_ptr<DeviceStateSnapshot>>& device_states_;
+    msgs::DeviceState device_state_scratch_{};
     daemon::CommandChannel& commands_;
     msgs::HapticCommand command_scratch_{};
     msgs::HapticCommandReply reply_scratch_{};
@@ -320,7 +332,24 @@ int runDaemon(const DaemonOptions& options) {
             telemetry_writer.write(msgs::toIdl(batch));
         }
     };
-    RealtimeLoop loop(cfg, endpoints, commands, *telemetry);
+    // CAN: one bus per distinct interface / UDP port block, one driver and renderer per device.
+    const runtime::OpenedBuses buses = runtime::openBuses(cfg.devices);
+    runtime::ChannelSettings channel_settings;
+    channel_settings.period_s = 1.0 / cfg.loop.rate_hz;
+    runtime::DeviceRuntime devices(cfg.devices, buses.per_device, channel_settings);
+    for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
+        spdlog::info("device '{}' on {}", cfg.devices[i].name, buses.descriptions[i]);
+    }
+    std::vector<std::unique_ptr<DeviceStateSnapshot>> device_states;
+    std::vector<iox::popo::Publisher<msgs::DeviceState>*> device_state_publishers;
+    for (auto& endpoint : endpoints) {
+        device_states.push_back(std::make_unique<DeviceStateSnapshot>());
+        device_state_publishers.push_back(endpoint.device_state.get());
+    }
+    DeviceStatePublisher device_state_publisher(std::move(device_state_publishers), device_states,
+                                                std::chrono::milliseconds(1));
+
+    RealtimeLoop loop(cfg, endpoints, commands, *telemetry, devices, device_states);
     loop.start();
     while (loop.startState() == 0) {
         std::this_thread::sleep_for(std::chrono::milliseconds(1));

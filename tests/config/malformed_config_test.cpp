@@ -230,6 +230,20 @@ TEST(ConfigOutOfRange, NonStandardBitrate) {
                  "expected a standard CAN bit rate"});
 }
 
+TEST(ConfigOutOfRange, UdpPortWithoutUdpTransport) {
+    const auto file = kDataDir / "devices/udp_port_without_udp_transport.yaml";
+    expectError(deviceError("udp_port_without_udp_transport.yaml"),
+                {file.string(), lineOf(file, "udp_port"), 13, "can.udp_port",
+                 "expected can.transport: udp with this key"});
+}
+
+TEST(ConfigOutOfRange, UdpPortBlockPastLastPort) {
+    const auto file = kDataDir / "devices/udp_port_block_past_65535.yaml";
+    expectError(deviceError("udp_port_block_past_65535.yaml"),
+                {file.string(), lineOf(file, "udp_port"), 13, "can.udp_port",
+                 "ports ends at or below 65535, got 65530"});
+}
+
 TEST(ConfigOutOfRange, ReversedJointLimits) {
     const auto file = kDataDir / "devices/reversed_joint_limits.yaml";
     expectError(deviceError("reversed_joint_limits.yaml"),

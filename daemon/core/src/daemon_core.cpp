@@ -57,15 +57,25 @@ InputRejection DaemonCore::offerConstraintSet(std::size_t device,
                                               const msgs::ConstraintSet& message,
                                               std::int64_t now_ns) noexcept {
     DeviceSlot& slot = devices_[device];
-    return account(slot, validate(message, slot.descriptor.name, slot.descriptor.joint_count),
-                   now_ns);
+    const InputRejection reason =
+        account(slot, validate(message, slot.descriptor.name, slot.descriptor.joint_count), now_ns);
+    if (reason == InputRejection::kNone) {
+        slot.constraint_set = message;
+        slot.has_constraint_set = true;
+    }
+    return reason;
 }
 
 InputRejection DaemonCore::offerContactSurface(std::size_t device,
                                                const msgs::ContactSurface& message,
                                                std::int64_t now_ns) noexcept {
     DeviceSlot& slot = devices_[device];
-    return account(slot, validate(message, slot.descriptor.name), now_ns);
+    const InputRejection reason = account(slot, validate(message, slot.descriptor.name), now_ns);
+    if (reason == InputRejection::kNone) {
+        slot.contact_surface = message;
+        slot.has_contact_surface = true;
+    }
+    return reason;
 }
 
 double DaemonCore::ageMs(const DeviceSlot& slot, std::int64_t now_ns) const noexcept {
@@ -111,9 +121,20 @@ void DaemonCore::fillDeviceState(std::size_t device, std::int64_t now_ns,
     out.header.source_id.assign(slot.descriptor.name);
     out.joint_count = slot.descriptor.joint_count;
     out.actuator_count = slot.descriptor.actuator_count;
-    // No device driver is attached yet (CAN drivers arrive with their own issue), so the
-    // sensed values stay zero and the device reports itself offline and in its safe state.
-    std::uint32_t bits = static_cast<std::uint32_t>(msgs::DeviceStatusBit::kSafeState);
+    // Without a runtime's report the sensed values stay zero and the device is offline and
+    // in its safe state (the report's defaults).
+    const DeviceReport& report = slot.report;
+    out.joint_position_rad = report.joint_position_rad;
+    out.joint_velocity_rad_per_s = report.joint_velocity_rad_per_s;
+    out.actuator_position = report.actuator_position;
+    out.actuator_force = report.actuator_force;
+    out.platform_position_m = report.platform_position_m;
+    out.platform_orientation_wxyz = report.platform_orientation_wxyz;
+    std::uint32_t bits = report.status_bits;
+    if (machine_.rendering() && slot.fade > 0.0 &&
+        (bits & static_cast<std::uint32_t>(msgs::DeviceStatusBit::kSafeState)) == 0) {
+        bits |= static_cast<std::uint32_t>(msgs::DeviceStatusBit::kRendering);
+    }
     if (slot.fade < 1.0) {
         bits |= static_cast<std::uint32_t>(msgs::DeviceStatusBit::kStaleSimInput);
     }
@@ -131,6 +152,12 @@ void DaemonCore::fillTelemetry(std::size_t device, std::uint64_t tick, std::int6
     out.tick = tick;
     out.stamp_ns = now_ns;
     out.device_index = static_cast<std::uint16_t>(device);
+    const DeviceReport& report = devices_[device].report;
+    out.actuator_force_cmd = report.commanded;
+    out.joint_position_rad = report.joint_position_rad;
+    out.proxy_position_rad = report.proxy_position_rad;
+    out.ghost_force_n = report.ghost_force_n;
+    out.energy_observer_j = report.energy_observer_j;
     out.compute_us = timing.read_us + timing.compute_us + timing.write_us;
     out.wakeup_latency_us = timing.wakeup_latency_us;
 }
@@ -158,8 +185,9 @@ void DaemonCore::fillStatus(std::int64_t now_ns, msgs::HapticStatus& out) noexce
         msgs::DeviceStatus status;
         status.device_id.assign(slot.descriptor.name);
         status.kind = slot.descriptor.kind;
-        status.state = msgs::DeviceRunState::kOffline;
-        status.last_frame_age_ms = -1.0;  // no CAN frame ever received
+        status.state = slot.report.run_state;
+        status.last_frame_age_ms = slot.report.last_frame_age_ms;
+        status.can = slot.report.can;
         out.devices.push_back(status);
         received += slot.received;
         rejected += slot.rejected;

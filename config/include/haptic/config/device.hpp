@@ -47,14 +47,31 @@ struct EnumTraits<RenderingMethod> {
     }};
 };
 
+// Which bus hapticd opens for the device: the SocketCAN interface (real hardware, vcan) or
+// the UDP CAN bus on loopback that hapticemu speaks where the kernel has no SocketCAN.
+enum class CanTransport { kSocketCan, kUdp };
+
+template <>
+struct EnumTraits<CanTransport> {
+    static constexpr std::array<EnumEntry<CanTransport>, 2> kEntries{{
+        {"socketcan", CanTransport::kSocketCan},
+        {"udp", CanTransport::kUdp},
+    }};
+};
+
 // YAML: can: {...}. Ids are 11-bit standard ids, pairwise distinct within a device; the
 // daemon and sim loaders also reject two devices on one interface sharing an id.
 struct CanConfig {
-    std::string interface;        // SocketCAN interface name (1-15 chars), e.g. "can0"
-    std::uint32_t bitrate{0};     // nominal bit/s; the interface is configured outside us
-    bool fd{false};               // CAN FD frames (needs an FD-capable interface, MTU 72)
-    std::uint32_t command_id{0};  // host -> device setpoints
-    std::uint32_t state_id{0};    // device -> host sensed state
+    std::string interface;  // SocketCAN interface name (1-15 chars), e.g. "can0"
+    // Optional keys transport (default socketcan), udp_port and udp_slots (only with
+    // transport: udp; defaults 47000 and 8, the block hapticemu uses by default).
+    CanTransport transport{CanTransport::kSocketCan};
+    std::uint16_t udp_port{47000};  // first port of the UDP bus's port block
+    std::uint16_t udp_slots{8};     // parties on the UDP bus (2..32)
+    std::uint32_t bitrate{0};       // nominal bit/s; the interface is configured outside us
+    bool fd{false};                 // CAN FD frames (needs an FD-capable interface, MTU 72)
+    std::uint32_t command_id{0};    // host -> device setpoints
+    std::uint32_t state_id{0};      // device -> host sensed state
     std::uint32_t heartbeat_id{0};
     std::uint32_t fault_id{0};
     int heartbeat_timeout_ms{0};  // no heartbeat for this long: device goes to safe state

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "haptic/daemon/device_report.hpp"
 #include "haptic/daemon/loop_statistics.hpp"
 #include "haptic/daemon/sim_input_validation.hpp"
 #include "haptic/daemon/state_machine.hpp"
@@ -58,6 +59,28 @@ class DaemonCore {
     InputRejection offerContactSurface(std::size_t device, const msgs::ContactSurface& message,
                                        std::int64_t now_ns) noexcept;
 
+    // The newest accepted message of the device (nullptr before the first), and how many
+    // have been accepted so far, so a renderer can tell a new message from the one it has.
+    [[nodiscard]] const msgs::ConstraintSet* latestConstraintSet(
+        std::size_t device) const noexcept {
+        return devices_[device].has_constraint_set ? &devices_[device].constraint_set : nullptr;
+    }
+    [[nodiscard]] const msgs::ContactSurface* latestContactSurface(
+        std::size_t device) const noexcept {
+        return devices_[device].has_contact_surface ? &devices_[device].contact_surface : nullptr;
+    }
+    [[nodiscard]] std::uint64_t acceptedCount(std::size_t device) const noexcept {
+        return devices_[device].received;
+    }
+
+    // The device runtime's report for this tick (driver state, bus, commanded output).
+    void setDeviceReport(std::size_t device, const DeviceReport& report) noexcept {
+        devices_[device].report = report;
+    }
+    [[nodiscard]] const DeviceReport& deviceReport(std::size_t device) const noexcept {
+        return devices_[device].report;
+    }
+
     // Once per tick, after the inputs: ages, fades, statistics.
     void update(std::int64_t now_ns, const TickTiming& timing) noexcept;
 
@@ -72,8 +95,8 @@ class DaemonCore {
     [[nodiscard]] std::uint64_t rejectedCount(std::size_t device,
                                               InputRejection reason) const noexcept;
 
-    // One telemetry sample for the device at this tick. The commanded force is the rendered
-    // force times outputGain(); no renderer is attached yet, so it is zero.
+    // One telemetry sample for the device at this tick: what the device report says was
+    // commanded (the rendered force times outputGain(), after the safety stage).
     void fillTelemetry(std::size_t device, std::uint64_t tick, std::int64_t now_ns,
                        const TickTiming& timing, msgs::TelemetrySample& out) const noexcept;
 
@@ -108,6 +131,11 @@ class DaemonCore {
         std::array<std::uint64_t, static_cast<std::size_t>(InputRejection::kCount_)> rejected_by{};
         std::uint64_t state_seq{0};
         double fade{0.0};
+        DeviceReport report{};
+        bool has_constraint_set{false};
+        bool has_contact_surface{false};
+        msgs::ConstraintSet constraint_set{};
+        msgs::ContactSurface contact_surface{};
     };
 
     InputRejection account(DeviceSlot& slot, InputRejection reason, std::int64_t now_ns) noexcept;

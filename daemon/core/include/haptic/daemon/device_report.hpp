@@ -1,0 +1,40 @@
+#pragma once
+
+// What the per-device runtime (daemon/runtime) hands DaemonCore each tick: the measured
+// device state from the CAN driver, the bus health and what was commanded. DaemonCore puts
+// it into DeviceState, haptic/status and haptic/telemetry. Trivially copyable, no allocation.
+
+#include <array>
+#include <cstdint>
+
+#include "haptic/msgs/messages.hpp"
+
+namespace haptic::daemon {
+
+struct DeviceReport {
+    // False until a runtime reports the device: status then shows it OFFLINE with an
+    // unknown bus, as before any driver was attached.
+    bool attached{false};
+    msgs::DeviceRunState run_state{msgs::DeviceRunState::kOffline};
+    msgs::CanCounters can{};
+    double last_frame_age_ms{-1.0};  // -1: never heard from the device
+    // DeviceStatusBit: kOnline, kSafeState, kFault (the core adds kRendering, kStaleSimInput).
+    std::uint32_t status_bits{static_cast<std::uint32_t>(msgs::DeviceStatusBit::kSafeState)};
+
+    // Measured (DeviceState).
+    std::array<double, msgs::kMaxJointDofs> joint_position_rad{};
+    std::array<double, msgs::kMaxJointDofs> joint_velocity_rad_per_s{};
+    std::array<double, msgs::kMaxActuators> actuator_position{};
+    std::array<double, msgs::kMaxActuators> actuator_force{};
+    std::array<double, 3> platform_position_m{};
+    std::array<double, 4> platform_orientation_wxyz{1.0, 0.0, 0.0, 0.0};
+
+    // Commanded this tick (telemetry): exoskeleton actuator force in N, thimble servo
+    // targets in rad.
+    std::array<double, msgs::kMaxActuators> commanded{};
+    std::array<double, msgs::kMaxJointDofs> proxy_position_rad{};
+    std::array<double, 3> ghost_force_n{};
+    double energy_observer_j{0.0};
+};
+
+}  // namespace haptic::daemon

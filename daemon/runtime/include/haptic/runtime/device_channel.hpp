@@ -1,0 +1,105 @@
+#pragma once
+
+// One device as hapticd's RT thread drives it: its CAN driver, its renderer and its safety
+// stage, between DaemonCore (sim input, state machine, output gain) and the bus. No I/O of its
+// own beyond the CanBus it is given; after construction every member the loop calls is
+// noexcept, allocation- and lock-free with bounded work, so tests drive it on a LoopbackBus.
+//
+// Per tick (DeviceRuntime calls these in this order):
+//   handleFrame()  for every frame the bus delivered (read phase)
+//   supervise()    link faults -> DaemonCore::raiseFault, once per occurrence (latched)
+//   compute()      renderer -> safety -> x DaemonCore::outputGain -> next command
+//   write()        command to the bus
+//
+// Faults (haptic/status "Faults:", code in brackets) latch the device in its safe state:
+//   100 heartbeat lost   no heartbeat for can.heartbeat_timeout_ms after one was heard
+//   101 bus-off          the CAN controller reports bus-off
+//   102 device fault     the device reports a fault (fault frame or heartbeat mode)
+//   103 transmit failed  commands could not be queued for transmit_fault_ticks ticks in a row
+// A device never heard from is OFFLINE (held safe, not a fault: hapticd may start before the
+// devices). A stale state frame (can.state_timeout_ms) fades the force out through the port
+// guard without a fault. `clear` empties the fault list; a cause still present is raised again
+// on the next tick.
+
+#include <cstdint>
+#include <string>
+
+#include "haptic/can/bus.hpp"
+#include "haptic/config/device.hpp"
+#include "haptic/daemon/daemon_core.hpp"
+#include "haptic/daemon/device_report.hpp"
+#include "haptic/devices/link_monitor.hpp"
+
+namespace haptic::runtime {
+
+enum FaultCode : std::uint32_t {
+    kFaultHeartbeatLost = 100,
+    kFaultBusOff = 101,
+    kFaultDeviceReported = 102,
+    kFaultTransmitFailed = 103,
+};
+
+struct ChannelSettings {
+    double period_s{1e-3};
+    // Consecutive ticks whose command could not be queued (back-pressure, refusal) before the
+    // link counts as failed. One refused frame is back-pressure, not a fault.
+    int transmit_fault_ticks{10};
+};
+
+class DeviceChannel {
+  public:
+    virtual ~DeviceChannel() = default;
+    DeviceChannel(const DeviceChannel&) = delete;
+    DeviceChannel& operator=(const DeviceChannel&) = delete;
+
+    [[nodiscard]] const std::string& name() const noexcept { return name_; }
+    [[nodiscard]] can::CanBus& bus() noexcept { return bus_; }
+
+    // True when the frame carries one of this device's ids (accepted or rejected).
+    bool handleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept;
+    void supervise(daemon::DaemonCore& core, std::int64_t now_ns) noexcept;
+    virtual void compute(daemon::DaemonCore& core, std::size_t index,
+                         std::int64_t now_ns) noexcept = 0;
+    void write() noexcept;
+
+    [[nodiscard]] const daemon::DeviceReport& report() const noexcept { return report_; }
+    // LinkFault bits of the last supervise().
+    [[nodiscard]] std::uint32_t linkFaults() const noexcept { return link_bits_; }
+    // LinkFault bits that raised a fault and hold the device safe until `clear`.
+    [[nodiscard]] std::uint32_t latchedFaults() const noexcept { return latched_; }
+    // Whether the device must send no force (thimble: retract), whatever the daemon state.
+    [[nodiscard]] bool heldSafe() const noexcept;
+
+  protected:
+    DeviceChannel(const config::DeviceConfig& device, can::CanBus& bus,
+                  const ChannelSettings& settings);
+
+    virtual bool driverHandleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept = 0;
+    virtual std::uint32_t driverFaults(std::int64_t now_ns) noexcept = 0;
+    virtual can::IoResult sendCommand() noexcept = 0;
+    [[nodiscard]] virtual const devices::LinkMonitor& link() const noexcept = 0;
+    [[nodiscard]] virtual std::uint64_t rejectedFrames() const noexcept = 0;
+    // The code the device reports (fault frame or heartbeat), 0 if none.
+    [[nodiscard]] virtual std::uint8_t deviceFaultCode() const noexcept = 0;
+
+    // Run state, status bits, bus counters and frame age of report_ for this tick.
+    void fillLinkReport(bool rendering, double gain, std::int64_t now_ns) noexcept;
+
+    ChannelSettings settings_;
+    daemon::DeviceReport report_{};
+
+  private:
+    void raise(daemon::DaemonCore& core, std::uint32_t bit) noexcept;
+
+    std::string name_;
+    can::CanBus& bus_;
+    int heartbeat_timeout_ms_;
+    std::uint32_t link_bits_{devices::kNoHeartbeatYet};
+    std::uint32_t latched_{0};
+    int failed_transmits_{0};
+    std::uint64_t rx_frames_{0};
+    std::uint64_t tx_frames_{0};
+    std::uint64_t tx_errors_{0};
+};
+
+}  // namespace haptic::runtime

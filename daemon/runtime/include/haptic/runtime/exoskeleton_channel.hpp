@@ -1,0 +1,79 @@
+#pragma once
+
+// The exoskeleton's tick: encoders and stroke from the driver -> KinestheticRenderer (the
+// strategy named by the daemon's current rendering method, fed the newest accepted
+// ConstraintSet) -> ActuatorPortGuard (NaN, fade on stale device state, force clamp, rate
+// limit, passivity) -> x DaemonCore::outputGain (sim fade, state machine; 0 while the device is
+// held safe) -> force command. Enable is off whenever the gain is zero.
+//
+// Renderer stiffnesses are the kinesthetic benchmark's joint-space values (N m/rad, assumed,
+// like the device geometry); the port guard uses min(safety.max_force_n, actuator.max_force_n),
+// safety.max_force_rate_n_per_s and safety.fade_out_ms.
+
+#include <cstdint>
+
+#include "haptic/devices/exoskeleton_driver.hpp"
+#include "haptic/kinesthetic/device_model.hpp"
+#include "haptic/kinesthetic/port_safety.hpp"
+#include "haptic/kinesthetic/renderer.hpp"
+#include "haptic/runtime/device_channel.hpp"
+
+namespace haptic::runtime {
+
+// Joint-space rendering parameters for the shipped (assumed) exoskeleton.
+[[nodiscard]] kinesthetic::RenderParameters exoskeletonRenderParameters(
+    const config::ExoskeletonConfig& exo);
+
+class ExoskeletonChannel final : public DeviceChannel {
+  public:
+    // Throws std::invalid_argument when the device is not an exoskeleton or its parameters
+    // are invalid.
+    ExoskeletonChannel(const config::DeviceConfig& device, can::CanBus& bus,
+                       const ChannelSettings& settings);
+
+    void compute(daemon::DaemonCore& core, std::size_t index,
+                 std::int64_t now_ns) noexcept override;
+
+    [[nodiscard]] config::RenderingMethod method() const noexcept {
+        return renderer_.parameters().method;
+    }
+    [[nodiscard]] const kinesthetic::RenderOutput& renderOutput() const noexcept { return out_; }
+    [[nodiscard]] const protocol::ExoskeletonCommand& command() const noexcept { return command_; }
+    [[nodiscard]] const devices::ExoskeletonDriver& driver() const noexcept { return driver_; }
+
+  protected:
+    bool driverHandleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept override {
+        return driver_.handleFrame(frame, now_ns);
+    }
+    std::uint32_t driverFaults(std::int64_t now_ns) noexcept override {
+        return driver_.faults(now_ns);
+    }
+    can::IoResult sendCommand() noexcept override { return driver_.sendCommand(command_); }
+    [[nodiscard]] const devices::LinkMonitor& link() const noexcept override {
+        return driver_.link();
+    }
+    [[nodiscard]] std::uint64_t rejectedFrames() const noexcept override {
+        return driver_.codec().rejects().total();
+    }
+    [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
+
+  private:
+    void followMethod(const msgs::DeviceId& method) noexcept;
+    void measure() noexcept;
+
+    devices::ExoskeletonDriver driver_;
+    kinesthetic::ExoskeletonDevice model_;  // before renderer_, which keeps a reference
+    kinesthetic::KinestheticRenderer renderer_;
+    kinesthetic::ActuatorPortGuard guard_;
+    std::size_t max_constraints_;
+    msgs::DeviceId applied_method_{};
+    kinesthetic::ConfigVector q_;
+    kinesthetic::ConfigVector q_dot_;
+    double stroke_m_{0.0};
+    std::uint64_t encoder_updates_{0};
+    std::int64_t encoder_time_ns_{0};
+    kinesthetic::RenderOutput out_;
+    protocol::ExoskeletonCommand command_{};
+};
+
+}  // namespace haptic::runtime

@@ -1,0 +1,76 @@
+#pragma once
+
+// The thimble's tick: the newest accepted ContactSurface -> ContactSurfaceOptimiser (solved
+// once per new surface; a surface does not change between sim frames) -> fade -> IK ->
+// ServoLimiter (servo range, servos.max_rate_deg_per_s) -> servo targets.
+//
+// "Fade to zero" on a thimble is the plate moving away from the pad: the commanded platform
+// pose is blended in (height, tilt_x, tilt_y) between the retract pose (zero tilt, highest
+// reachable plate: no contact) and the optimised pose,
+//     xi = xi_retract + g (xi_solved - xi_retract),   g = DaemonCore::outputGain,
+// so g = 1 is the rendered contact, g = 0 the retract pose, and a falling g lifts and levels
+// the plate monotonically, which for the pad's monotone pressure law lowers the contact
+// force. The servo limiter then caps how fast the servos move. IDLE, FAULT, E-STOP and a
+// device held safe use g = 0: the thimble's safe state is the retract pose. If the blended
+// pose has no IK solution the servo angles themselves are blended (always inside the range).
+
+#include <cstdint>
+
+#include "haptic/devices/thimble_driver.hpp"
+#include "haptic/runtime/device_channel.hpp"
+#include "haptic/tactile/contact_optimiser.hpp"
+#include "haptic/tactile/servo_limiter.hpp"
+#include "haptic/tactile/thimble_kinematics.hpp"
+
+namespace haptic::runtime {
+
+class ThimbleChannel final : public DeviceChannel {
+  public:
+    // Throws std::invalid_argument when the device is not a thimble.
+    ThimbleChannel(const config::DeviceConfig& device, can::CanBus& bus,
+                   const ChannelSettings& settings);
+
+    void compute(daemon::DaemonCore& core, std::size_t index,
+                 std::int64_t now_ns) noexcept override;
+
+    [[nodiscard]] const tactile::ServoAngles& retractServoAngles() const noexcept {
+        return retract_servo_rad_;
+    }
+    [[nodiscard]] const protocol::ThimbleCommand& command() const noexcept { return command_; }
+    [[nodiscard]] const tactile::SolveReport& lastSolve() const noexcept { return solved_.report; }
+    [[nodiscard]] const devices::ThimbleDriver& driver() const noexcept { return driver_; }
+
+  protected:
+    bool driverHandleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept override {
+        return driver_.handleFrame(frame, now_ns);
+    }
+    std::uint32_t driverFaults(std::int64_t now_ns) noexcept override {
+        return driver_.faults(now_ns);
+    }
+    can::IoResult sendCommand() noexcept override { return driver_.sendCommand(command_); }
+    [[nodiscard]] const devices::LinkMonitor& link() const noexcept override {
+        return driver_.link();
+    }
+    [[nodiscard]] std::uint64_t rejectedFrames() const noexcept override {
+        return driver_.codec().rejects().total();
+    }
+    [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
+
+  private:
+    void measure() noexcept;
+    [[nodiscard]] tactile::ServoAngles blend(double gain) const noexcept;
+
+    devices::ThimbleDriver driver_;
+    tactile::ThimbleKinematics kinematics_;
+    tactile::ContactSurfaceOptimiser optimiser_;
+    tactile::ServoAngles retract_servo_rad_{};
+    tactile::ServoLimiter limiter_;
+    tactile::TactileCommand solved_{};
+    std::uint64_t solved_from_{0};  // DaemonCore::acceptedCount of the surface solved
+    std::uint64_t state_updates_{0};
+    tactile::PlatformDofs measured_dofs_{};
+    tactile::PlatformPose measured_pose_{};
+    protocol::ThimbleCommand command_{};
+};
+
+}  // namespace haptic::runtime

@@ -1,0 +1,182 @@
+#include "haptic/runtime/device_channel.hpp"
+
+#include <cstdio>
+
+namespace haptic::runtime {
+namespace {
+
+// Faults that stop the link: the device cannot be driven until an operator clears them.
+constexpr std::uint32_t kLatchingFaults =
+    devices::kHeartbeatLost | devices::kBusOff | devices::kDeviceFault | devices::kTransmitFailed;
+// Faults that hold the device safe while present, latched or not.
+constexpr std::uint32_t kHoldSafe = kLatchingFaults | devices::kNoHeartbeatYet;
+
+msgs::BusState toMessage(can::BusState state) noexcept {
+    switch (state) {
+        case can::BusState::kErrorActive:
+            return msgs::BusState::kErrorActive;
+        case can::BusState::kErrorWarning:
+            return msgs::BusState::kErrorWarning;
+        case can::BusState::kErrorPassive:
+            return msgs::BusState::kErrorPassive;
+        case can::BusState::kBusOff:
+            return msgs::BusState::kBusOff;
+    }
+    return msgs::BusState::kUnknown;
+}
+
+const char* deviceFaultName(std::uint8_t code) noexcept {
+    switch (code) {
+        case 1:
+            return "overcurrent";
+        case 2:
+            return "overtemperature";
+        case 3:
+            return "position limit";
+        case 4:
+            return "command timeout";
+        case 5:
+            return "encoder";
+        case 6:
+            return "internal";
+        default:
+            return "unknown";
+    }
+}
+
+constexpr std::uint32_t bit(msgs::DeviceStatusBit b) noexcept {
+    return static_cast<std::uint32_t>(b);
+}
+
+}  // namespace
+
+DeviceChannel::DeviceChannel(const config::DeviceConfig& device, can::CanBus& bus,
+                             const ChannelSettings& settings)
+    : settings_(settings),
+      name_(device.name),
+      bus_(bus),
+      heartbeat_timeout_ms_(device.can.heartbeat_timeout_ms) {}
+
+bool DeviceChannel::handleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept {
+    if (!driverHandleFrame(frame, now_ns)) {
+        return false;
+    }
+    ++rx_frames_;
+    return true;
+}
+
+bool DeviceChannel::heldSafe() const noexcept {
+    return latched_ != 0 || (link_bits_ & kHoldSafe) != 0;
+}
+
+void DeviceChannel::raise(daemon::DaemonCore& core, std::uint32_t fault_bit) noexcept {
+    // snprintf into a stack buffer: no allocation on the RT thread.
+    char message[msgs::kShortTextCapacity];
+    std::uint32_t code = 0;
+    switch (fault_bit) {
+        case devices::kHeartbeatLost:
+            code = kFaultHeartbeatLost;
+            std::snprintf(message, sizeof(message),
+                          "heartbeat lost: none for more than %d ms; device held safe",
+                          heartbeat_timeout_ms_);
+            break;
+        case devices::kBusOff:
+            code = kFaultBusOff;
+            std::snprintf(message, sizeof(message),
+                          "CAN bus-off: controller refuses to transmit; device held safe");
+            break;
+        case devices::kDeviceFault: {
+            code = kFaultDeviceReported;
+            const std::uint8_t reported = deviceFaultCode();
+            std::snprintf(message, sizeof(message), "device reports fault %u (%s); held safe",
+                          static_cast<unsigned>(reported), deviceFaultName(reported));
+            break;
+        }
+        default:
+            code = kFaultTransmitFailed;
+            std::snprintf(message, sizeof(message),
+                          "CAN transmit failed %d ticks in a row; device held safe",
+                          settings_.transmit_fault_ticks);
+            break;
+    }
+    core.raiseFault(code, name_, message);
+}
+
+void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noexcept {
+    link_bits_ = driverFaults(now_ns) & ~devices::kTransmitFailed;
+    if (failed_transmits_ >= settings_.transmit_fault_ticks) {
+        link_bits_ |= devices::kTransmitFailed;
+    }
+    // `clear` emptied the list: re-arm, so a cause that is still there is raised again.
+    if (latched_ != 0 && core.stateMachine().faultCount() == 0) {
+        latched_ = 0;
+    }
+    const std::uint32_t active = link_bits_ & kLatchingFaults;
+    const std::uint32_t raised = active & ~latched_;
+    for (const std::uint32_t fault_bit : {static_cast<std::uint32_t>(devices::kHeartbeatLost),
+                                          static_cast<std::uint32_t>(devices::kBusOff),
+                                          static_cast<std::uint32_t>(devices::kDeviceFault),
+                                          static_cast<std::uint32_t>(devices::kTransmitFailed)}) {
+        if ((raised & fault_bit) != 0) {
+            raise(core, fault_bit);
+        }
+    }
+    latched_ |= active;
+}
+
+void DeviceChannel::write() noexcept {
+    const can::IoResult result = sendCommand();
+    if (result == can::IoResult::kOk) {
+        ++tx_frames_;
+        failed_transmits_ = 0;
+    } else {
+        ++tx_errors_;
+        ++failed_transmits_;
+    }
+}
+
+void DeviceChannel::fillLinkReport(bool rendering, double gain, std::int64_t now_ns) noexcept {
+    report_.attached = true;
+    if (latched_ != 0) {
+        report_.run_state = msgs::DeviceRunState::kFault;
+    } else if ((link_bits_ & devices::kNoHeartbeatYet) != 0) {
+        report_.run_state = msgs::DeviceRunState::kOffline;
+    } else if ((link_bits_ & (kHoldSafe | devices::kStateStale)) != 0 ||
+               (rendering && gain <= 0.0)) {
+        report_.run_state = msgs::DeviceRunState::kSafe;
+    } else if (rendering) {
+        report_.run_state = msgs::DeviceRunState::kActive;
+    } else {
+        report_.run_state = msgs::DeviceRunState::kReady;
+    }
+
+    std::uint32_t bits = 0;
+    if ((link_bits_ & (devices::kNoHeartbeatYet | devices::kHeartbeatLost)) == 0) {
+        bits |= bit(msgs::DeviceStatusBit::kOnline);
+    }
+    if (gain <= 0.0) {
+        bits |= bit(msgs::DeviceStatusBit::kSafeState);
+    }
+    if (latched_ != 0) {
+        bits |= bit(msgs::DeviceStatusBit::kFault);
+    }
+    report_.status_bits = bits;
+
+    const auto& link = this->link();
+    const std::int64_t last_frame_ns =
+        link.lastHeartbeatNs() > link.lastStateNs() ? link.lastHeartbeatNs() : link.lastStateNs();
+    report_.last_frame_age_ms =
+        last_frame_ns > 0 ? static_cast<double>(now_ns - last_frame_ns) * 1e-6 : -1.0;
+
+    const can::BusCounters& counters = bus_.counters();
+    report_.can.bus_state = toMessage(bus_.state());
+    report_.can.rx_frames = rx_frames_;
+    report_.can.tx_frames = tx_frames_;
+    // Receive errors belong to the bus (shared by its devices): error frames, malformed
+    // datagrams and kernel overflows.
+    report_.can.rx_errors = counters.rx_error_frames + counters.rx_dropped + counters.rx_overflows;
+    report_.can.tx_errors = tx_errors_;
+    report_.can.rejected_frames = rejectedFrames();
+}
+
+}  // namespace haptic::runtime

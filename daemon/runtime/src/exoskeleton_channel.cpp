@@ -1,0 +1,134 @@
+#include "haptic/runtime/exoskeleton_channel.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace haptic::runtime {
+namespace {
+
+// Velocity from encoder differences is noisy (receive stamps jitter with the bus), so it is
+// low-pass filtered; it only feeds the renderer's actuator damping.
+constexpr double kVelocityFilter = 0.3;
+
+kinesthetic::PortGuardConfig portGuardConfig(const config::DeviceConfig& device,
+                                             const ChannelSettings& settings) {
+    const auto& exo = device.exoskeleton();
+    kinesthetic::PortGuardConfig guard;
+    guard.period_s = settings.period_s;
+    guard.max_force_n = std::min(device.safety.max_force_n, exo.actuator.max_force_n);
+    guard.max_force_rate_n_per_s = device.safety.max_force_rate_n_per_s;
+    guard.fade_time_s = static_cast<double>(device.safety.fade_out_ms) * 1e-3;
+    return guard;
+}
+
+}  // namespace
+
+kinesthetic::RenderParameters exoskeletonRenderParameters(const config::ExoskeletonConfig& exo) {
+    kinesthetic::RenderParameters parameters;
+    parameters.method = exo.rendering.method;
+    // The kinesthetic benchmark's joint-space values (README "Kinesthetic rendering"):
+    // assumptions, like the device geometry, until a lab identifies its finger and linkage.
+    parameters.tracking_stiffness = 2.0;  // k_a, N m/rad
+    parameters.user_stiffness = 0.6;      // k_u, N m/rad
+    parameters.actuator_damping = 0.5;    // b_v, N s/m along the actuator
+    return parameters;
+}
+
+ExoskeletonChannel::ExoskeletonChannel(const config::DeviceConfig& device, can::CanBus& bus,
+                                       const ChannelSettings& settings)
+    : DeviceChannel(device, bus, settings),
+      driver_(device, bus),
+      model_(device.exoskeleton()),
+      renderer_(model_, exoskeletonRenderParameters(device.exoskeleton())),
+      guard_(portGuardConfig(device, settings)),
+      max_constraints_(static_cast<std::size_t>(device.exoskeleton().rendering.max_constraints)),
+      q_(kinesthetic::ConfigVector::Zero(model_.dofs())),
+      q_dot_(kinesthetic::ConfigVector::Zero(model_.dofs())) {
+    applied_method_.assign(config::toString(device.exoskeleton().rendering.method));
+}
+
+std::uint8_t ExoskeletonChannel::deviceFaultCode() const noexcept {
+    const auto& state = driver_.state();
+    if (state.last_fault.active) {
+        return static_cast<std::uint8_t>(state.last_fault.code);
+    }
+    return state.heartbeat.active_fault;
+}
+
+void ExoskeletonChannel::followMethod(const msgs::DeviceId& method) noexcept {
+    if (method == applied_method_) {
+        return;
+    }
+    // The state machine only accepts known names, so a miss cannot happen; keep the running
+    // strategy if it ever did.
+    if (const auto parsed = config::enumFromString<config::RenderingMethod>(method.view())) {
+        renderer_.setMethod(*parsed);
+        applied_method_ = method;
+    }
+}
+
+void ExoskeletonChannel::measure() noexcept {
+    const auto& state = driver_.state();
+    stroke_m_ = state.actuator.stroke_m;
+    if (state.encoder_updates == encoder_updates_) {
+        return;
+    }
+    kinesthetic::ConfigVector q_new(q_.size());
+    for (Eigen::Index i = 0; i < q_new.size(); ++i) {
+        q_new[i] = state.encoders.joint_rad[static_cast<std::size_t>(i)];
+    }
+    if (encoder_updates_ > 0) {
+        // Several frames can arrive in one read; never divide by less than half a period.
+        const double dt_s =
+            std::max(static_cast<double>(state.encoders_time_ns - encoder_time_ns_) * 1e-9,
+                     0.5 * settings_.period_s);
+        q_dot_ += kVelocityFilter * ((q_new - q_) / dt_s - q_dot_);
+    }
+    q_ = q_new;
+    encoder_updates_ = state.encoder_updates;
+    encoder_time_ns_ = state.encoders_time_ns;
+}
+
+void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
+                                 std::int64_t now_ns) noexcept {
+    followMethod(core.stateMachine().method());
+    const auto& state = driver_.state();
+    const bool state_fresh = (linkFaults() & (devices::kStateStale | devices::kNoHeartbeatYet |
+                                              devices::kHeartbeatLost)) == 0 &&
+                             state.encoder_updates > 0 && state.actuator_updates > 0;
+
+    double desired_n = 0.0;
+    if (state_fresh) {
+        measure();
+        std::span<const msgs::LinearConstraint> constraints;
+        if (const msgs::ConstraintSet* set = core.latestConstraintSet(index)) {
+            const auto used = set->constraints.used();
+            constraints = used.first(std::min(used.size(), max_constraints_));
+        }
+        renderer_.tick(q_, q_dot_, constraints, out_);
+        desired_n = out_.actuator_force.size() > 0 ? out_.actuator_force[0] : 0.0;
+    }
+    // Without a fresh device state the guard fades the last good force out (never a step).
+    const kinesthetic::PortCommand port = guard_.apply(desired_n, stroke_m_, state_fresh);
+    const bool rendering = core.stateMachine().rendering();
+    const double gain = heldSafe() ? 0.0 : core.outputGain(index);
+    const double force_n = port.force_n * gain;
+    // The passivity observer must book the force really applied, which the gain may reduce.
+    guard_.passivity().record(force_n);
+    command_.force_n = force_n;
+    command_.enable = gain > 0.0;
+
+    fillLinkReport(rendering, gain, now_ns);
+    for (Eigen::Index i = 0; i < q_.size(); ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        report_.joint_position_rad[k] = q_[i];
+        report_.joint_velocity_rad_per_s[k] = q_dot_[i];
+        report_.proxy_position_rad[k] = out_.proxy.size() > i ? out_.proxy[i] : q_[i];
+    }
+    report_.actuator_position[0] = state.actuator.stroke_m;
+    report_.actuator_force[0] = state.actuator.force_n;
+    report_.commanded[0] = force_n;
+    report_.energy_observer_j = guard_.passivity().observedEnergy();
+}
+
+}  // namespace haptic::runtime

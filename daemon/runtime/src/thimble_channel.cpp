@@ -1,0 +1,112 @@
+#include "haptic/runtime/thimble_channel.hpp"
+
+#include <Eigen/Geometry>
+
+namespace haptic::runtime {
+namespace {
+
+tactile::ServoAngles retractAngles(const tactile::ThimbleKinematics& kinematics) {
+    const auto ik = kinematics.inverse(kinematics.retractPose());
+    if (!ik.ok()) {
+        throw std::invalid_argument("thimble: the retract pose has no inverse kinematics (" +
+                                    std::string(tactile::toString(ik.error)) + ")");
+    }
+    return ik.servo_rad;
+}
+
+}  // namespace
+
+ThimbleChannel::ThimbleChannel(const config::DeviceConfig& device, can::CanBus& bus,
+                               const ChannelSettings& settings)
+    : DeviceChannel(device, bus, settings),
+      driver_(device, bus),
+      kinematics_(device.thimble()),
+      optimiser_(kinematics_, tactile::OptimiserSettings::fromConfig(device.thimble())),
+      retract_servo_rad_(retractAngles(kinematics_)),
+      limiter_(device.thimble().servos, retract_servo_rad_) {
+    solved_.dofs = kinematics_.retractPose();
+    solved_.servo_rad = retract_servo_rad_;
+    measured_dofs_ = kinematics_.retractPose();
+    command_.servo_target_rad = retract_servo_rad_;
+}
+
+std::uint8_t ThimbleChannel::deviceFaultCode() const noexcept {
+    const auto& state = driver_.state();
+    if (state.last_fault.active) {
+        return static_cast<std::uint8_t>(state.last_fault.code);
+    }
+    return state.heartbeat.active_fault;
+}
+
+void ThimbleChannel::measure() noexcept {
+    const auto& state = driver_.state();
+    if (state.state_updates == state_updates_) {
+        return;
+    }
+    state_updates_ = state.state_updates;
+    // Newton from the last estimate: 1-3 iterations between consecutive 1 kHz frames.
+    const tactile::ForwardResult fk =
+        kinematics_.forward(state.servos.servo_angle_rad, measured_dofs_);
+    if (fk.ok()) {
+        measured_dofs_ = fk.dofs;
+        measured_pose_ = fk.pose;
+    }
+}
+
+tactile::ServoAngles ThimbleChannel::blend(double gain) const noexcept {
+    const tactile::PlatformDofs& retract = kinematics_.retractPose();
+    tactile::PlatformDofs target;
+    target.height_m = retract.height_m + gain * (solved_.dofs.height_m - retract.height_m);
+    target.tilt_x_rad = retract.tilt_x_rad + gain * (solved_.dofs.tilt_x_rad - retract.tilt_x_rad);
+    target.tilt_y_rad = retract.tilt_y_rad + gain * (solved_.dofs.tilt_y_rad - retract.tilt_y_rad);
+    const tactile::InverseResult ik = kinematics_.inverse(target, /*check_workspace=*/false);
+    if (ik.ok()) {
+        return ik.servo_rad;
+    }
+    tactile::ServoAngles angles{};
+    for (std::size_t i = 0; i < angles.size(); ++i) {
+        angles[i] = retract_servo_rad_[i] + gain * (solved_.servo_rad[i] - retract_servo_rad_[i]);
+    }
+    return angles;
+}
+
+void ThimbleChannel::compute(daemon::DaemonCore& core, std::size_t index,
+                             std::int64_t now_ns) noexcept {
+    const auto& state = driver_.state();
+    const bool state_fresh = (linkFaults() & (devices::kStateStale | devices::kNoHeartbeatYet |
+                                              devices::kHeartbeatLost)) == 0 &&
+                             state.state_updates > 0;
+    if (state_fresh) {
+        measure();
+    }
+    const std::uint64_t accepted = core.acceptedCount(index);
+    const msgs::ContactSurface* surface = core.latestContactSurface(index);
+    if (surface != nullptr && accepted != solved_from_) {
+        solved_ = optimiser_.solve(*surface);
+        solved_from_ = accepted;
+    }
+
+    const bool rendering = core.stateMachine().rendering();
+    // A stale device state cannot be trusted to be where we think: retract as well.
+    const double gain = heldSafe() || !state_fresh ? 0.0 : core.outputGain(index);
+    const tactile::LimitedServoCommand limited = limiter_.step(blend(gain), settings_.period_s);
+    command_.servo_target_rad = limited.servo_rad;
+
+    fillLinkReport(rendering, gain, now_ns);
+    for (std::size_t i = 0; i < 3; ++i) {
+        report_.joint_position_rad[i] = state.servos.servo_angle_rad[i];
+        report_.actuator_position[i] = state.servos.servo_angle_rad[i];
+        report_.commanded[i] = limited.servo_rad[i];
+    }
+    report_.proxy_position_rad[0] = solved_.dofs.height_m;
+    report_.proxy_position_rad[1] = solved_.dofs.tilt_x_rad;
+    report_.proxy_position_rad[2] = solved_.dofs.tilt_y_rad;
+    for (int i = 0; i < 3; ++i) {
+        report_.platform_position_m[static_cast<std::size_t>(i)] = measured_pose_.position_m[i];
+    }
+    const Eigen::Quaterniond orientation(measured_pose_.rotation);
+    report_.platform_orientation_wxyz = {orientation.w(), orientation.x(), orientation.y(),
+                                         orientation.z()};
+}
+
+}  // namespace haptic::runtime

@@ -1,0 +1,225 @@
+// The per-device tick of hapticd against the emulated devices (real drivers, renderers,
+// safety stages and emulator models on a loopback bus, synthetic time).
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "haptic/runtime/exoskeleton_channel.hpp"
+#include "haptic/runtime/thimble_channel.hpp"
+#include "runtime_rig.hpp"
+
+namespace haptic::testing {
+namespace {
+
+using ::testing::HasSubstr;
+
+// Enables rendering and runs until the exoskeleton's force has ramped up (100 ms fade-in).
+void renderWithContact(RuntimeRig& rig) {
+    rig.offerContact();
+    rig.ticks(20);  // devices heard, state fresh
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
+    for (int i = 0; i < 300; ++i) {
+        if (i % 10 == 0) {
+            rig.offerContact();  // a 100 Hz sim
+        }
+        rig.tick();
+    }
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
+}
+
+double distance(const std::array<double, 3>& a, const tactile::ServoAngles& b) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < 3; ++i) {
+        sum += (a[i] - b[i]) * (a[i] - b[i]);
+    }
+    return std::sqrt(sum);
+}
+
+const tactile::ServoAngles& retract(RuntimeRig& rig) {
+    return static_cast<runtime::ThimbleChannel&>(rig.runtime.channel(kThimble))
+        .retractServoAngles();
+}
+
+TEST(DeviceRuntime, DevicesComeOnlineAndRenderContactWhileRendering) {
+    RuntimeRig rig;
+    rig.offerContact();
+    rig.ticks(20);
+    const auto& exo = rig.core.deviceReport(kExo);
+    EXPECT_EQ(exo.run_state, msgs::DeviceRunState::kReady);
+    EXPECT_EQ(rig.core.deviceReport(kThimble).run_state, msgs::DeviceRunState::kReady);
+    EXPECT_EQ(rig.exoForce(), 0.0) << "IDLE sends no force";
+    EXPECT_LT(distance(rig.thimbleTargets(), retract(rig)), 1e-12) << "IDLE holds the retract pose";
+    EXPECT_GT(exo.can.rx_frames, 20U);
+    EXPECT_GT(exo.can.tx_frames, 10U);
+    EXPECT_EQ(exo.can.bus_state, msgs::BusState::kErrorActive);
+    // Measured state comes from the emulated device, not zeros.
+    EXPECT_GT(std::abs(exo.joint_position_rad[0]) + std::abs(exo.joint_position_rad[1]), 0.1);
+    EXPECT_GT(exo.actuator_position[0], 0.0);
+
+    renderWithContact(rig);
+    EXPECT_NEAR(std::abs(rig.exoForce()), 10.0, 1e-9) << "the wall saturates at safety.max_force_n";
+    EXPECT_EQ(rig.core.deviceReport(kExo).run_state, msgs::DeviceRunState::kActive);
+    EXPECT_GT(distance(rig.thimbleTargets(), retract(rig)), 0.05) << "the plate presses the pad";
+    EXPECT_TRUE(rig.core.deviceReport(kExo).status_bits &
+                static_cast<std::uint32_t>(msgs::DeviceStatusBit::kOnline));
+    // The emulated actuator follows the command (first-order lag of 5 ms).
+    EXPECT_NEAR(rig.core.deviceReport(kExo).actuator_force[0], rig.exoForce(), 0.5);
+    EXPECT_EQ(rig.telemetry.device_index, kThimble);
+    EXPECT_EQ(rig.core.deviceReport(kThimble).commanded[0], rig.thimbleTargets()[0]);
+}
+
+TEST(DeviceRuntime, StaleSimInputFadesToZeroWithinTheTimeoutAndNeverStepsUp) {
+    RuntimeRig rig;
+    renderWithContact(rig);
+    double previous = std::abs(rig.exoForce());
+    double previous_thimble = distance(rig.thimbleTargets(), retract(rig));
+    ASSERT_GT(previous, 1.0);
+    // The sim stops: 20 ms later (sim_timeout) both devices are at zero / retracting.
+    for (int i = 0; i < 30; ++i) {
+        rig.tick();
+        const double force = std::abs(rig.exoForce());
+        const double thimble = distance(rig.thimbleTargets(), retract(rig));
+        EXPECT_LE(force, previous + 1e-12) << "tick " << i;
+        EXPECT_LE(thimble, previous_thimble + 1e-12) << "tick " << i;
+        previous = force;
+        previous_thimble = thimble;
+        if (i >= 20) {
+            EXPECT_EQ(force, 0.0) << "tick " << i;
+        }
+    }
+    EXPECT_EQ(rig.core.deviceReport(kExo).run_state, msgs::DeviceRunState::kSafe);
+    // Fresh input ramps back up, never a step (100 ms fade-in, rate limit).
+    for (int i = 0; i < 50; ++i) {
+        rig.offerContact();
+        rig.tick();
+        const double force = std::abs(rig.exoForce());
+        EXPECT_LE(force - previous, 0.5 + 1e-9) << "tick " << i;  // 500 N/s at 1 kHz
+        previous = force;
+    }
+    EXPECT_GT(previous, 1.0);
+}
+
+TEST(DeviceRuntime, HeartbeatLossRaisesALatchedFaultNamingTheDevice) {
+    RuntimeRig rig;
+    renderWithContact(rig);
+    rig.emulatorFault(kThimble, "heartbeat stop");
+    rig.ticks(70);  // heartbeat_timeout_ms 50 (+ up to one 10 ms heartbeat period)
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    ASSERT_EQ(rig.core.stateMachine().faultCount(), 1U);
+    const auto& fault = rig.core.stateMachine().fault(0);
+    EXPECT_EQ(fault.code, runtime::kFaultHeartbeatLost);
+    EXPECT_EQ(fault.device_id.view(), "thimble");
+    EXPECT_THAT(std::string(fault.message.view()), HasSubstr("heartbeat lost"));
+    EXPECT_EQ(rig.core.deviceReport(kThimble).run_state, msgs::DeviceRunState::kFault);
+    EXPECT_EQ(rig.exoForce(), 0.0) << "FAULT holds every device at zero";
+    // The thimble's safe state is the retract pose, reached at servos.max_rate_deg_per_s.
+    double previous = distance(rig.thimbleTargets(), retract(rig));
+    for (int i = 0; i < 300; ++i) {
+        rig.tick();
+        const double now = distance(rig.thimbleTargets(), retract(rig));
+        ASSERT_LE(now, previous + 1e-12) << "tick " << i;
+        previous = now;
+    }
+    EXPECT_LT(previous, 1e-12);
+
+    // Latched: the heartbeat returns, the fault stays until clear; clear lands in IDLE.
+    rig.emulatorFault(kThimble, "heartbeat start");
+    rig.ticks(30);
+    EXPECT_EQ(rig.core.deviceReport(kThimble).run_state, msgs::DeviceRunState::kFault);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    EXPECT_EQ(rig.core.stateMachine().faultCount(), 1U) << "raised once, not once per tick";
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kClearFault));
+    rig.ticks(5);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
+    EXPECT_EQ(rig.core.deviceReport(kThimble).run_state, msgs::DeviceRunState::kReady);
+}
+
+TEST(DeviceRuntime, ClearWhileTheCauseRemainsRaisesTheFaultAgain) {
+    RuntimeRig rig;
+    renderWithContact(rig);
+    rig.emulatorFault(kExo, "heartbeat stop");
+    rig.ticks(70);
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kClearFault));
+    rig.ticks(2);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    EXPECT_EQ(rig.core.stateMachine().fault(0).device_id.view(), "exo");
+}
+
+TEST(DeviceRuntime, BusOffFaultsTheDevicesOnThatBus) {
+    RuntimeRig rig;
+    renderWithContact(rig);
+    rig.emulatorFault(kExo, "busoff");
+    rig.ticks(3);
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    EXPECT_EQ(rig.core.stateMachine().fault(0).code, runtime::kFaultBusOff);
+    EXPECT_EQ(rig.core.deviceReport(kExo).can.bus_state, msgs::BusState::kBusOff);
+    EXPECT_EQ(rig.core.deviceReport(kExo).run_state, msgs::DeviceRunState::kFault);
+    EXPECT_EQ(rig.exoForce(), 0.0);
+    // Both devices share the loopback bus here, so both are named.
+    ASSERT_EQ(rig.core.stateMachine().faultCount(), 2U);
+    EXPECT_EQ(rig.core.stateMachine().fault(1).device_id.view(), "thimble");
+}
+
+TEST(DeviceRuntime, DeviceFaultReportIsRaisedWithItsCode) {
+    RuntimeRig rig;
+    renderWithContact(rig);
+    rig.emulatorFault(kExo, "fault 2");
+    rig.ticks(20);
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    EXPECT_EQ(rig.core.stateMachine().fault(0).code, runtime::kFaultDeviceReported);
+    EXPECT_THAT(std::string(rig.core.stateMachine().fault(0).message.view()),
+                HasSubstr("overtemperature"));
+}
+
+TEST(DeviceRuntime, TransmitFailureForTenTicksFaults) {
+    RuntimeRig rig;
+    renderWithContact(rig);
+    rig.host.injectBackpressure(9);
+    rig.ticks(6);  // 9 writes (two devices per tick) refused: not yet a fault
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
+    rig.host.injectBackpressure(40);
+    rig.ticks(25);
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    EXPECT_EQ(rig.core.stateMachine().fault(0).code, runtime::kFaultTransmitFailed);
+}
+
+TEST(DeviceRuntime, MethodCommandSwitchesTheKinestheticStrategy) {
+    RuntimeRig rig;
+    rig.ticks(5);
+    auto& exo = static_cast<runtime::ExoskeletonChannel&>(rig.runtime.channel(kExo));
+    EXPECT_EQ(exo.method(), config::RenderingMethod::kLinearizedSubspace);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kSetMethod, "anisotropic"));
+    rig.tick();
+    EXPECT_EQ(exo.method(), config::RenderingMethod::kAnisotropic);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kSetMethod, "naive"));
+    rig.tick();
+    EXPECT_EQ(exo.method(), config::RenderingMethod::kNaive);
+}
+
+TEST(DeviceRuntime, EstopZeroesForceAndClearReturnsToIdle) {
+    RuntimeRig rig;
+    renderWithContact(rig);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kEstop));
+    rig.tick();
+    EXPECT_EQ(rig.exoForce(), 0.0);
+    EXPECT_EQ(rig.core.deviceReport(kExo).status_bits &
+                  static_cast<std::uint32_t>(msgs::DeviceStatusBit::kSafeState),
+              static_cast<std::uint32_t>(msgs::DeviceStatusBit::kSafeState));
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kClearFault));
+    rig.tick();
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
+}
+
+TEST(DeviceRuntime, NeverHeardDevicesAreOfflineNotFaulted) {
+    RuntimeRig rig;
+    rig.emulatorFault(kExo, "heartbeat stop");
+    rig.ticks(200);
+    EXPECT_EQ(rig.core.deviceReport(kExo).run_state, msgs::DeviceRunState::kOffline);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
+}
+
+}  // namespace
+}  // namespace haptic::testing

@@ -1,0 +1,60 @@
+#pragma once
+
+// The whole per-tick path of hapticd without RouDi or DDS: DaemonCore, the DeviceRuntime with
+// the real drivers and renderers on a LoopbackBus, and the hapticemu emulator library for
+// both shipped devices on the other end. Time is synthetic (1 ms per tick), so tests are
+// exact and fast.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "haptic/can/loopback_bus.hpp"
+#include "haptic/config/device.hpp"
+#include "haptic/daemon/daemon_core.hpp"
+#include "haptic/emu/device_emulator.hpp"
+#include "haptic/runtime/device_runtime.hpp"
+
+namespace haptic::testing {
+
+inline constexpr std::int64_t kMs = 1'000'000;
+inline constexpr std::size_t kExo = 0;
+inline constexpr std::size_t kThimble = 1;
+
+class RuntimeRig {
+  public:
+    RuntimeRig();
+
+    // One 1 kHz tick: emulators, bus, then hapticd's read / update / compute / write order.
+    void tick();
+    void ticks(int count) {
+        for (int i = 0; i < count; ++i) {
+            tick();
+        }
+    }
+    // Sim input as handsim would send it (valid; contact on both devices).
+    void offerContact();
+    bool command(msgs::CommandKind kind, const char* argument = "");
+    void emulatorFault(std::size_t device, const char* line);
+
+    [[nodiscard]] double exoForce() const;
+    [[nodiscard]] std::array<double, 3> thimbleTargets() const;
+
+    std::vector<config::DeviceConfig> devices;
+    can::LoopbackBus host;
+    can::LoopbackBus target;
+    std::vector<std::unique_ptr<emu::DeviceEmulator>> emulators;
+    daemon::DaemonCore core;
+    runtime::DeviceRuntime runtime;
+    msgs::ConstraintSet constraint_set{};
+    msgs::ContactSurface contact_surface{};
+    msgs::HapticStatus status{};
+    msgs::TelemetrySample telemetry{};
+    msgs::DeviceState device_state{};
+    msgs::HapticCommand command_scratch{};
+    msgs::HapticCommandReply reply{};
+    std::int64_t now{1'000 * kMs};
+    std::uint64_t tick_count{0};
+};
+
+}  // namespace haptic::testing
