@@ -1,0 +1,476 @@
+// End-to-end safety of hapticd with devices attached: the real iox-roudi, hapticd, handsim,
+// hapticctl and one `hapticemu` process per device on the UDP CAN bus. The test reads
+// haptic/status and haptic/telemetry over DDS itself (stamps are CLOCK_MONOTONIC, the clock it
+// kills the sim by) and publishes its own ConstraintSets over iceoryx where it needs exact
+// control of the sim input. Shares RouDi's socket with end_to_end_test: same RESOURCE_LOCK.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include "HapticStatusPubSubTypes.h"
+#include "HapticTelemetryPubSubTypes.h"
+#include "child_process.hpp"
+#include "emulator_process.hpp"
+#include "haptic/ipc/dds_participant.hpp"
+#include "haptic/ipc/iceoryx_runtime.hpp"
+#include "haptic/ipc/topics.hpp"
+#include "haptic/msgs/conversions.hpp"
+#include "iceoryx_posh/popo/publisher.hpp"
+
+namespace haptic::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using namespace std::chrono_literals;
+
+const std::string kConfigDir = HAPTIC_CONFIG_DIR;
+constexpr std::size_t kExo = 0;
+constexpr double kMaxStepN = 0.5 + 1e-6;  // safety.max_force_rate_n_per_s 500 at 1 kHz
+
+std::int64_t monotonicNs() {
+    timespec ts{};
+    ::clock_gettime(CLOCK_MONOTONIC, &ts);
+    return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+std::string readFile(const fs::path& path) {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+void replaceLine(const fs::path& path, const std::string& from, const std::string& to) {
+    std::string text = readFile(path);
+    const auto at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from << " not in " << path;
+    text.replace(at, from.size(), to);
+    std::ofstream(path) << text;
+}
+
+// The shipped configuration, copied, with each device on its own UDP bus (a port block per
+// test process, so parallel ctest runs never share one) and timeouts that tolerate a loaded
+// 2-core VM under ASan: a stalled emulator must not look like a lost device here.
+struct TestConfig {
+    TestConfig() {
+        dir = fs::temp_directory_path() / ("haptic-safety-" + std::to_string(::getpid()));
+        fs::remove_all(dir);
+        fs::copy(kConfigDir, dir, fs::copy_options::recursive);
+        const int base = 40000 + (::getpid() % 600) * 16;
+        exo_port = base;
+        thimble_port = base + 8;
+        const std::string timeouts_from = "heartbeat_timeout_ms: 50";
+        replaceLine(dir / "devices/exoskeleton.yaml", "udp_port: 47000",
+                    "udp_port: " + std::to_string(exo_port));
+        replaceLine(dir / "devices/thimble.yaml", "udp_port: 47000",
+                    "udp_port: " + std::to_string(thimble_port));
+        for (const char* device : {"devices/exoskeleton.yaml", "devices/thimble.yaml"}) {
+            replaceLine(dir / device, timeouts_from, "heartbeat_timeout_ms: 250");
+            replaceLine(dir / device, "state_timeout_ms: 10", "state_timeout_ms: 50");
+        }
+    }
+    ~TestConfig() { fs::remove_all(dir); }
+
+    fs::path dir;
+    int exo_port{0};
+    int thimble_port{0};
+};
+
+std::string domain() {
+    return std::to_string(100 + (::getpid() + 37) % 100);
+}
+
+class DeviceSafetyTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        ASSERT_FALSE(ipc::probeRoudi().reachable)
+            << "an iox-roudi is already running on this host; stop it (and the demo) first";
+        roudi_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l",
+                                     "warning"},
+            "roudi");
+        const auto deadline = std::chrono::steady_clock::now() + 10s;
+        while (!ipc::probeRoudi().reachable) {
+            ASSERT_TRUE(roudi_->running()) << roudi_->stderrText();
+            ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
+            std::this_thread::sleep_for(20ms);
+        }
+        exo_emu_ = startEmulator("devices/exoskeleton.yaml", config_.exo_port);
+        thimble_emu_ = startEmulator("devices/thimble.yaml", config_.thimble_port);
+        daemon_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{HAPTICD_PATH, "-c", (config_.dir / "daemon.yaml").string(),
+                                     "--realtime", "ignore", "--dds-domain", domain()},
+            "hapticd");
+        participant_ = std::make_unique<ipc::DdsParticipant>(
+            ipc::DdsSettings{static_cast<std::uint32_t>(std::stoi(domain())),
+                             kConfigDir + "/dds_profiles.xml", "haptic_participant"},
+            "device_safety_test");
+        status_reader_ = participant_->createReader<idl::HapticStatusPubSubType>(
+            ipc::kStatusTopic, ipc::TopicKind::kLatestState);
+        telemetry_reader_ = participant_->createReader<idl::HapticTelemetryPubSubType>(
+            ipc::kTelemetryTopic, ipc::TopicKind::kStream);
+        // Both devices heard and ready.
+        waitForStatus("both devices READY", [](const msgs::HapticStatus& s) {
+            return s.state == msgs::DaemonState::kIdle && s.devices.size() == 2 &&
+                   s.devices[0].state == msgs::DeviceRunState::kReady &&
+                   s.devices[1].state == msgs::DeviceRunState::kReady;
+        });
+    }
+
+    void TearDown() override {
+        sim_.reset();
+        if (daemon_) {
+            EXPECT_EQ(daemon_->terminate(), std::optional<int>(0)) << daemon_->stderrText();
+        }
+        daemon_.reset();
+        participant_.reset();
+        if (exo_emu_) {
+            exo_emu_->stop();
+        }
+        if (thimble_emu_) {
+            thimble_emu_->stop();
+        }
+        if (roudi_) {
+            roudi_->terminate();
+        }
+    }
+
+    std::unique_ptr<EmulatorProcess> startEmulator(const std::string& device, int port) {
+        auto emulator = std::make_unique<EmulatorProcess>(std::vector<std::string>{
+            HAPTICEMU_PATH, "-d", (config_.dir / device).string(), "--bus", "udp", "--udp-port",
+            std::to_string(port), "--udp-slots", "8"});
+        return emulator;
+    }
+
+    void startSim() {
+        sim_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{HANDSIM_PATH, "--dds-domain", domain()}, "handsim");
+    }
+
+    CommandResult hapticctl(std::vector<std::string> args) {
+        std::vector<std::string> argv{HAPTICCTL_PATH, "--dds-domain", domain()};
+        argv.insert(argv.end(), args.begin(), args.end());
+        return runCommand(argv, 20s);
+    }
+
+    // Takes haptic/status until `done` holds (20 s at most); returns the last status.
+    msgs::HapticStatus waitForStatus(const std::string& what,
+                                     const std::function<bool(const msgs::HapticStatus&)>& done) {
+        idl::HapticStatus sample;
+        msgs::HapticStatus status;
+        const auto deadline = std::chrono::steady_clock::now() + 20s;
+        while (std::chrono::steady_clock::now() < deadline) {
+            EXPECT_TRUE(daemon_->running()) << daemon_->stderrText();
+            if (!daemon_->running()) {
+                break;
+            }
+            if (status_reader_.waitAndTake(sample, 200ms) && msgs::fromIdl(sample, status).ok() &&
+                done(status)) {
+                return status;
+            }
+        }
+        ADD_FAILURE() << "timed out waiting for: " << what << "\nlast hapticd log:\n"
+                      << daemon_->stderrText();
+        return status;
+    }
+
+    // Every telemetry sample of `device` received within `duration`.
+    std::vector<msgs::TelemetrySample> collectTelemetry(std::size_t device,
+                                                        std::chrono::milliseconds duration,
+                                                        const std::function<void()>& during = {}) {
+        std::vector<msgs::TelemetrySample> samples;
+        idl::HapticTelemetry sample;
+        msgs::HapticTelemetry batch;
+        const auto end = std::chrono::steady_clock::now() + duration;
+        bool started = false;
+        while (std::chrono::steady_clock::now() < end) {
+            if (!started && during) {
+                during();
+                started = true;
+            }
+            if (!telemetry_reader_.waitAndTake(sample, 50ms) ||
+                !msgs::fromIdl(sample, batch).ok()) {
+                continue;
+            }
+            for (const auto& s : batch.samples) {
+                if (s.device_index == device) {
+                    samples.push_back(s);
+                }
+            }
+        }
+        return samples;
+    }
+
+    void drainTelemetry() {
+        idl::HapticTelemetry sample;
+        while (telemetry_reader_.waitAndTake(sample, 0ms)) {
+        }
+    }
+
+    bool command(const std::string& verb, const std::string& argument = "") {
+        std::vector<std::string> args{verb};
+        if (!argument.empty()) {
+            args.push_back(argument);
+        }
+        const auto result = hapticctl(args);
+        EXPECT_EQ(result.exit_code, 0) << verb << ": " << result.out << result.err;
+        return result.exit_code == 0;
+    }
+
+    TestConfig config_;
+    std::unique_ptr<ChildProcess> roudi_;
+    std::unique_ptr<EmulatorProcess> exo_emu_;
+    std::unique_ptr<EmulatorProcess> thimble_emu_;
+    std::unique_ptr<ChildProcess> daemon_;
+    std::unique_ptr<ChildProcess> sim_;
+    std::unique_ptr<ipc::DdsParticipant> participant_;
+    ipc::DdsReader<idl::HapticStatus> status_reader_;
+    ipc::DdsReader<idl::HapticTelemetry> telemetry_reader_;
+};
+
+iox::capro::ServiceDescription constraintSetService(const std::string& device) {
+    const std::string service(ipc::kIceoryxService);
+    const std::string event(ipc::kConstraintSetEvent);
+    return {iox::capro::IdString_t(iox::cxx::TruncateToCapacity, service.c_str()),
+            iox::capro::IdString_t(iox::cxx::TruncateToCapacity, device.c_str()),
+            iox::capro::IdString_t(iox::cxx::TruncateToCapacity, event.c_str())};
+}
+
+// A wall at MCP <= -0.4 rad, beyond the joint's limit: the emulated finger is always inside
+// it, so the exoskeleton's force stays at its limit while this input is fresh.
+msgs::ConstraintSet wallConstraintSet(std::uint64_t seq) {
+    msgs::ConstraintSet message;
+    message.header.seq = seq;
+    message.header.stamp_ns = monotonicNs();
+    message.header.source_id.assign("exo");
+    message.dof = 3;
+    msgs::LinearConstraint wall;
+    wall.a = {-1.0, 0.0, 0.0};
+    wall.b = 0.4;
+    message.constraints.push_back(wall);
+    return message;
+}
+
+// Each way a message can be bad, in turn.
+msgs::ConstraintSet badConstraintSet(std::uint64_t seq, int kind) {
+    msgs::ConstraintSet message = wallConstraintSet(seq);
+    switch (kind % 5) {
+        case 0:
+            message.q_sim_rad[1] = std::numeric_limits<double>::quiet_NaN();
+            break;
+        case 1:
+            message.constraints[0].a[0] = std::numeric_limits<double>::infinity();
+            break;
+        case 2:
+            message.dof = 7;  // the exoskeleton has 3 joints
+            break;
+        case 3:
+            message.constraints[0].a = {};  // zero normal
+            break;
+        default:
+            message.constraints.count = msgs::kMaxConstraints + 1;  // beyond the capacity
+            break;
+    }
+    return message;
+}
+
+TEST_F(DeviceSafetyTest, BadConstraintSetsAreRejectedCountedAndDoNotChangeTheForce) {
+    ipc::initIceoryxRuntime("device_safety_test");
+    iox::popo::Publisher<msgs::ConstraintSet> publisher(constraintSetService("exo"));
+    std::uint64_t seq = 0;
+    const auto publish = [&](const msgs::ConstraintSet& message) {
+        publisher.loan().and_then([&](auto& sample) {
+            *sample = message;
+            sample.publish();
+        });
+    };
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    while (!publisher.hasSubscribers()) {
+        ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "hapticd never subscribed";
+        std::this_thread::sleep_for(10ms);
+    }
+    // A 100 Hz sim pressing the wall; rendering ramps the force up to its limit.
+    std::atomic<bool> stop{false};
+    std::atomic<int> bad_sent{0};
+    std::atomic<bool> send_bad{false};
+    std::thread sim([&] {
+        int kind = 0;
+        while (!stop.load()) {
+            publish(wallConstraintSet(++seq));
+            std::this_thread::sleep_for(5ms);
+            if (send_bad.load()) {
+                publish(badConstraintSet(++seq, kind++));
+                bad_sent.fetch_add(1);
+            }
+            std::this_thread::sleep_for(5ms);
+        }
+    });
+    ASSERT_TRUE(command("enable"));
+    waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kRendering;
+    });
+    std::this_thread::sleep_for(500ms);  // fade-in (100 ms) and rate limit
+    const auto before = waitForStatus("a fresh status", [](const auto&) { return true; });
+    drainTelemetry();
+
+    send_bad.store(true);
+    const auto samples = collectTelemetry(kExo, 1500ms);
+    send_bad.store(false);
+    std::this_thread::sleep_for(100ms);
+    const int sent = bad_sent.load();
+    const auto after = waitForStatus("the rejections counted", [&](const msgs::HapticStatus& s) {
+        return s.sim_link.rejected - before.sim_link.rejected >= static_cast<std::uint64_t>(sent);
+    });
+    stop.store(true);
+    sim.join();
+
+    EXPECT_GT(sent, 50);
+    EXPECT_EQ(after.sim_link.rejected - before.sim_link.rejected, static_cast<std::uint64_t>(sent));
+    EXPECT_EQ(after.state, msgs::DaemonState::kRendering) << "bad input is not a device fault";
+    // The force stayed where the valid input put it: fresh, large, finite, no steps.
+    ASSERT_GT(samples.size(), 500U);
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+        const double force = samples[i].actuator_force_cmd[0];
+        ASSERT_TRUE(std::isfinite(force)) << "tick " << samples[i].tick;
+        EXPECT_GT(std::abs(force), 5.0) << "tick " << samples[i].tick;
+        if (i > 0 && samples[i].tick == samples[i - 1].tick + 1) {
+            EXPECT_LE(std::abs(force - samples[i - 1].actuator_force_cmd[0]), kMaxStepN);
+        }
+    }
+    const auto status = hapticctl({"status"});
+    ASSERT_EQ(status.exit_code, 0) << status.err;
+    EXPECT_THAT(status.out, HasSubstr(std::to_string(after.sim_link.rejected) + " rejected"));
+}
+
+TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTimeout) {
+    startSim();
+    waitForStatus("sim connected", [](const msgs::HapticStatus& s) {
+        return s.sim_link.connected && s.sim_link.received > 20;
+    });
+    ASSERT_TRUE(command("enable"));
+    waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kRendering;
+    });
+    // The default scene presses the finger: wait until the exoskeleton renders force.
+    drainTelemetry();
+    std::vector<msgs::TelemetrySample> before;
+    const auto deadline = std::chrono::steady_clock::now() + 20s;
+    while (std::chrono::steady_clock::now() < deadline) {
+        before = collectTelemetry(kExo, 200ms);
+        if (!before.empty() && std::abs(before.back().actuator_force_cmd[0]) > 0.5) {
+            break;
+        }
+    }
+    ASSERT_FALSE(before.empty());
+    ASSERT_GT(std::abs(before.back().actuator_force_cmd[0]), 0.5) << "no contact force rendered";
+
+    const std::int64_t kill_ns = monotonicNs();
+    ::kill(sim_->pid(), SIGKILL);
+    const auto after = collectTelemetry(kExo, 600ms);
+    ASSERT_TRUE(sim_->waitFor(5s).has_value());
+
+    // Every sim message reached hapticd before the kill; the RT thread took the last one by
+    // the next tick, so from kill + sim_timeout (20 ms) + one tick on the force is zero.
+    const std::int64_t zero_from_ns = kill_ns + 20'000'000 + 1'000'000;
+    std::size_t checked = 0;
+    for (std::size_t i = 0; i < after.size(); ++i) {
+        const double force = after[i].actuator_force_cmd[0];
+        if (after[i].stamp_ns > zero_from_ns) {
+            EXPECT_EQ(force, 0.0) << "tick " << after[i].tick << ", "
+                                  << (after[i].stamp_ns - kill_ns) / 1e6 << " ms after the kill";
+            ++checked;
+        }
+        if (i > 0 && after[i].tick == after[i - 1].tick + 1) {
+            // Never a step up: at most the rate limit, and not above the previous magnitude
+            // once the fade has started.
+            EXPECT_LE(std::abs(force) - std::abs(after[i - 1].actuator_force_cmd[0]), kMaxStepN)
+                << "tick " << after[i].tick;
+        }
+    }
+    EXPECT_GT(checked, 400U);
+    const auto status = hapticctl({"status"});
+    EXPECT_THAT(status.out, HasSubstr("NOT CONNECTED"));
+}
+
+TEST_F(DeviceSafetyTest, EstopClearHeartbeatLossAndBusOffShowInStatusWithZeroForce) {
+    const auto expectZeroExoForce = [&](const char* when) {
+        drainTelemetry();
+        const auto samples = collectTelemetry(kExo, 300ms);
+        ASSERT_GT(samples.size(), 100U) << when;
+        for (const auto& sample : samples) {
+            ASSERT_EQ(sample.actuator_force_cmd[0], 0.0) << when << ", tick " << sample.tick;
+        }
+    };
+
+    // (e) E-STOP and clear with both devices attached.
+    ASSERT_TRUE(command("enable"));
+    waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kRendering;
+    });
+    ASSERT_TRUE(command("estop"));
+    auto status = waitForStatus(
+        "E-STOP", [](const msgs::HapticStatus& s) { return s.state == msgs::DaemonState::kEstop; });
+    EXPECT_EQ(status.devices[kExo].state, msgs::DeviceRunState::kSafe);
+    expectZeroExoForce("during E-STOP");
+    ASSERT_TRUE(command("clear"));
+    waitForStatus("IDLE, devices ready", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kIdle &&
+               s.devices[1].state == msgs::DeviceRunState::kReady;
+    });
+
+    // (b) The thimble's heartbeat stops: FAULT naming the thimble.
+    ASSERT_TRUE(command("enable"));
+    ASSERT_TRUE(thimble_emu_->sendCommand("heartbeat stop"));
+    status = waitForStatus("FAULT", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kFault && !s.faults.empty();
+    });
+    ASSERT_EQ(status.faults.size(), 1U);
+    EXPECT_EQ(status.faults[0].device_id.view(), "thimble");
+    EXPECT_EQ(status.faults[0].code, 100U);
+    EXPECT_EQ(status.devices[1].state, msgs::DeviceRunState::kFault);
+    auto text = hapticctl({"status"});
+    EXPECT_THAT(text.out, HasSubstr("State: FAULT"));
+    EXPECT_THAT(text.out, HasSubstr("[100] thimble: heartbeat lost"));
+    EXPECT_THAT(text.out, ::testing::ContainsRegex("thimble +thimble +FAULT"));
+    expectZeroExoForce("after the heartbeat loss");
+
+    ASSERT_TRUE(thimble_emu_->sendCommand("heartbeat start"));
+    std::this_thread::sleep_for(100ms);
+    ASSERT_TRUE(command("clear"));
+    waitForStatus("IDLE after clear", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kIdle && s.faults.empty() &&
+               s.devices[1].state == msgs::DeviceRunState::kReady;
+    });
+
+    // (c) Bus-off on the exoskeleton's bus: FAULT naming only the exoskeleton.
+    ASSERT_TRUE(command("enable"));
+    ASSERT_TRUE(exo_emu_->sendCommand("busoff"));
+    status = waitForStatus("bus-off FAULT", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kFault && !s.faults.empty();
+    });
+    ASSERT_EQ(status.faults.size(), 1U);
+    EXPECT_EQ(status.faults[0].device_id.view(), "exo");
+    EXPECT_EQ(status.faults[0].code, 101U);
+    EXPECT_EQ(status.devices[kExo].can.bus_state, msgs::BusState::kBusOff);
+    text = hapticctl({"status"});
+    EXPECT_THAT(text.out, HasSubstr("[101] exo: CAN bus-off"));
+    EXPECT_THAT(text.out, ::testing::ContainsRegex("exo +exoskeleton +FAULT +bus bus-off"));
+    expectZeroExoForce("after bus-off");
+}
+
+}  // namespace
+}  // namespace haptic::testing
