@@ -28,7 +28,6 @@
 #include "haptic/ipc/iceoryx_runtime.hpp"
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
-#include "iceoryx_posh/popo/publisher.hpp"
 
 namespace haptic::testing {
 namespace {
@@ -39,6 +38,7 @@ using namespace std::chrono_literals;
 
 const std::string kConfigDir = HAPTIC_CONFIG_DIR;
 constexpr std::size_t kExo = 0;
+constexpr std::size_t kThimble = 1;
 constexpr double kMaxStepN = 0.5 + 1e-6;  // safety.max_force_rate_n_per_s 500 at 1 kHz
 
 std::int64_t monotonicNs() {
@@ -242,113 +242,60 @@ class DeviceSafetyTest : public ::testing::Test {
     ipc::DdsReader<idl::HapticTelemetry> telemetry_reader_;
 };
 
-iox::capro::ServiceDescription constraintSetService(const std::string& device) {
-    const std::string service(ipc::kIceoryxService);
-    const std::string event(ipc::kConstraintSetEvent);
-    return {iox::capro::IdString_t(iox::cxx::TruncateToCapacity, service.c_str()),
-            iox::capro::IdString_t(iox::cxx::TruncateToCapacity, device.c_str()),
-            iox::capro::IdString_t(iox::cxx::TruncateToCapacity, event.c_str())};
-}
-
-// A wall at MCP <= -0.4 rad, beyond the joint's limit: the emulated finger is always inside
-// it, so the exoskeleton's force stays at its limit while this input is fresh.
-msgs::ConstraintSet wallConstraintSet(std::uint64_t seq) {
-    msgs::ConstraintSet message;
-    message.header.seq = seq;
-    message.header.stamp_ns = monotonicNs();
-    message.header.source_id.assign("exo");
-    message.dof = 3;
-    msgs::LinearConstraint wall;
-    wall.a = {-1.0, 0.0, 0.0};
-    wall.b = 0.4;
-    message.constraints.push_back(wall);
-    return message;
-}
-
-// Each way a message can be bad, in turn.
-msgs::ConstraintSet badConstraintSet(std::uint64_t seq, int kind) {
-    msgs::ConstraintSet message = wallConstraintSet(seq);
-    switch (kind % 5) {
-        case 0:
-            message.q_sim_rad[1] = std::numeric_limits<double>::quiet_NaN();
-            break;
-        case 1:
-            message.constraints[0].a[0] = std::numeric_limits<double>::infinity();
-            break;
-        case 2:
-            message.dof = 7;  // the exoskeleton has 3 joints
-            break;
-        case 3:
-            message.constraints[0].a = {};  // zero normal
-            break;
-        default:
-            message.constraints.count = msgs::kMaxConstraints + 1;  // beyond the capacity
-            break;
-    }
-    return message;
-}
-
-TEST_F(DeviceSafetyTest, BadConstraintSetsAreRejectedCountedAndDoNotChangeTheForce) {
-    ipc::initIceoryxRuntime("device_safety_test");
-    iox::popo::Publisher<msgs::ConstraintSet> publisher(constraintSetService("exo"));
-    std::uint64_t seq = 0;
-    const auto publish = [&](const msgs::ConstraintSet& message) {
-        publisher.loan().and_then([&](auto& sample) {
-            *sample = message;
-            sample.publish();
-        });
-    };
-    const auto deadline = std::chrono::steady_clock::now() + 10s;
-    while (!publisher.hasSubscribers()) {
-        ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "hapticd never subscribed";
-        std::this_thread::sleep_for(10ms);
-    }
-    // A 100 Hz sim pressing the wall; rendering ramps the force up to its limit.
-    std::atomic<bool> stop{false};
-    std::atomic<int> bad_sent{0};
-    std::atomic<bool> send_bad{false};
-    std::thread sim([&] {
-        int kind = 0;
-        while (!stop.load()) {
-            publish(wallConstraintSet(++seq));
-            std::this_thread::sleep_for(5ms);
-            if (send_bad.load()) {
-                publish(badConstraintSet(++seq, kind++));
-                bad_sent.fetch_add(1);
-            }
-            std::this_thread::sleep_for(5ms);
+// Waits until the injector printed `token` (a line of its stdout); returns its output.
+std::string waitForOutput(EmulatorProcess& process, const std::string& token) {
+    const auto deadline = std::chrono::steady_clock::now() + 15s;
+    while (std::chrono::steady_clock::now() < deadline) {
+        const std::string out = process.output();
+        if (out.find(token) != std::string::npos) {
+            return out;
         }
-    });
+        std::this_thread::sleep_for(20ms);
+    }
+    ADD_FAILURE() << "no '" << token << "' from the injector: " << process.output();
+    return process.output();
+}
+
+TEST_F(DeviceSafetyTest, BadSimInputIsRejectedCountedAndDoesNotChangeTheOutput) {
+    // The injector is its own iceoryx process: RouDi signals every registered process when it
+    // stops, which must not be this test.
+    EmulatorProcess injector({SIM_INPUT_INJECTOR_PATH});
+    waitForOutput(injector, "ready");
+    const auto thimble_idle = collectTelemetry(kThimble, 100ms);
+    ASSERT_FALSE(thimble_idle.empty());
+
     ASSERT_TRUE(command("enable"));
     waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
         return s.state == msgs::DaemonState::kRendering;
     });
-    std::this_thread::sleep_for(500ms);  // fade-in (100 ms) and rate limit
+    std::this_thread::sleep_for(500ms);  // fade-in (100 ms), servo ramp to the contact pose
     const auto before = waitForStatus("a fresh status", [](const auto&) { return true; });
     drainTelemetry();
 
-    send_bad.store(true);
-    const auto samples = collectTelemetry(kExo, 1500ms);
-    send_bad.store(false);
-    std::this_thread::sleep_for(100ms);
-    const int sent = bad_sent.load();
+    ASSERT_TRUE(injector.sendCommand("bad on"));
+    const auto thimble = collectTelemetry(kThimble, 1500ms);
+    ASSERT_TRUE(injector.sendCommand("bad off"));
+    std::smatch sent_match;
+    const std::string out = waitForOutput(injector, "sent ");
+    ASSERT_TRUE(std::regex_search(out, sent_match, std::regex(R"(sent (\d+))"))) << out;
+    const std::uint64_t sent = std::stoull(sent_match[1]);
     const auto after = waitForStatus("the rejections counted", [&](const msgs::HapticStatus& s) {
-        return s.sim_link.rejected - before.sim_link.rejected >= static_cast<std::uint64_t>(sent);
+        return s.sim_link.rejected - before.sim_link.rejected >= sent;
     });
-    stop.store(true);
-    sim.join();
+    injector.stop();
 
-    EXPECT_GT(sent, 50);
-    EXPECT_EQ(after.sim_link.rejected - before.sim_link.rejected, static_cast<std::uint64_t>(sent));
+    EXPECT_GT(sent, 100U);
+    EXPECT_EQ(after.sim_link.rejected - before.sim_link.rejected, sent);
     EXPECT_EQ(after.state, msgs::DaemonState::kRendering) << "bad input is not a device fault";
-    // The force stayed where the valid input put it: fresh, large, finite, no steps.
-    ASSERT_GT(samples.size(), 500U);
-    for (std::size_t i = 0; i < samples.size(); ++i) {
-        const double force = samples[i].actuator_force_cmd[0];
-        ASSERT_TRUE(std::isfinite(force)) << "tick " << samples[i].tick;
-        EXPECT_GT(std::abs(force), 5.0) << "tick " << samples[i].tick;
-        if (i > 0 && samples[i].tick == samples[i - 1].tick + 1) {
-            EXPECT_LE(std::abs(force - samples[i - 1].actuator_force_cmd[0]), kMaxStepN);
+    // The thimble's targets depend only on the accepted surface: not one bad message may
+    // move them (an accepted one would have retracted the plate).
+    ASSERT_GT(thimble.size(), 500U);
+    const auto& pressed = thimble.front().actuator_force_cmd;
+    EXPECT_GT(std::abs(pressed[0] - thimble_idle.back().actuator_force_cmd[0]), 0.01)
+        << "the plate is not pressing";
+    for (const auto& sample : thimble) {
+        for (std::size_t k = 0; k < 3; ++k) {
+            ASSERT_EQ(sample.actuator_force_cmd[k], pressed[k]) << "tick " << sample.tick;
         }
     }
     const auto status = hapticctl({"status"});
@@ -365,12 +312,13 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTime
     waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
         return s.state == msgs::DaemonState::kRendering;
     });
-    // The default scene presses the finger: wait until the exoskeleton renders force.
+    // The default scene presses the finger now and then (the emulated user moves on its own):
+    // kill the sim while the exoskeleton renders force.
     drainTelemetry();
     std::vector<msgs::TelemetrySample> before;
-    const auto deadline = std::chrono::steady_clock::now() + 20s;
+    const auto deadline = std::chrono::steady_clock::now() + 30s;
     while (std::chrono::steady_clock::now() < deadline) {
-        before = collectTelemetry(kExo, 200ms);
+        before = collectTelemetry(kExo, 30ms);
         if (!before.empty() && std::abs(before.back().actuator_force_cmd[0]) > 0.5) {
             break;
         }
@@ -383,9 +331,10 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTime
     const auto after = collectTelemetry(kExo, 600ms);
     ASSERT_TRUE(sim_->waitFor(5s).has_value());
 
-    // Every sim message reached hapticd before the kill; the RT thread took the last one by
-    // the next tick, so from kill + sim_timeout (20 ms) + one tick on the force is zero.
-    const std::int64_t zero_from_ns = kill_ns + 20'000'000 + 1'000'000;
+    // Every sim message reached hapticd before the kill; the RT thread takes the last one at
+    // its next tick (1 ms, plus up to 2 ms wake-up latency on a loaded VM), so from
+    // kill + sim_timeout (20 ms) + 3 ms on the force is zero.
+    const std::int64_t zero_from_ns = kill_ns + 20'000'000 + 3'000'000;
     std::size_t checked = 0;
     for (std::size_t i = 0; i < after.size(); ++i) {
         const double force = after[i].actuator_force_cmd[0];
