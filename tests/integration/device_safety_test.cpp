@@ -9,11 +9,13 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <regex>
@@ -39,6 +41,7 @@ using namespace std::chrono_literals;
 const std::string kConfigDir = HAPTIC_CONFIG_DIR;
 constexpr std::size_t kExo = 0;
 constexpr std::size_t kThimble = 1;
+constexpr std::size_t kAllDevices = 99;
 constexpr double kMaxStepN = 0.5 + 1e-6;  // safety.max_force_rate_n_per_s 500 at 1 kHz
 
 std::int64_t monotonicNs() {
@@ -207,7 +210,7 @@ class DeviceSafetyTest : public ::testing::Test {
                 continue;
             }
             for (const auto& s : batch.samples) {
-                if (s.device_index == device) {
+                if (device == kAllDevices || s.device_index == device) {
                     samples.push_back(s);
                 }
             }
@@ -256,6 +259,15 @@ std::string waitForOutput(EmulatorProcess& process, const std::string& token) {
     return process.output();
 }
 
+bool targetsNear(const msgs::TelemetrySample& a, const msgs::TelemetrySample& b) {
+    for (std::size_t k = 0; k < 3; ++k) {
+        if (!(std::abs(a.actuator_force_cmd[k] - b.actuator_force_cmd[k]) < 1e-3)) {
+            return false;
+        }
+    }
+    return true;
+}
+
 TEST_F(DeviceSafetyTest, BadSimInputIsRejectedCountedAndDoesNotChangeTheOutput) {
     // The injector is its own iceoryx process: RouDi signals every registered process when it
     // stops, which must not be this test.
@@ -268,7 +280,17 @@ TEST_F(DeviceSafetyTest, BadSimInputIsRejectedCountedAndDoesNotChangeTheOutput) 
     waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
         return s.state == msgs::DaemonState::kRendering;
     });
-    std::this_thread::sleep_for(500ms);  // fade-in (100 ms), servo ramp to the contact pose
+    // Fade-in (100 ms) and the servo ramp to the contact pose: wait until the targets hold.
+    const auto steady_deadline = std::chrono::steady_clock::now() + 15s;
+    bool steady = false;
+    while (!steady && std::chrono::steady_clock::now() < steady_deadline) {
+        const auto window = collectTelemetry(kThimble, 200ms);
+        steady = window.size() > 50 &&
+                 std::all_of(window.begin(), window.end(), [&](const auto& sample) {
+                     return targetsNear(sample, window.front());
+                 });
+    }
+    ASSERT_TRUE(steady) << "the thimble's targets never settled";
     const auto before = waitForStatus("a fresh status", [](const auto&) { return true; });
     drainTelemetry();
 
@@ -287,20 +309,41 @@ TEST_F(DeviceSafetyTest, BadSimInputIsRejectedCountedAndDoesNotChangeTheOutput) 
     EXPECT_GT(sent, 100U);
     EXPECT_EQ(after.sim_link.rejected - before.sim_link.rejected, sent);
     EXPECT_EQ(after.state, msgs::DaemonState::kRendering) << "bad input is not a device fault";
-    // The thimble's targets depend only on the accepted surface: not one bad message may
-    // move them (an accepted one would have retracted the plate).
+    // The thimble's targets depend only on the accepted surfaces: not one bad message may
+    // move them. An accepted one would have sent the plate towards the retract pose, at least
+    // one servo-rate step (0.007 rad) per tick; re-solving the same good surface from the
+    // warm start moves them by ~1e-4 rad at most (the optimiser's 1 um step tolerance).
     ASSERT_GT(thimble.size(), 500U);
     const auto& pressed = thimble.front().actuator_force_cmd;
     EXPECT_GT(std::abs(pressed[0] - thimble_idle.back().actuator_force_cmd[0]), 0.01)
         << "the plate is not pressing";
     for (const auto& sample : thimble) {
-        for (std::size_t k = 0; k < 3; ++k) {
-            ASSERT_EQ(sample.actuator_force_cmd[k], pressed[k]) << "tick " << sample.tick;
-        }
+        ASSERT_TRUE(targetsNear(sample, thimble.front()))
+            << "tick " << sample.tick << ": " << sample.actuator_force_cmd[0] << " "
+            << sample.actuator_force_cmd[1] << " " << sample.actuator_force_cmd[2] << " vs "
+            << pressed[0] << " " << pressed[1] << " " << pressed[2];
     }
     const auto status = hapticctl({"status"});
     ASSERT_EQ(status.exit_code, 0) << status.err;
     EXPECT_THAT(status.out, HasSubstr(std::to_string(after.sim_link.rejected) + " rejected"));
+}
+
+std::vector<msgs::TelemetrySample> ofDevice(const std::vector<msgs::TelemetrySample>& samples,
+                                            std::size_t device) {
+    std::vector<msgs::TelemetrySample> out;
+    std::copy_if(samples.begin(), samples.end(), std::back_inserter(out),
+                 [&](const auto& sample) { return sample.device_index == device; });
+    return out;
+}
+
+// Largest distance of a servo target from the retract targets (rad).
+double fromRetract(const msgs::TelemetrySample& sample, const msgs::TelemetrySample& retract) {
+    double largest = 0.0;
+    for (std::size_t k = 0; k < 3; ++k) {
+        largest = std::max(largest,
+                           std::abs(sample.actuator_force_cmd[k] - retract.actuator_force_cmd[k]));
+    }
+    return largest;
 }
 
 TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTimeout) {
@@ -308,49 +351,80 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTime
     waitForStatus("sim connected", [](const msgs::HapticStatus& s) {
         return s.sim_link.connected && s.sim_link.received > 20;
     });
+    // IDLE holds the thimble at its retract pose: that is where a fade must take it.
+    const auto idle = collectTelemetry(kThimble, 100ms);
+    ASSERT_FALSE(idle.empty());
+    const msgs::TelemetrySample retract = idle.back();
     ASSERT_TRUE(command("enable"));
     waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
         return s.state == msgs::DaemonState::kRendering;
     });
-    // The default scene presses the finger now and then (the emulated user moves on its own):
-    // kill the sim while the exoskeleton renders force.
+    // The default scene presses the fingertip now and then: kill the sim while the thimble's
+    // plate presses (the sim's contact alone decides that), preferably while the exoskeleton
+    // renders force too (that also depends on where the emulated user moves the finger).
     drainTelemetry();
-    std::vector<msgs::TelemetrySample> before;
-    const auto deadline = std::chrono::steady_clock::now() + 30s;
-    while (std::chrono::steady_clock::now() < deadline) {
-        before = collectTelemetry(kExo, 30ms);
-        if (!before.empty() && std::abs(before.back().actuator_force_cmd[0]) > 0.5) {
+    std::vector<msgs::TelemetrySample> exo;
+    std::vector<msgs::TelemetrySample> thimble;
+    const auto started = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - started < 30s) {
+        const auto window = collectTelemetry(kAllDevices, 30ms);
+        exo = ofDevice(window, kExo);
+        thimble = ofDevice(window, kThimble);
+        const bool pressing = !thimble.empty() && fromRetract(thimble.back(), retract) > 0.05;
+        const bool exo_force = !exo.empty() && std::abs(exo.back().actuator_force_cmd[0]) > 0.5;
+        if (pressing && (exo_force || std::chrono::steady_clock::now() - started > 15s)) {
             break;
         }
     }
-    ASSERT_FALSE(before.empty());
-    ASSERT_GT(std::abs(before.back().actuator_force_cmd[0]), 0.5) << "no contact force rendered";
+    ASSERT_FALSE(thimble.empty());
+    ASSERT_GT(fromRetract(thimble.back(), retract), 0.05) << "the thimble never pressed";
 
     const std::int64_t kill_ns = monotonicNs();
     ::kill(sim_->pid(), SIGKILL);
-    const auto after = collectTelemetry(kExo, 600ms);
+    const auto after = collectTelemetry(kAllDevices, 600ms);
     ASSERT_TRUE(sim_->waitFor(5s).has_value());
 
     // Every sim message reached hapticd before the kill; the RT thread takes the last one at
     // its next tick (1 ms, plus up to 2 ms wake-up latency on a loaded VM), so from
-    // kill + sim_timeout (20 ms) + 3 ms on the force is zero.
+    // kill + sim_timeout (20 ms) + 3 ms on the output gain is zero.
     const std::int64_t zero_from_ns = kill_ns + 20'000'000 + 3'000'000;
+    const auto exo_after = ofDevice(after, kExo);
     std::size_t checked = 0;
-    for (std::size_t i = 0; i < after.size(); ++i) {
-        const double force = after[i].actuator_force_cmd[0];
-        if (after[i].stamp_ns > zero_from_ns) {
-            EXPECT_EQ(force, 0.0) << "tick " << after[i].tick << ", "
-                                  << (after[i].stamp_ns - kill_ns) / 1e6 << " ms after the kill";
+    for (std::size_t i = 0; i < exo_after.size(); ++i) {
+        const double force = exo_after[i].actuator_force_cmd[0];
+        if (exo_after[i].stamp_ns > zero_from_ns) {
+            EXPECT_EQ(force, 0.0) << "tick " << exo_after[i].tick << ", "
+                                  << (exo_after[i].stamp_ns - kill_ns) / 1e6
+                                  << " ms after the kill";
             ++checked;
         }
-        if (i > 0 && after[i].tick == after[i - 1].tick + 1) {
-            // Never a step up: at most the rate limit, and not above the previous magnitude
-            // once the fade has started.
-            EXPECT_LE(std::abs(force) - std::abs(after[i - 1].actuator_force_cmd[0]), kMaxStepN)
-                << "tick " << after[i].tick;
+        if (i > 0 && exo_after[i].tick == exo_after[i - 1].tick + 1) {
+            // Never a step up: at most the rate limit while the finger moves under the fade.
+            EXPECT_LE(std::abs(force) - std::abs(exo_after[i - 1].actuator_force_cmd[0]), kMaxStepN)
+                << "tick " << exo_after[i].tick;
         }
     }
     EXPECT_GT(checked, 400U);
+
+    // The thimble: at gain zero the commanded pose is the retract pose, which the servo
+    // limiter approaches at exactly servos.max_rate_deg_per_s (400 deg/s: 6.98 mrad per tick)
+    // on the servo farthest from it, never moving back towards the pad.
+    const double step = 400.0 * M_PI / 180.0 * 1e-3;
+    const auto thimble_after = ofDevice(after, kThimble);
+    std::size_t ramped = 0;
+    for (std::size_t i = 1; i < thimble_after.size(); ++i) {
+        if (thimble_after[i - 1].stamp_ns <= zero_from_ns ||
+            thimble_after[i].tick != thimble_after[i - 1].tick + 1) {
+            continue;
+        }
+        const double previous = fromRetract(thimble_after[i - 1], retract);
+        EXPECT_NEAR(fromRetract(thimble_after[i], retract), std::max(previous - step, 0.0), 1e-6)
+            << "tick " << thimble_after[i].tick;
+        ++ramped;
+    }
+    EXPECT_GT(ramped, 400U);
+    ASSERT_FALSE(thimble_after.empty());
+    EXPECT_LT(fromRetract(thimble_after.back(), retract), 1e-9) << "not back at the retract pose";
     const auto status = hapticctl({"status"});
     EXPECT_THAT(status.out, HasSubstr("NOT CONNECTED"));
 }
