@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The README's main command: builds if needed, starts the real iox-roudi with our memory
-# pools, then hapticd and handsim, and shows `hapticctl status` live. Stops everything on
-# Ctrl-C or after --duration and checks that no shared memory is left behind.
+# pools, `hapticemu` for the exoskeleton and the thimble on the UDP CAN bus (the shipped device
+# files say can.transport: udp), then hapticd and handsim, and shows `hapticctl status` live.
+# Stops everything on Ctrl-C or after --duration and checks that no shared memory is left
+# behind.
 #
 #   scripts/demo.sh [--duration SECONDS] [--realtime enforce|ignore]
 set -euo pipefail
@@ -30,6 +32,7 @@ fi
 HAPTICD="$BUILD/daemon/hapticd/hapticd"
 HANDSIM="$BUILD/sim/handsim/handsim"
 HAPTICCTL="$BUILD/daemon/hapticctl/hapticctl"
+HAPTICEMU="$BUILD/drivers/hapticemu"
 LOGS=$(mktemp -d /tmp/haptic-demo.XXXXXX)
 PIDS=()
 
@@ -57,6 +60,8 @@ cleanup() {
   echo "demo: shutting down"
   [[ -n "${SIM_PID:-}" ]] && stop "$SIM_PID" handsim
   [[ -n "${DAEMON_PID:-}" ]] && stop "$DAEMON_PID" hapticd
+  [[ -n "${THIMBLE_EMU_PID:-}" ]] && stop "$THIMBLE_EMU_PID" hapticemu-thimble
+  [[ -n "${EXO_EMU_PID:-}" ]] && stop "$EXO_EMU_PID" hapticemu-exo
   [[ -n "${ROUDI_PID:-}" ]] && stop "$ROUDI_PID" iox-roudi
   local stale
   stale=$(ls /dev/shm/iceoryx_mgmt /dev/shm/"$(id -gn)" /tmp/roudi /tmp/roudi.lock \
@@ -86,6 +91,15 @@ for _ in $(seq 200); do
   sleep 0.05
 done
 
+echo "demo: starting hapticemu for both devices on the UDP CAN bus"
+# stdin from /dev/null: no fault commands; the emulators run until stopped.
+setsid "$HAPTICEMU" -d "$ROOT/config/devices/exoskeleton.yaml" --bus udp </dev/null \
+  >"$LOGS/hapticemu-exo.log" 2>&1 &
+EXO_EMU_PID=$!
+setsid "$HAPTICEMU" -d "$ROOT/config/devices/thimble.yaml" --bus udp </dev/null \
+  >"$LOGS/hapticemu-thimble.log" 2>&1 &
+THIMBLE_EMU_PID=$!
+
 echo "demo: starting hapticd (--realtime $REALTIME) and handsim"
 setsid "$HAPTICD" --realtime "$REALTIME" >"$LOGS/hapticd.log" 2>&1 &
 DAEMON_PID=$!
@@ -95,7 +109,8 @@ SIM_PID=$!
 start=$SECONDS
 while :; do
   sleep 2
-  for pid_name in "$DAEMON_PID:hapticd" "$SIM_PID:handsim"; do
+  for pid_name in "$DAEMON_PID:hapticd" "$SIM_PID:handsim" "$EXO_EMU_PID:hapticemu-exo" \
+      "$THIMBLE_EMU_PID:hapticemu-thimble"; do
     if ! kill -0 "${pid_name%%:*}" 2>/dev/null; then
       echo "demo: ${pid_name#*:} exited; its log:" >&2
       tail -n 20 "$LOGS/${pid_name#*:}.log" >&2

@@ -129,13 +129,17 @@ void DeviceChannel::write() noexcept {
     if (result == can::IoResult::kOk) {
         ++tx_frames_;
         failed_transmits_ = 0;
+    } else if (result == can::IoResult::kBusOff) {
+        ++tx_errors_;  // bus-off is its own fault; the refused writes are its consequence
     } else {
         ++tx_errors_;
         ++failed_transmits_;
     }
 }
 
-void DeviceChannel::fillLinkReport(bool rendering, double gain, std::int64_t now_ns) noexcept {
+void DeviceChannel::fillLinkReport(msgs::DaemonState state, double gain,
+                                   std::int64_t now_ns) noexcept {
+    const bool rendering = state == msgs::DaemonState::kRendering;
     report_.attached = true;
     if (latched_ != 0) {
         report_.run_state = msgs::DeviceRunState::kFault;
@@ -146,8 +150,10 @@ void DeviceChannel::fillLinkReport(bool rendering, double gain, std::int64_t now
         report_.run_state = msgs::DeviceRunState::kSafe;
     } else if (rendering) {
         report_.run_state = msgs::DeviceRunState::kActive;
-    } else {
+    } else if (state == msgs::DaemonState::kIdle) {
         report_.run_state = msgs::DeviceRunState::kReady;
+    } else {
+        report_.run_state = msgs::DeviceRunState::kSafe;  // FAULT, E-STOP (or INIT)
     }
 
     std::uint32_t bits = 0;

@@ -110,7 +110,6 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     }
     // Without a fresh device state the guard fades the last good force out (never a step).
     const kinesthetic::PortCommand port = guard_.apply(desired_n, stroke_m_, state_fresh);
-    const bool rendering = core.stateMachine().rendering();
     const double gain = heldSafe() ? 0.0 : core.outputGain(index);
     const double force_n = port.force_n * gain;
     // The passivity observer must book the force really applied, which the gain may reduce.
@@ -118,7 +117,7 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     command_.force_n = force_n;
     command_.enable = gain > 0.0;
 
-    fillLinkReport(rendering, gain, now_ns);
+    fillLinkReport(core.state(), gain, now_ns);
     for (Eigen::Index i = 0; i < q_.size(); ++i) {
         const auto k = static_cast<std::size_t>(i);
         report_.joint_position_rad[k] = q_[i];

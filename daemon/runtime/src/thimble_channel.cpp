@@ -86,13 +86,12 @@ void ThimbleChannel::compute(daemon::DaemonCore& core, std::size_t index,
         solved_from_ = accepted;
     }
 
-    const bool rendering = core.stateMachine().rendering();
     // A stale device state cannot be trusted to be where we think: retract as well.
     const double gain = heldSafe() || !state_fresh ? 0.0 : core.outputGain(index);
     const tactile::LimitedServoCommand limited = limiter_.step(blend(gain), settings_.period_s);
     command_.servo_target_rad = limited.servo_rad;
 
-    fillLinkReport(rendering, gain, now_ns);
+    fillLinkReport(core.state(), gain, now_ns);
     for (std::size_t i = 0; i < 3; ++i) {
         report_.joint_position_rad[i] = state.servos.servo_angle_rad[i];
         report_.actuator_position[i] = state.servos.servo_angle_rad[i];

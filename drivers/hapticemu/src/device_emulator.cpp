@@ -7,8 +7,10 @@
 namespace haptic::emu {
 
 void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
+    bool first_tick = false;
     if (!started_) {
         started_ = true;
+        first_tick = true;
         start_ns_ = now_ns;
         next_heartbeat_ns_ = now_ns;
         next_tick_ns_ = now_ns + options_.tick_ns;
@@ -40,14 +42,20 @@ void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
     }
     if (options_.mode == EmulatorMode::kStream) {
         // Bounded catch-up: after a long stall the model jumps rather than spinning.
+        bool stepped = first_tick;  // the device reports its state once at start, too
         for (int i = 0; i < 10 && now_ns >= next_tick_ns_; ++i) {
             next_tick_ns_ += options_.tick_ns;
             stepModel(tickSeconds());
+            stepped = true;
         }
         if (now_ns >= next_tick_ns_) {
             next_tick_ns_ = now_ns + options_.tick_ns;
         }
-        sendState(now_ns);
+        // State once per model tick, as the device does: tick() also runs whenever a frame
+        // wakes the emulator's loop, which must not multiply the state rate.
+        if (stepped) {
+            sendState(now_ns);
+        }
     }
     faults_.flush(bus_, now_ns);
 }

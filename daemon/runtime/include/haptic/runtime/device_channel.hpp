@@ -83,7 +83,10 @@ class DeviceChannel {
     [[nodiscard]] virtual std::uint8_t deviceFaultCode() const noexcept = 0;
 
     // Run state, status bits, bus counters and frame age of report_ for this tick.
-    void fillLinkReport(bool rendering, double gain, std::int64_t now_ns) noexcept;
+    // READY: heard, healthy, daemon IDLE. ACTIVE: rendering with a gain above zero. SAFE:
+    // held at zero force / retracted (stale state, stale sim input, FAULT or E-STOP of the
+    // daemon). FAULT: this device's own latched fault. OFFLINE: never heard from.
+    void fillLinkReport(msgs::DaemonState state, double gain, std::int64_t now_ns) noexcept;
 
     ChannelSettings settings_;
     daemon::DeviceReport report_{};

@@ -1,0 +1,499 @@
+// End-to-end safety of hapticd with devices attached: the real iox-roudi, hapticd, handsim,
+// hapticctl and one `hapticemu` process per device on the UDP CAN bus. The test reads
+// haptic/status and haptic/telemetry over DDS itself (stamps are CLOCK_MONOTONIC, the clock it
+// kills the sim by) and publishes its own ConstraintSets over iceoryx where it needs exact
+// control of the sim input. Shares RouDi's socket with end_to_end_test: same RESOURCE_LOCK.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
+#include <memory>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include "HapticStatusPubSubTypes.h"
+#include "HapticTelemetryPubSubTypes.h"
+#include "child_process.hpp"
+#include "emulator_process.hpp"
+#include "haptic/ipc/dds_participant.hpp"
+#include "haptic/ipc/iceoryx_runtime.hpp"
+#include "haptic/ipc/topics.hpp"
+#include "haptic/msgs/conversions.hpp"
+
+namespace haptic::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using namespace std::chrono_literals;
+
+const std::string kConfigDir = HAPTIC_CONFIG_DIR;
+constexpr std::size_t kExo = 0;
+constexpr std::size_t kThimble = 1;
+constexpr std::size_t kAllDevices = 99;
+constexpr double kMaxStepN = 0.5 + 1e-6;  // safety.max_force_rate_n_per_s 500 at 1 kHz
+
+std::int64_t monotonicNs() {
+    timespec ts{};
+    ::clock_gettime(CLOCK_MONOTONIC, &ts);
+    return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+std::string readFile(const fs::path& path) {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+void replaceLine(const fs::path& path, const std::string& from, const std::string& to) {
+    std::string text = readFile(path);
+    const auto at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from << " not in " << path;
+    text.replace(at, from.size(), to);
+    std::ofstream(path) << text;
+}
+
+// The shipped configuration, copied, with each device on its own UDP bus (a port block per
+// test process, so parallel ctest runs never share one) and timeouts that tolerate a loaded
+// 2-core VM under ASan: a stalled emulator must not look like a lost device here.
+struct TestConfig {
+    TestConfig() {
+        dir = fs::temp_directory_path() / ("haptic-safety-" + std::to_string(::getpid()));
+        fs::remove_all(dir);
+        fs::copy(kConfigDir, dir, fs::copy_options::recursive);
+        const int base = 40000 + (::getpid() % 600) * 16;
+        exo_port = base;
+        thimble_port = base + 8;
+        const std::string timeouts_from = "heartbeat_timeout_ms: 50";
+        replaceLine(dir / "devices/exoskeleton.yaml", "udp_port: 47000",
+                    "udp_port: " + std::to_string(exo_port));
+        replaceLine(dir / "devices/thimble.yaml", "udp_port: 47000",
+                    "udp_port: " + std::to_string(thimble_port));
+        for (const char* device : {"devices/exoskeleton.yaml", "devices/thimble.yaml"}) {
+            replaceLine(dir / device, timeouts_from, "heartbeat_timeout_ms: 250");
+            replaceLine(dir / device, "state_timeout_ms: 10", "state_timeout_ms: 50");
+        }
+    }
+    ~TestConfig() { fs::remove_all(dir); }
+
+    fs::path dir;
+    int exo_port{0};
+    int thimble_port{0};
+};
+
+std::string domain() {
+    return std::to_string(100 + (::getpid() + 37) % 100);
+}
+
+class DeviceSafetyTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        ASSERT_FALSE(ipc::probeRoudi().reachable)
+            << "an iox-roudi is already running on this host; stop it (and the demo) first";
+        roudi_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l",
+                                     "warning"},
+            "roudi");
+        const auto deadline = std::chrono::steady_clock::now() + 10s;
+        while (!ipc::probeRoudi().reachable) {
+            ASSERT_TRUE(roudi_->running()) << roudi_->stderrText();
+            ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
+            std::this_thread::sleep_for(20ms);
+        }
+        exo_emu_ = startEmulator("devices/exoskeleton.yaml", config_.exo_port);
+        thimble_emu_ = startEmulator("devices/thimble.yaml", config_.thimble_port);
+        daemon_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{HAPTICD_PATH, "-c", (config_.dir / "daemon.yaml").string(),
+                                     "--realtime", "ignore", "--dds-domain", domain()},
+            "hapticd");
+        participant_ = std::make_unique<ipc::DdsParticipant>(
+            ipc::DdsSettings{static_cast<std::uint32_t>(std::stoi(domain())),
+                             kConfigDir + "/dds_profiles.xml", "haptic_participant"},
+            "device_safety_test");
+        status_reader_ = participant_->createReader<idl::HapticStatusPubSubType>(
+            ipc::kStatusTopic, ipc::TopicKind::kLatestState);
+        telemetry_reader_ = participant_->createReader<idl::HapticTelemetryPubSubType>(
+            ipc::kTelemetryTopic, ipc::TopicKind::kStream);
+        // Both devices heard and ready.
+        waitForStatus("both devices READY", [](const msgs::HapticStatus& s) {
+            return s.state == msgs::DaemonState::kIdle && s.devices.size() == 2 &&
+                   s.devices[0].state == msgs::DeviceRunState::kReady &&
+                   s.devices[1].state == msgs::DeviceRunState::kReady;
+        });
+    }
+
+    void TearDown() override {
+        sim_.reset();
+        if (daemon_) {
+            EXPECT_EQ(daemon_->terminate(), std::optional<int>(0)) << daemon_->stderrText();
+        }
+        daemon_.reset();
+        participant_.reset();
+        if (exo_emu_) {
+            exo_emu_->stop();
+        }
+        if (thimble_emu_) {
+            thimble_emu_->stop();
+        }
+        if (roudi_) {
+            roudi_->terminate();
+        }
+    }
+
+    std::unique_ptr<EmulatorProcess> startEmulator(const std::string& device, int port) {
+        auto emulator = std::make_unique<EmulatorProcess>(std::vector<std::string>{
+            HAPTICEMU_PATH, "-d", (config_.dir / device).string(), "--bus", "udp", "--udp-port",
+            std::to_string(port), "--udp-slots", "8"});
+        return emulator;
+    }
+
+    void startSim() {
+        sim_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{HANDSIM_PATH, "--dds-domain", domain()}, "handsim");
+    }
+
+    CommandResult hapticctl(std::vector<std::string> args) {
+        std::vector<std::string> argv{HAPTICCTL_PATH, "--dds-domain", domain()};
+        argv.insert(argv.end(), args.begin(), args.end());
+        return runCommand(argv, 20s);
+    }
+
+    // Takes haptic/status until `done` holds (20 s at most); returns the last status.
+    msgs::HapticStatus waitForStatus(const std::string& what,
+                                     const std::function<bool(const msgs::HapticStatus&)>& done) {
+        idl::HapticStatus sample;
+        msgs::HapticStatus status;
+        const auto deadline = std::chrono::steady_clock::now() + 20s;
+        while (std::chrono::steady_clock::now() < deadline) {
+            EXPECT_TRUE(daemon_->running()) << daemon_->stderrText();
+            if (!daemon_->running()) {
+                break;
+            }
+            if (status_reader_.waitAndTake(sample, 200ms) && msgs::fromIdl(sample, status).ok() &&
+                done(status)) {
+                return status;
+            }
+        }
+        ADD_FAILURE() << "timed out waiting for: " << what << "\nlast hapticd log:\n"
+                      << daemon_->stderrText();
+        return status;
+    }
+
+    // Every telemetry sample of `device` received within `duration`.
+    std::vector<msgs::TelemetrySample> collectTelemetry(std::size_t device,
+                                                        std::chrono::milliseconds duration,
+                                                        const std::function<void()>& during = {}) {
+        std::vector<msgs::TelemetrySample> samples;
+        idl::HapticTelemetry sample;
+        msgs::HapticTelemetry batch;
+        const auto end = std::chrono::steady_clock::now() + duration;
+        bool started = false;
+        while (std::chrono::steady_clock::now() < end) {
+            if (!started && during) {
+                during();
+                started = true;
+            }
+            if (!telemetry_reader_.waitAndTake(sample, 50ms) ||
+                !msgs::fromIdl(sample, batch).ok()) {
+                continue;
+            }
+            for (const auto& s : batch.samples) {
+                if (device == kAllDevices || s.device_index == device) {
+                    samples.push_back(s);
+                }
+            }
+        }
+        return samples;
+    }
+
+    void drainTelemetry() {
+        idl::HapticTelemetry sample;
+        while (telemetry_reader_.waitAndTake(sample, 0ms)) {
+        }
+    }
+
+    bool command(const std::string& verb, const std::string& argument = "") {
+        std::vector<std::string> args{verb};
+        if (!argument.empty()) {
+            args.push_back(argument);
+        }
+        const auto result = hapticctl(args);
+        EXPECT_EQ(result.exit_code, 0) << verb << ": " << result.out << result.err;
+        return result.exit_code == 0;
+    }
+
+    TestConfig config_;
+    std::unique_ptr<ChildProcess> roudi_;
+    std::unique_ptr<EmulatorProcess> exo_emu_;
+    std::unique_ptr<EmulatorProcess> thimble_emu_;
+    std::unique_ptr<ChildProcess> daemon_;
+    std::unique_ptr<ChildProcess> sim_;
+    std::unique_ptr<ipc::DdsParticipant> participant_;
+    ipc::DdsReader<idl::HapticStatus> status_reader_;
+    ipc::DdsReader<idl::HapticTelemetry> telemetry_reader_;
+};
+
+// Waits until the injector printed `token` (a line of its stdout); returns its output.
+std::string waitForOutput(EmulatorProcess& process, const std::string& token) {
+    const auto deadline = std::chrono::steady_clock::now() + 15s;
+    while (std::chrono::steady_clock::now() < deadline) {
+        const std::string out = process.output();
+        if (out.find(token) != std::string::npos) {
+            return out;
+        }
+        std::this_thread::sleep_for(20ms);
+    }
+    ADD_FAILURE() << "no '" << token << "' from the injector: " << process.output();
+    return process.output();
+}
+
+bool targetsNear(const msgs::TelemetrySample& a, const msgs::TelemetrySample& b) {
+    for (std::size_t k = 0; k < 3; ++k) {
+        if (!(std::abs(a.actuator_force_cmd[k] - b.actuator_force_cmd[k]) < 1e-3)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+TEST_F(DeviceSafetyTest, BadSimInputIsRejectedCountedAndDoesNotChangeTheOutput) {
+    // The injector is its own iceoryx process: RouDi signals every registered process when it
+    // stops, which must not be this test.
+    EmulatorProcess injector({SIM_INPUT_INJECTOR_PATH});
+    waitForOutput(injector, "ready");
+    const auto thimble_idle = collectTelemetry(kThimble, 100ms);
+    ASSERT_FALSE(thimble_idle.empty());
+
+    ASSERT_TRUE(command("enable"));
+    waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kRendering;
+    });
+    // Fade-in (100 ms) and the servo ramp to the contact pose: wait until the targets hold.
+    const auto steady_deadline = std::chrono::steady_clock::now() + 15s;
+    bool steady = false;
+    while (!steady && std::chrono::steady_clock::now() < steady_deadline) {
+        const auto window = collectTelemetry(kThimble, 200ms);
+        steady = window.size() > 50 &&
+                 std::all_of(window.begin(), window.end(), [&](const auto& sample) {
+                     return targetsNear(sample, window.front());
+                 });
+    }
+    ASSERT_TRUE(steady) << "the thimble's targets never settled";
+    const auto before = waitForStatus("a fresh status", [](const auto&) { return true; });
+    drainTelemetry();
+
+    ASSERT_TRUE(injector.sendCommand("bad on"));
+    const auto thimble = collectTelemetry(kThimble, 1500ms);
+    ASSERT_TRUE(injector.sendCommand("bad off"));
+    std::smatch sent_match;
+    const std::string out = waitForOutput(injector, "sent ");
+    ASSERT_TRUE(std::regex_search(out, sent_match, std::regex(R"(sent (\d+))"))) << out;
+    const std::uint64_t sent = std::stoull(sent_match[1]);
+    const auto after = waitForStatus("the rejections counted", [&](const msgs::HapticStatus& s) {
+        return s.sim_link.rejected - before.sim_link.rejected >= sent;
+    });
+    injector.stop();
+
+    EXPECT_GT(sent, 100U);
+    EXPECT_EQ(after.sim_link.rejected - before.sim_link.rejected, sent);
+    EXPECT_EQ(after.state, msgs::DaemonState::kRendering) << "bad input is not a device fault";
+    // The thimble's targets depend only on the accepted surfaces: not one bad message may
+    // move them. An accepted one would have sent the plate towards the retract pose, at least
+    // one servo-rate step (0.007 rad) per tick; re-solving the same good surface from the
+    // warm start moves them by ~1e-4 rad at most (the optimiser's 1 um step tolerance).
+    ASSERT_GT(thimble.size(), 500U);
+    const auto& pressed = thimble.front().actuator_force_cmd;
+    EXPECT_GT(std::abs(pressed[0] - thimble_idle.back().actuator_force_cmd[0]), 0.01)
+        << "the plate is not pressing";
+    for (const auto& sample : thimble) {
+        ASSERT_TRUE(targetsNear(sample, thimble.front()))
+            << "tick " << sample.tick << ": " << sample.actuator_force_cmd[0] << " "
+            << sample.actuator_force_cmd[1] << " " << sample.actuator_force_cmd[2] << " vs "
+            << pressed[0] << " " << pressed[1] << " " << pressed[2];
+    }
+    const auto status = hapticctl({"status"});
+    ASSERT_EQ(status.exit_code, 0) << status.err;
+    EXPECT_THAT(status.out, HasSubstr(std::to_string(after.sim_link.rejected) + " rejected"));
+}
+
+std::vector<msgs::TelemetrySample> ofDevice(const std::vector<msgs::TelemetrySample>& samples,
+                                            std::size_t device) {
+    std::vector<msgs::TelemetrySample> out;
+    std::copy_if(samples.begin(), samples.end(), std::back_inserter(out),
+                 [&](const auto& sample) { return sample.device_index == device; });
+    return out;
+}
+
+// Largest distance of a servo target from the retract targets (rad).
+double fromRetract(const msgs::TelemetrySample& sample, const msgs::TelemetrySample& retract) {
+    double largest = 0.0;
+    for (std::size_t k = 0; k < 3; ++k) {
+        largest = std::max(largest,
+                           std::abs(sample.actuator_force_cmd[k] - retract.actuator_force_cmd[k]));
+    }
+    return largest;
+}
+
+TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTimeout) {
+    startSim();
+    waitForStatus("sim connected", [](const msgs::HapticStatus& s) {
+        return s.sim_link.connected && s.sim_link.received > 20;
+    });
+    // IDLE holds the thimble at its retract pose: that is where a fade must take it.
+    const auto idle = collectTelemetry(kThimble, 100ms);
+    ASSERT_FALSE(idle.empty());
+    const msgs::TelemetrySample retract = idle.back();
+    ASSERT_TRUE(command("enable"));
+    waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kRendering;
+    });
+    // The default scene presses the fingertip now and then: kill the sim while the thimble's
+    // plate presses (the sim's contact alone decides that), preferably while the exoskeleton
+    // renders force too (that also depends on where the emulated user moves the finger).
+    drainTelemetry();
+    std::vector<msgs::TelemetrySample> exo;
+    std::vector<msgs::TelemetrySample> thimble;
+    const auto started = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - started < 30s) {
+        const auto window = collectTelemetry(kAllDevices, 30ms);
+        exo = ofDevice(window, kExo);
+        thimble = ofDevice(window, kThimble);
+        const bool pressing = !thimble.empty() && fromRetract(thimble.back(), retract) > 0.05;
+        const bool exo_force = !exo.empty() && std::abs(exo.back().actuator_force_cmd[0]) > 0.5;
+        if (pressing && (exo_force || std::chrono::steady_clock::now() - started > 15s)) {
+            break;
+        }
+    }
+    ASSERT_FALSE(thimble.empty());
+    ASSERT_GT(fromRetract(thimble.back(), retract), 0.05) << "the thimble never pressed";
+
+    const std::int64_t kill_ns = monotonicNs();
+    ::kill(sim_->pid(), SIGKILL);
+    const auto after = collectTelemetry(kAllDevices, 600ms);
+    ASSERT_TRUE(sim_->waitFor(5s).has_value());
+
+    // Every sim message reached hapticd before the kill; the RT thread takes the last one at
+    // its next tick (1 ms, plus up to 2 ms wake-up latency on a loaded VM), so from
+    // kill + sim_timeout (20 ms) + 3 ms on the output gain is zero.
+    const std::int64_t zero_from_ns = kill_ns + 20'000'000 + 3'000'000;
+    const auto exo_after = ofDevice(after, kExo);
+    std::size_t checked = 0;
+    for (std::size_t i = 0; i < exo_after.size(); ++i) {
+        const double force = exo_after[i].actuator_force_cmd[0];
+        if (exo_after[i].stamp_ns > zero_from_ns) {
+            EXPECT_EQ(force, 0.0) << "tick " << exo_after[i].tick << ", "
+                                  << (exo_after[i].stamp_ns - kill_ns) / 1e6
+                                  << " ms after the kill";
+            ++checked;
+        }
+        if (i > 0 && exo_after[i].tick == exo_after[i - 1].tick + 1) {
+            // Never a step up: at most the rate limit while the finger moves under the fade.
+            EXPECT_LE(std::abs(force) - std::abs(exo_after[i - 1].actuator_force_cmd[0]), kMaxStepN)
+                << "tick " << exo_after[i].tick;
+        }
+    }
+    EXPECT_GT(checked, 400U);
+
+    // The thimble: at gain zero the commanded pose is the retract pose, which the servo
+    // limiter approaches at exactly servos.max_rate_deg_per_s (400 deg/s: 6.98 mrad per tick)
+    // on the servo farthest from it, never moving back towards the pad.
+    const double step = 400.0 * M_PI / 180.0 * 1e-3;
+    const auto thimble_after = ofDevice(after, kThimble);
+    std::size_t ramped = 0;
+    for (std::size_t i = 1; i < thimble_after.size(); ++i) {
+        if (thimble_after[i - 1].stamp_ns <= zero_from_ns ||
+            thimble_after[i].tick != thimble_after[i - 1].tick + 1) {
+            continue;
+        }
+        const double previous = fromRetract(thimble_after[i - 1], retract);
+        EXPECT_NEAR(fromRetract(thimble_after[i], retract), std::max(previous - step, 0.0), 1e-6)
+            << "tick " << thimble_after[i].tick;
+        ++ramped;
+    }
+    EXPECT_GT(ramped, 400U);
+    ASSERT_FALSE(thimble_after.empty());
+    EXPECT_LT(fromRetract(thimble_after.back(), retract), 1e-9) << "not back at the retract pose";
+    const auto status = hapticctl({"status"});
+    EXPECT_THAT(status.out, HasSubstr("NOT CONNECTED"));
+}
+
+TEST_F(DeviceSafetyTest, EstopClearHeartbeatLossAndBusOffShowInStatusWithZeroForce) {
+    const auto expectZeroExoForce = [&](const char* when) {
+        drainTelemetry();
+        const auto samples = collectTelemetry(kExo, 300ms);
+        ASSERT_GT(samples.size(), 100U) << when;
+        for (const auto& sample : samples) {
+            ASSERT_EQ(sample.actuator_force_cmd[0], 0.0) << when << ", tick " << sample.tick;
+        }
+    };
+
+    // (e) E-STOP and clear with both devices attached.
+    ASSERT_TRUE(command("enable"));
+    waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kRendering;
+    });
+    ASSERT_TRUE(command("estop"));
+    auto status = waitForStatus(
+        "E-STOP", [](const msgs::HapticStatus& s) { return s.state == msgs::DaemonState::kEstop; });
+    EXPECT_EQ(status.devices[kExo].state, msgs::DeviceRunState::kSafe);
+    expectZeroExoForce("during E-STOP");
+    ASSERT_TRUE(command("clear"));
+    waitForStatus("IDLE, devices ready", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kIdle &&
+               s.devices[1].state == msgs::DeviceRunState::kReady;
+    });
+
+    // (b) The thimble's heartbeat stops: FAULT naming the thimble.
+    ASSERT_TRUE(command("enable"));
+    ASSERT_TRUE(thimble_emu_->sendCommand("heartbeat stop"));
+    status = waitForStatus("FAULT", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kFault && !s.faults.empty();
+    });
+    ASSERT_EQ(status.faults.size(), 1U);
+    EXPECT_EQ(status.faults[0].device_id.view(), "thimble");
+    EXPECT_EQ(status.faults[0].code, 100U);
+    EXPECT_EQ(status.devices[1].state, msgs::DeviceRunState::kFault);
+    auto text = hapticctl({"status"});
+    EXPECT_THAT(text.out, HasSubstr("State: FAULT"));
+    EXPECT_THAT(text.out, HasSubstr("[100] thimble: heartbeat lost"));
+    EXPECT_THAT(text.out, ::testing::ContainsRegex("thimble +thimble +FAULT"));
+    expectZeroExoForce("after the heartbeat loss");
+
+    ASSERT_TRUE(thimble_emu_->sendCommand("heartbeat start"));
+    std::this_thread::sleep_for(100ms);
+    ASSERT_TRUE(command("clear"));
+    waitForStatus("IDLE after clear", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kIdle && s.faults.empty() &&
+               s.devices[1].state == msgs::DeviceRunState::kReady;
+    });
+
+    // (c) Bus-off on the exoskeleton's bus: FAULT naming only the exoskeleton.
+    ASSERT_TRUE(command("enable"));
+    ASSERT_TRUE(exo_emu_->sendCommand("busoff"));
+    status = waitForStatus("bus-off FAULT", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kFault && !s.faults.empty();
+    });
+    ASSERT_EQ(status.faults.size(), 1U);
+    EXPECT_EQ(status.faults[0].device_id.view(), "exo");
+    EXPECT_EQ(status.faults[0].code, 101U);
+    EXPECT_EQ(status.devices[kExo].can.bus_state, msgs::BusState::kBusOff);
+    text = hapticctl({"status"});
+    EXPECT_THAT(text.out, HasSubstr("[101] exo: CAN bus-off"));
+    EXPECT_THAT(text.out, ::testing::ContainsRegex("exo +exoskeleton +FAULT +bus bus-off"));
+    expectZeroExoForce("after bus-off");
+}
+
+}  // namespace
+}  // namespace haptic::testing
