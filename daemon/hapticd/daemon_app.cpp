@@ -12,6 +12,7 @@
 #include "HapticStatusPubSubTypes.h"
 #include "HapticTelemetryPubSubTypes.h"
 #include "command_relay.hpp"
+#include "dds_sim_link.hpp"
 #include "haptic/daemon/command_channel.hpp"
 #include "haptic/daemon/daemon_core.hpp"
 #include "haptic/daemon/seqlock.hpp"
@@ -51,7 +52,7 @@ iox::popo::SubscriberOptions latestValueOptions() {
 }
 
 // The iceoryx endpoints of one device. Exactly one of the two subscribers exists, matching
-// the device kind.
+// the device kind; none exist when the sim link is DDS (see dds_sim_link.hpp).
 struct DeviceEndpoints {
     std::unique_ptr<iox::popo::Subscriber<msgs::ConstraintSet>> constraint_sets;
     std::unique_ptr<iox::popo::Subscriber<msgs::ContactSurface>> contact_surfaces;
@@ -102,9 +103,11 @@ std::vector<daemon::DeviceDescriptor> deviceDescriptors(const config::DaemonConf
 class RealtimeLoop {
   public:
     RealtimeLoop(const config::DaemonConfig& cfg, std::vector<DeviceEndpoints>& endpoints,
-                 daemon::CommandChannel& commands, TelemetryQueue& telemetry)
+                 DdsSimLink* dds_sim_link, daemon::CommandChannel& commands,
+                 TelemetryQueue& telemetry)
         : core_(coreSettings(cfg), deviceDescriptors(cfg)),
           endpoints_(endpoints),
+          dds_sim_link_(dds_sim_link),
           commands_(commands),
           telemetry_(telemetry),
           realtime_{cfg.loop.realtime == config::RealtimeMode::kEnforce
@@ -188,6 +191,10 @@ class RealtimeLoop {
     }
 
     void takeSimInputs(std::int64_t now_ns) noexcept {
+        if (dds_sim_link_ != nullptr) {
+            takeDdsSimInputs(now_ns);
+            return;
+        }
         for (std::size_t i = 0; i < endpoints_.size(); ++i) {
             auto& endpoint = endpoints_[i];
             if (endpoint.constraint_sets) {
@@ -201,6 +208,17 @@ class RealtimeLoop {
                     (void)core_.offerContactSurface(i, *sample, now_ns);
                 })) {
                 }
+            }
+        }
+    }
+
+    void takeDdsSimInputs(std::int64_t now_ns) noexcept {
+        for (std::size_t i = 0; i < dds_sim_link_->deviceCount(); ++i) {
+            if (const auto* message = dds_sim_link_->takeConstraintSet(i)) {
+                (void)core_.offerConstraintSet(i, *message, now_ns);
+            }
+            if (const auto* message = dds_sim_link_->takeContactSurface(i)) {
+                (void)core_.offerContactSurface(i, *message, now_ns);
             }
         }
     }
@@ -226,6 +244,11 @@ class RealtimeLoop {
 
     void publishDeviceStates(std::int64_t now_ns) noexcept {
         for (std::size_t i = 0; i < endpoints_.size(); ++i) {
+            if (dds_sim_link_ != nullptr) {
+                core_.fillDeviceState(i, now_ns, device_state_scratch_);
+                dds_sim_link_->storeDeviceState(i, device_state_scratch_);
+                continue;
+            }
             endpoints_[i].device_state->loan().and_then([&](auto& sample) {
                 core_.fillDeviceState(i, now_ns, *sample);
                 sample.publish();
@@ -235,6 +258,8 @@ class RealtimeLoop {
 
     daemon::DaemonCore core_;
     std::vector<DeviceEndpoints>& endpoints_;
+    DdsSimLink* dds_sim_link_;  // null when the sim link is iceoryx
+    msgs::DeviceState device_state_scratch_{};
     daemon::CommandChannel& commands_;
     msgs::HapticCommand command_scratch_{};
     msgs::HapticCommandReply reply_scratch_{};
@@ -256,18 +281,19 @@ class RealtimeLoop {
 
 int runDaemon(const DaemonOptions& options) {
     const auto& cfg = options.config;
-    if (cfg.sim_link.transport != config::SimTransport::kIceoryx) {
-        spdlog::error(
-            "{}: sim_link.transport 'dds' is not available in this version; the DDS sim "
-            "link arrives with the runtime issue. Use 'iceoryx'.",
-            cfg.source.string());
-        return EXIT_FAILURE;
+    // Over DDS the daemon needs no RouDi: the sim link is its only iceoryx user.
+    const bool dds_sim = cfg.sim_link.transport == config::SimTransport::kDds;
+    if (!dds_sim) {
+        ipc::initIceoryxRuntime("hapticd");
     }
-
-    ipc::initIceoryxRuntime("hapticd");
     std::vector<DeviceEndpoints> endpoints(cfg.devices.size());
     for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
         const auto& device = cfg.devices[i];
+        spdlog::info("device '{}' ({}) from {}", device.name,
+                     device.isExoskeleton() ? "exoskeleton" : "thimble", device.source.string());
+        if (dds_sim) {
+            continue;
+        }
         if (device.isExoskeleton()) {
             endpoints[i].constraint_sets =
                 std::make_unique<iox::popo::Subscriber<msgs::ConstraintSet>>(
@@ -281,8 +307,6 @@ int runDaemon(const DaemonOptions& options) {
         publisher_options.historyCapacity = 1;
         endpoints[i].device_state = std::make_unique<iox::popo::Publisher<msgs::DeviceState>>(
             serviceFor(device.name, ipc::kDeviceStateEvent), publisher_options);
-        spdlog::info("device '{}' ({}) from {}", device.name,
-                     device.isExoskeleton() ? "exoskeleton" : "thimble", device.source.string());
     }
 
     ipc::DdsParticipant participant(
@@ -318,7 +342,19 @@ int runDaemon(const DaemonOptions& options) {
             telemetry_writer.write(msgs::toIdl(batch));
         }
     };
-    RealtimeLoop loop(cfg, endpoints, commands, *telemetry);
+    std::unique_ptr<DdsSimLink> dds_sim_link;
+    if (dds_sim) {
+        std::vector<SimLinkDevice> link_devices;
+        for (const auto& device : cfg.devices) {
+            link_devices.push_back({device.name, device.isExoskeleton()
+                                                     ? msgs::DeviceKind::kExoskeleton
+                                                     : msgs::DeviceKind::kThimble});
+        }
+        dds_sim_link = std::make_unique<DdsSimLink>(participant, std::move(link_devices));
+        dds_sim_link->start();
+        spdlog::info("sim link over DDS on domain {} (no RouDi needed)", cfg.dds.domain_id);
+    }
+    RealtimeLoop loop(cfg, endpoints, dds_sim_link.get(), commands, *telemetry);
     loop.start();
     while (loop.startState() == 0) {
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -376,6 +412,15 @@ int runDaemon(const DaemonOptions& options) {
     loop.stop();
     spdlog::info("stopped after {} ticks ({} telemetry samples dropped)", loop.ticks(),
                  loop.telemetryDropped());
+    if (dds_sim_link) {
+        dds_sim_link->stop();
+        for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
+            spdlog::info("sim link dds: device '{}': received {} messages", cfg.devices[i].name,
+                         dds_sim_link->received(i));
+        }
+        spdlog::info("sim link dds: {} unconvertible messages dropped, {} device states published",
+                     dds_sim_link->unconvertible(), dds_sim_link->statesPublished());
+    }
     return EXIT_SUCCESS;
 }
 

@@ -18,6 +18,7 @@
 #include "haptic/sim/placeholder_fingertip_plane.hpp"
 #include "iceoryx_posh/popo/publisher.hpp"
 #include "iceoryx_posh/popo/subscriber.hpp"
+#include "sim_link_dds.hpp"
 
 namespace haptic::handsim {
 namespace {
@@ -82,18 +83,18 @@ int runSim(const SimOptions& options) {
             cfg.scene.source.string(), cfg.scene.name);
         return EXIT_FAILURE;
     }
-    if (cfg.sim_link.transport != config::SimTransport::kIceoryx) {
-        spdlog::error(
-            "{}: sim_link.transport 'dds' is not available in this version; use 'iceoryx'",
-            cfg.source.string());
-        return EXIT_FAILURE;
+    // Over DDS the sim needs no RouDi (and may run on another host).
+    const bool dds_sim = cfg.sim_link.transport == config::SimTransport::kDds;
+    if (!dds_sim) {
+        ipc::initIceoryxRuntime("handsim");
     }
-
-    ipc::initIceoryxRuntime("handsim");
     std::vector<DeviceLink> links(cfg.devices.size());
     for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
         const auto& device = cfg.devices[i];
         links[i].device = &device;
+        if (dds_sim) {
+            continue;
+        }
         if (device.isExoskeleton()) {
             links[i].constraint_sets = std::make_unique<iox::popo::Publisher<msgs::ConstraintSet>>(
                 serviceFor(device.name, ipc::kConstraintSetEvent));
@@ -114,6 +115,14 @@ int runSim(const SimOptions& options) {
         "handsim");
     auto status_writer = participant.createWriter<idl::SimStatusPubSubType>(
         ipc::kSimStatusTopic, ipc::TopicKind::kLatestState);
+    std::unique_ptr<SimLinkDds> dds_link;
+    if (dds_sim) {
+        dds_link = std::make_unique<SimLinkDds>(participant, cfg.devices);
+        spdlog::info("sim link over DDS on domain {} (no RouDi needed)", cfg.dds.domain_id);
+    }
+    msgs::ConstraintSet dds_constraints;
+    msgs::ContactSurface dds_surface;
+    msgs::DeviceState dds_state;
 
     sim::PlaceholderFingertipPlane model(placeholderParameters(cfg));
     spdlog::warn(
@@ -139,8 +148,26 @@ int runSim(const SimOptions& options) {
         model.setTime(t_s);
         const std::int64_t stamp = monotonicNs();
 
-        for (auto& link : links) {
+        for (std::size_t i = 0; i < links.size(); ++i) {
+            auto& link = links[i];
             const std::string& name = link.device->name;
+            if (dds_link) {
+                if (link.device->isExoskeleton()) {
+                    dds_constraints = msgs::ConstraintSet{};
+                    model.fillConstraintSet(dds_constraints);
+                    dds_constraints.header = {++link.seq, stamp, {}};
+                    dds_constraints.header.source_id.assign(name);
+                    link.published += dds_link->publish(i, dds_constraints) ? 1 : 0;
+                } else {
+                    dds_surface = msgs::ContactSurface{};
+                    model.fillContactSurface(dds_surface);
+                    dds_surface.header = {++link.seq, stamp, {}};
+                    dds_surface.header.source_id.assign(name);
+                    link.published += dds_link->publish(i, dds_surface) ? 1 : 0;
+                }
+                link.states_received += dds_link->takeDeviceStates(i, dds_state);
+                continue;
+            }
             if (link.constraint_sets) {
                 link.constraint_sets->loan().and_then([&](auto& sample) {
                     *sample = msgs::ConstraintSet{};
