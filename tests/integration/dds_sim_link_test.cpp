@@ -96,9 +96,10 @@ TEST(DdsSimLink, DaemonAndSimTalkOverDdsOnlyAndAKilledSimGoesStale) {
     EXPECT_THAT(status, HasSubstr("Sim link: dds, NOT CONNECTED")) << status;
     ASSERT_TRUE(daemon.running()) << "a dead sim must not take the daemon down";
 
-    // The DeviceState back-channel goes over DDS too: a fresh sim receives it.
+    // The DeviceState back-channel goes over DDS too: a fresh sim receives it (4 s leave room
+    // for DDS discovery, which can take over a second under ASan).
     ChildProcess sim2(
-        {HANDSIM_PATH, "--dds-domain", domain, "--sim-link", "dds", "--duration", "1.5"},
+        {HANDSIM_PATH, "--dds-domain", domain, "--sim-link", "dds", "--duration", "4"},
         "handsim-dds2");
     ASSERT_EQ(sim2.waitFor(15s), std::optional<int>(0)) << sim2.stderrText();
     std::smatch received;
