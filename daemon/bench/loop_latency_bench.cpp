@@ -46,6 +46,7 @@ struct BenchOptions {
     std::string daemon_config{HAPTIC_DEFAULT_CONFIG_DIR "/daemon.yaml"};
     std::string sim_config{HAPTIC_DEFAULT_CONFIG_DIR "/sim.yaml"};
     std::string realtime;  // hapticd --realtime override; empty = the config's
+    std::string sim_link;  // hapticd/handsim --sim-link override; empty = the config's
     std::vector<std::string> with;
     std::string output;
     std::string command_line;
@@ -114,6 +115,9 @@ DaemonLoopResult runDaemonLoop(const BenchOptions& options, const config::Daemon
         domain,       "--duration", fixed(options.duration_s + 5.0)};
     if (!options.realtime.empty()) {
         argv.insert(argv.end(), {"--realtime", options.realtime});
+    }
+    if (!options.sim_link.empty()) {
+        argv.insert(argv.end(), {"--sim-link", options.sim_link});
     }
     ChildProcess daemon(argv, "bench-hapticd");
 
@@ -197,8 +201,12 @@ std::string hostLine() {
     char date[32];
     const std::time_t now = std::time(nullptr);
     std::strftime(date, sizeof(date), "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
+    // Other work on the machine moves every number here; the load average says how much.
+    std::string load;
+    std::getline(std::ifstream("/proc/loadavg"), load);
     return std::string(date) + ", kernel " + host.release + " " + host.version + ", " +
-           std::to_string(std::thread::hardware_concurrency()) + " CPUs";
+           std::to_string(std::thread::hardware_concurrency()) + " CPUs, load average " +
+           load.substr(0, load.find(' ', load.find(' ', load.find(' ') + 1) + 1)) + " at the end";
 }
 
 std::string ratio(double daemon, double reference) {
@@ -217,7 +225,9 @@ std::string roudiConfig(const config::DaemonConfig& cfg) {
 int runBenchmark(const BenchOptions& options) {
     const auto cfg = config::loadDaemonConfig(options.daemon_config);
     const std::string domain = std::to_string(200 + ::getpid() % 30);
-    const bool iceoryx_daemon = cfg.sim_link.transport == config::SimTransport::kIceoryx;
+    const bool iceoryx_daemon = options.sim_link.empty()
+                                    ? cfg.sim_link.transport == config::SimTransport::kIceoryx
+                                    : options.sim_link == "iceoryx";
     std::unique_ptr<ChildProcess> roudi;
     if (!ipc::probeRoudi().reachable) {
         roudi = std::make_unique<ChildProcess>(
@@ -313,6 +323,9 @@ int main(int argc, char** argv) {
         ->check(CLI::ExistingFile);
     app.add_option("--realtime", options.realtime, "hapticd --realtime override")
         ->check(CLI::IsMember({"enforce", "ignore"}));
+    app.add_option("--sim-link", options.sim_link,
+                   "hapticd's and handsim's sim link during the loop phase (default: the config's)")
+        ->check(CLI::IsMember({"iceoryx", "dds"}));
     app.add_option("--with", options.with,
                    "another process to run during the benchmark, e.g. '/usr/bin/hapticemu ...' "
                    "(absolute path first; repeatable)");
