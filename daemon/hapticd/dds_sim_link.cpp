@@ -125,7 +125,8 @@ void DdsSimLink::drain(Device& device) {
                 name, reason, count);
         }
     };
-    bool any = false;
+    // Each convertible message is stored at once: a later unconvertible one must not leave a
+    // half-overwritten twin behind to be stored.
     if (device.descriptor.kind == msgs::DeviceKind::kExoskeleton) {
         while (device.constraint_reader.take(device.idl_constraints)) {
             const auto result = msgs::fromIdl(device.idl_constraints, device.constraints);
@@ -133,10 +134,7 @@ void DdsSimLink::drain(Device& device) {
                 reject(result.error);
                 continue;
             }
-            any = true;
             device.received.fetch_add(1, std::memory_order_relaxed);
-        }
-        if (any) {
             device.constraint_slot.store(device.constraints);
         }
     } else {
@@ -146,10 +144,7 @@ void DdsSimLink::drain(Device& device) {
                 reject(result.error);
                 continue;
             }
-            any = true;
             device.received.fetch_add(1, std::memory_order_relaxed);
-        }
-        if (any) {
             device.surface_slot.store(device.surface);
         }
     }

@@ -35,7 +35,7 @@ bool SimLinkDds::publish(std::size_t device, const msgs::ContactSurface& message
 std::size_t SimLinkDds::takeDeviceStates(std::size_t device, msgs::DeviceState& latest) {
     std::size_t taken = 0;
     while (links_[device].state_reader.take(idl_state_)) {
-        const auto result = msgs::fromIdl(idl_state_, latest);
+        const auto result = msgs::fromIdl(idl_state_, state_);
         if (!result.ok()) {
             if (unconvertible_states_++ % 1000 == 0) {
                 spdlog::warn("sim link dds: dropped a DeviceState that fits no twin: {}",
@@ -43,6 +43,7 @@ std::size_t SimLinkDds::takeDeviceStates(std::size_t device, msgs::DeviceState& 
             }
             continue;
         }
+        latest = state_;  // only a complete conversion replaces the caller's state
         ++taken;
     }
     return taken;

@@ -41,6 +41,7 @@ class SimLinkDds {
     };
     std::vector<DeviceLink> links_;
     idl::DeviceState idl_state_;
+    msgs::DeviceState state_{};
     std::uint64_t unconvertible_states_{0};
 };
 
