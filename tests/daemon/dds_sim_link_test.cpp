@@ -59,17 +59,20 @@ class DdsSimLinkTest : public ::testing::Test {
         link_.start();
     }
 
-    // Publishes until the link delivers (matching takes a moment); returns the message taken.
-    const msgs::ConstraintSet* publishUntilTaken(std::uint64_t seq) {
+    // Publishes once the link's reader has matched (reliable from then on) and waits for the
+    // RT side to take it; returns the message taken, or nullptr after 10 s.
+    const msgs::ConstraintSet* publishAndTake(std::uint64_t seq) {
         const auto deadline = std::chrono::steady_clock::now() + 10s;
+        while (constraint_writer_.matchedReaders() == 0 &&
+               std::chrono::steady_clock::now() < deadline) {
+            std::this_thread::sleep_for(1ms);
+        }
+        constraint_writer_.write(msgs::toIdl(constraintSet(seq)));
         while (std::chrono::steady_clock::now() < deadline) {
-            constraint_writer_.write(msgs::toIdl(constraintSet(seq)));
-            for (int i = 0; i < 20; ++i) {
-                if (const auto* taken = link_.takeConstraintSet(0)) {
-                    return taken;
-                }
-                std::this_thread::sleep_for(1ms);
+            if (const auto* taken = link_.takeConstraintSet(0)) {
+                return taken;
             }
+            std::this_thread::sleep_for(1ms);
         }
         return nullptr;
     }
@@ -82,7 +85,7 @@ class DdsSimLinkTest : public ::testing::Test {
 };
 
 TEST_F(DdsSimLinkTest, DeliversEachDevicesNewestMessageOnceToTheRtSide) {
-    const auto* taken = publishUntilTaken(7);
+    const auto* taken = publishAndTake(7);
     ASSERT_NE(taken, nullptr) << "no ConstraintSet arrived over DDS within 10 s";
     EXPECT_EQ(taken->header.seq, 7U);
     EXPECT_EQ(taken->header.source_id.view(), "exo");
@@ -90,6 +93,9 @@ TEST_F(DdsSimLinkTest, DeliversEachDevicesNewestMessageOnceToTheRtSide) {
     EXPECT_EQ(link_.takeContactSurface(0), nullptr) << "the exoskeleton has no contact surface";
     EXPECT_EQ(link_.takeContactSurface(1), nullptr) << "nothing was sent to the thimble";
 
+    for (int i = 0; i < 10000 && surface_writer_.matchedReaders() == 0; ++i) {
+        std::this_thread::sleep_for(1ms);
+    }
     surface_writer_.write(msgs::toIdl(contactSurface(3)));
     const msgs::ContactSurface* surface = nullptr;
     for (int i = 0; i < 5000 && surface == nullptr; ++i) {
@@ -103,7 +109,7 @@ TEST_F(DdsSimLinkTest, DeliversEachDevicesNewestMessageOnceToTheRtSide) {
 }
 
 TEST_F(DdsSimLinkTest, RtSideNeitherAllocatesNorBlocks) {
-    ASSERT_NE(publishUntilTaken(1), nullptr);
+    ASSERT_NE(publishAndTake(1), nullptr);
     msgs::DeviceState state{};
     state.header.source_id.assign("thimble");
     std::uint64_t taken = 0;
@@ -137,6 +143,10 @@ TEST_F(DdsSimLinkTest, PublishesTheNewestDeviceStateForTheSim) {
     }
     ASSERT_TRUE(got) << "no DeviceState on DDS within 10 s";
     EXPECT_EQ(received.header().source_id(), "thimble");
+    // The link counts a write after DDS returns, which may be after the reader took it.
+    for (int i = 0; i < 1000 && link_.statesPublished() == 0; ++i) {
+        std::this_thread::sleep_for(1ms);
+    }
     EXPECT_GT(link_.statesPublished(), 0U);
 }
 
@@ -154,27 +164,31 @@ TEST(SeqLockTryLoad, FailsBeforeTheFirstStoreAndReturnsTheVersionAfter) {
 
 TEST(SeqLockTryLoad, NeverReportsATornCopyAsValid) {
     daemon::SeqLock<std::array<std::uint64_t, 64>> slot;
+    std::atomic<std::uint64_t> valid{0};
     std::atomic<bool> done{false};
+    // The writer keeps storing until the reader has checked enough copies (or 10 s pass, which
+    // only a tryLoad that never succeeds would need), so the test never passes vacuously.
     std::thread writer([&] {
         std::array<std::uint64_t, 64> value{};
-        for (std::uint64_t i = 1; i <= 100000; ++i) {
+        const auto deadline = std::chrono::steady_clock::now() + 10s;
+        for (std::uint64_t i = 1;
+             valid.load() < 2000 && std::chrono::steady_clock::now() < deadline; ++i) {
             value.fill(i);
             slot.store(value);
         }
         done = true;
     });
-    std::uint64_t valid = 0;
     while (!done) {
         std::array<std::uint64_t, 64> out{};
         if (slot.tryLoad(out) != 0) {
-            ++valid;
             for (auto word : out) {
                 ASSERT_EQ(word, out[0]) << "torn copy reported as valid";
             }
+            valid.fetch_add(1);
         }
     }
     writer.join();
-    EXPECT_GT(valid, 0U);
+    EXPECT_GE(valid.load(), 2000U);
 }
 
 }  // namespace
