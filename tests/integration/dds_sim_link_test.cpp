@@ -96,12 +96,17 @@ TEST(DdsSimLink, DaemonAndSimTalkOverDdsOnlyAndAKilledSimGoesStale) {
     EXPECT_THAT(status, HasSubstr("Sim link: dds, NOT CONNECTED")) << status;
     ASSERT_TRUE(daemon.running()) << "a dead sim must not take the daemon down";
 
-    // The DeviceState back-channel goes over DDS too: a fresh sim receives it (4 s leave room
-    // for DDS discovery, which can take over a second under ASan).
-    ChildProcess sim2(
-        {HANDSIM_PATH, "--dds-domain", domain, "--sim-link", "dds", "--duration", "4"},
-        "handsim-dds2");
-    ASSERT_EQ(sim2.waitFor(15s), std::optional<int>(0)) << sim2.stderrText();
+    // A fresh sim reconnects over DDS, and the DeviceState back-channel reaches it. It runs
+    // until the daemon reports the link connected again plus a moment, so a slow DDS
+    // discovery (ASan, a loaded machine) only makes the test wait longer.
+    ChildProcess sim2({HANDSIM_PATH, "--dds-domain", domain, "--sim-link", "dds"}, "handsim-dds2");
+    const unsigned long received_before = link.received;
+    status = pollStatus(daemon, 12s, [&](const SimLinkLine& line) {
+        return line.found && line.connected && line.received > received_before;
+    });
+    EXPECT_THAT(status, HasSubstr("Sim link: dds, connected")) << status;
+    std::this_thread::sleep_for(300ms);
+    ASSERT_EQ(sim2.terminate(), std::optional<int>(0)) << sim2.stderrText();
     std::smatch received;
     const std::string sim_log = sim2.stderrText();
     ASSERT_TRUE(std::regex_search(
@@ -111,7 +116,6 @@ TEST(DdsSimLink, DaemonAndSimTalkOverDdsOnlyAndAKilledSimGoesStale) {
     EXPECT_GT(std::stoul(received[1]), 0U) << sim_log;
     EXPECT_GT(std::stoul(received[2]), 0U) << "DeviceState did not reach the sim over DDS";
 
-    EXPECT_FALSE(ipc::probeRoudi().reachable);
     EXPECT_EQ(daemon.terminate(), std::optional<int>(0)) << daemon.stderrText();
     const std::string daemon_log = daemon.stderrText();
     EXPECT_THAT(daemon_log, HasSubstr("sim link over DDS"));
