@@ -210,7 +210,7 @@ std::string hostLine() {
 }
 
 std::string ratio(double daemon, double reference) {
-    if (reference <= 0.0) {
+    if (reference <= 0.0 || daemon <= 0.0) {
         return "n/a";
     }
     const double value = daemon / reference;
@@ -228,14 +228,24 @@ int runBenchmark(const BenchOptions& options) {
     const bool iceoryx_daemon = options.sim_link.empty()
                                     ? cfg.sim_link.transport == config::SimTransport::kIceoryx
                                     : options.sim_link == "iceoryx";
-    std::unique_ptr<ChildProcess> roudi;
+    // Its own RouDi, so no other iceoryx process (a demo, a running hapticd, a test) shares
+    // the measurement or takes RouDi away in the middle of it.
+    if (ipc::probeRoudi().reachable) {
+        std::fprintf(stderr,
+                     "hapticd_loop_bench: an iox-roudi is already running; stop it (and any "
+                     "hapticd, handsim or demo using it) first\n");
+        return EXIT_FAILURE;
+    }
+    auto roudi = std::make_unique<ChildProcess>(
+        std::vector<std::string>{IOX_ROUDI_EXECUTABLE, "-c", roudiConfig(cfg), "-l", "warning"},
+        "bench-roudi");
+    for (int i = 0; i < 500 && !ipc::probeRoudi().reachable; ++i) {
+        std::this_thread::sleep_for(20ms);
+    }
     if (!ipc::probeRoudi().reachable) {
-        roudi = std::make_unique<ChildProcess>(
-            std::vector<std::string>{IOX_ROUDI_EXECUTABLE, "-c", roudiConfig(cfg), "-l", "warning"},
-            "bench-roudi");
-        for (int i = 0; i < 500 && !ipc::probeRoudi().reachable; ++i) {
-            std::this_thread::sleep_for(20ms);
-        }
+        std::fprintf(stderr, "hapticd_loop_bench: iox-roudi did not come up: %s\n",
+                     roudi->stderrText().c_str());
+        return EXIT_FAILURE;
     }
     std::vector<std::unique_ptr<ChildProcess>> extra;
     for (const auto& command : options.with) {
@@ -258,9 +268,7 @@ int runBenchmark(const BenchOptions& options) {
     const ProbeResult iceoryx = runProbe(options, "iceoryx", domain, iceoryx_error);
     const ProbeResult dds = runProbe(options, "dds", domain, dds_error);
     extra.clear();
-    if (roudi) {
-        roudi->terminate();
-    }
+    roudi->terminate();
 
     std::string report = "### " + hostLine() + "\n\nCommand: `" + options.command_line +
                          "`\n\nSCHED_FIFO priority " + std::to_string(cfg.loop.priority) +
