@@ -6,12 +6,14 @@
 #include <atomic>
 #include <cstdlib>
 #include <memory>
+#include <optional>
 #include <thread>
 #include <vector>
 
 #include "HapticStatusPubSubTypes.h"
 #include "HapticTelemetryPubSubTypes.h"
 #include "command_relay.hpp"
+#include "dds_sim_link.hpp"
 #include "device_state_publisher.hpp"
 #include "haptic/daemon/command_channel.hpp"
 #include "haptic/daemon/daemon_core.hpp"
@@ -54,8 +56,8 @@ iox::popo::SubscriberOptions latestValueOptions() {
 }
 
 // The iceoryx endpoints of one device. Exactly one of the two subscribers exists, matching
-// the device kind. The RT thread takes from the subscribers; the publisher belongs to the
-// DeviceStatePublisher thread.
+// the device kind; none exist when the sim link is DDS (see dds_sim_link.hpp). The RT
+// thread takes from the subscribers; the publisher belongs to the DeviceStatePublisher thread.
 struct DeviceEndpoints {
     std::unique_ptr<iox::popo::Subscriber<msgs::ConstraintSet>> constraint_sets;
     std::unique_ptr<iox::popo::Subscriber<msgs::ContactSurface>> contact_surfaces;
@@ -106,11 +108,12 @@ std::vector<daemon::DeviceDescriptor> deviceDescriptors(const config::DaemonConf
 class RealtimeLoop {
   public:
     RealtimeLoop(const config::DaemonConfig& cfg, std::vector<DeviceEndpoints>& endpoints,
-                 daemon::CommandChannel& commands, TelemetryQueue& telemetry,
-                 runtime::DeviceRuntime& devices,
+                 DdsSimLink* dds_sim_link, daemon::CommandChannel& commands,
+                 TelemetryQueue& telemetry, runtime::DeviceRuntime& devices,
                  std::vector<std::unique_ptr<DeviceStateSnapshot>>& device_states)
         : core_(coreSettings(cfg), deviceDescriptors(cfg)),
           endpoints_(endpoints),
+          dds_sim_link_(dds_sim_link),
           devices_(devices),
           device_states_(device_states),
           commands_(commands),
@@ -199,6 +202,10 @@ class RealtimeLoop {
     }
 
     void takeSimInputs(std::int64_t now_ns) noexcept {
+        if (dds_sim_link_ != nullptr) {
+            takeDdsSimInputs(now_ns);
+            return;
+        }
         for (std::size_t i = 0; i < endpoints_.size(); ++i) {
             auto& endpoint = endpoints_[i];
             if (endpoint.constraint_sets) {
@@ -212,6 +219,17 @@ class RealtimeLoop {
                     (void)core_.offerContactSurface(i, *sample, now_ns);
                 })) {
                 }
+            }
+        }
+    }
+
+    void takeDdsSimInputs(std::int64_t now_ns) noexcept {
+        for (std::size_t i = 0; i < dds_sim_link_->deviceCount(); ++i) {
+            if (const auto* message = dds_sim_link_->takeConstraintSet(i)) {
+                (void)core_.offerConstraintSet(i, *message, now_ns);
+            }
+            if (const auto* message = dds_sim_link_->takeContactSurface(i)) {
+                (void)core_.offerContactSurface(i, *message, now_ns);
             }
         }
     }
@@ -235,16 +253,22 @@ class RealtimeLoop {
         }
     }
 
-    // The DeviceStatePublisher thread puts these on iceoryx.
+    // A non-RT thread puts these on the sim link: the DeviceStatePublisher on iceoryx, the
+    // DdsSimLink's writer on DDS.
     void storeDeviceStates(std::int64_t now_ns) noexcept {
         for (std::size_t i = 0; i < device_states_.size(); ++i) {
             core_.fillDeviceState(i, now_ns, device_state_scratch_);
-            device_states_[i]->store(device_state_scratch_);
+            if (dds_sim_link_ != nullptr) {
+                dds_sim_link_->storeDeviceState(i, device_state_scratch_);
+            } else {
+                device_states_[i]->store(device_state_scratch_);
+            }
         }
     }
 
     daemon::DaemonCore core_;
     std::vector<DeviceEndpoints>& endpoints_;
+    DdsSimLink* dds_sim_link_;  // null when the sim link is iceoryx
     runtime::DeviceRuntime& devices_;
     std::vector<std::unique_ptr<DeviceStateSnapshot>>& device_states_;
     msgs::DeviceState device_state_scratch_{};
@@ -269,19 +293,21 @@ class RealtimeLoop {
 
 int runDaemon(const DaemonOptions& options) {
     const auto& cfg = options.config;
-    if (cfg.sim_link.transport != config::SimTransport::kIceoryx) {
-        spdlog::error(
-            "{}: sim_link.transport 'dds' is not available in this version; the DDS sim "
-            "link arrives with the runtime issue. Use 'iceoryx'.",
-            cfg.source.string());
-        return EXIT_FAILURE;
+    // Over DDS the daemon needs no RouDi: the sim link is its only iceoryx user.
+    const bool dds_sim = cfg.sim_link.transport == config::SimTransport::kDds;
+    std::optional<ipc::RoudiWatch> roudi_watch;
+    if (!dds_sim) {
+        ipc::initIceoryxRuntime("hapticd");
+        roudi_watch.emplace();
     }
-
-    ipc::initIceoryxRuntime("hapticd");
-    const ipc::RoudiWatch roudi_watch;
     std::vector<DeviceEndpoints> endpoints(cfg.devices.size());
     for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
         const auto& device = cfg.devices[i];
+        spdlog::info("device '{}' ({}) from {}", device.name,
+                     device.isExoskeleton() ? "exoskeleton" : "thimble", device.source.string());
+        if (dds_sim) {
+            continue;
+        }
         if (device.isExoskeleton()) {
             endpoints[i].constraint_sets =
                 std::make_unique<iox::popo::Subscriber<msgs::ConstraintSet>>(
@@ -295,8 +321,6 @@ int runDaemon(const DaemonOptions& options) {
         publisher_options.historyCapacity = 1;
         endpoints[i].device_state = std::make_unique<iox::popo::Publisher<msgs::DeviceState>>(
             serviceFor(device.name, ipc::kDeviceStateEvent), publisher_options);
-        spdlog::info("device '{}' ({}) from {}", device.name,
-                     device.isExoskeleton() ? "exoskeleton" : "thimble", device.source.string());
     }
 
     ipc::DdsParticipant participant(
@@ -341,15 +365,32 @@ int runDaemon(const DaemonOptions& options) {
         spdlog::info("device '{}' on {}", cfg.devices[i].name, buses.descriptions[i]);
     }
     std::vector<std::unique_ptr<DeviceStateSnapshot>> device_states;
-    std::vector<iox::popo::Publisher<msgs::DeviceState>*> device_state_publishers;
-    for (auto& endpoint : endpoints) {
+    for (std::size_t i = 0; i < endpoints.size(); ++i) {
         device_states.push_back(std::make_unique<DeviceStateSnapshot>());
-        device_state_publishers.push_back(endpoint.device_state.get());
     }
-    DeviceStatePublisher device_state_publisher(std::move(device_state_publishers), device_states,
-                                                std::chrono::milliseconds(1));
+    std::unique_ptr<DdsSimLink> dds_sim_link;
+    std::unique_ptr<DeviceStatePublisher> device_state_publisher;
+    if (dds_sim) {
+        std::vector<SimLinkDevice> link_devices;
+        for (const auto& device : cfg.devices) {
+            link_devices.push_back({device.name, device.isExoskeleton()
+                                                     ? msgs::DeviceKind::kExoskeleton
+                                                     : msgs::DeviceKind::kThimble});
+        }
+        dds_sim_link = std::make_unique<DdsSimLink>(participant, std::move(link_devices));
+        dds_sim_link->start();
+        spdlog::info("sim link over DDS on domain {} (no RouDi needed)", cfg.dds.domain_id);
+    } else {
+        std::vector<iox::popo::Publisher<msgs::DeviceState>*> device_state_publishers;
+        for (auto& endpoint : endpoints) {
+            device_state_publishers.push_back(endpoint.device_state.get());
+        }
+        device_state_publisher = std::make_unique<DeviceStatePublisher>(
+            std::move(device_state_publishers), device_states, std::chrono::milliseconds(1));
+    }
 
-    RealtimeLoop loop(cfg, endpoints, commands, *telemetry, devices, device_states);
+    RealtimeLoop loop(cfg, endpoints, dds_sim_link.get(), commands, *telemetry, devices,
+                      device_states);
     loop.start();
     while (loop.startState() == 0) {
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -393,7 +434,7 @@ int runDaemon(const DaemonOptions& options) {
         const auto now = std::chrono::steady_clock::now();
         if (now - last_roudi_check >= std::chrono::milliseconds(200)) {
             last_roudi_check = now;
-            if (const auto lost = roudi_watch.check()) {
+            if (const auto lost = roudi_watch ? roudi_watch->check() : std::nullopt) {
                 // Stale sim input has already faded the forces to zero; stopping the loop
                 // below holds the devices safe. A fresh hapticd can register with the new
                 // RouDi, this one cannot.
@@ -414,6 +455,15 @@ int runDaemon(const DaemonOptions& options) {
     loop.stop();
     spdlog::info("stopped after {} ticks ({} telemetry samples dropped)", loop.ticks(),
                  loop.telemetryDropped());
+    if (dds_sim_link) {
+        dds_sim_link->stop();
+        for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
+            spdlog::info("sim link dds: device '{}': received {} messages", cfg.devices[i].name,
+                         dds_sim_link->received(i));
+        }
+        spdlog::info("sim link dds: {} unconvertible messages dropped, {} device states published",
+                     dds_sim_link->unconvertible(), dds_sim_link->statesPublished());
+    }
     return exit_code;
 }
 

@@ -27,6 +27,10 @@ int main(int argc, char** argv) {
     app.add_option("--log-level", log_level, "override log_level")
         ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
     app.add_option("--dds-domain", dds_domain, "override dds.domain_id")->check(CLI::Range(0, 232));
+    std::string sim_link;
+    app.add_option("--sim-link", sim_link,
+                   "override sim_link.transport: iceoryx (same host) or dds (sim on any host)")
+        ->check(CLI::IsMember({"iceoryx", "dds"}));
     app.add_option("--duration", duration_s,
                    "stop after this many seconds (0 = run until signalled)")
         ->check(CLI::NonNegativeNumber);
@@ -43,6 +47,11 @@ int main(int argc, char** argv) {
         }
         if (dds_domain >= 0) {
             options.config.dds.domain_id = dds_domain;
+        }
+        if (!sim_link.empty()) {
+            options.config.sim_link.transport = sim_link == "dds"
+                                                    ? haptic::config::SimTransport::kDds
+                                                    : haptic::config::SimTransport::kIceoryx;
         }
         haptic::process::setupLogging(
             "hapticd",

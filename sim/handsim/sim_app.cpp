@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <memory>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -18,6 +19,7 @@
 #include "haptic/sim/placeholder_fingertip_plane.hpp"
 #include "iceoryx_posh/popo/publisher.hpp"
 #include "iceoryx_posh/popo/subscriber.hpp"
+#include "sim_link_dds.hpp"
 
 namespace haptic::handsim {
 namespace {
@@ -82,19 +84,20 @@ int runSim(const SimOptions& options) {
             cfg.scene.source.string(), cfg.scene.name);
         return EXIT_FAILURE;
     }
-    if (cfg.sim_link.transport != config::SimTransport::kIceoryx) {
-        spdlog::error(
-            "{}: sim_link.transport 'dds' is not available in this version; use 'iceoryx'",
-            cfg.source.string());
-        return EXIT_FAILURE;
+    // Over DDS the sim needs no RouDi (and may run on another host).
+    const bool dds_sim = cfg.sim_link.transport == config::SimTransport::kDds;
+    std::optional<ipc::RoudiWatch> roudi_watch;
+    if (!dds_sim) {
+        ipc::initIceoryxRuntime("handsim");
+        roudi_watch.emplace();
     }
-
-    ipc::initIceoryxRuntime("handsim");
-    const ipc::RoudiWatch roudi_watch;
     std::vector<DeviceLink> links(cfg.devices.size());
     for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
         const auto& device = cfg.devices[i];
         links[i].device = &device;
+        if (dds_sim) {
+            continue;
+        }
         if (device.isExoskeleton()) {
             links[i].constraint_sets = std::make_unique<iox::popo::Publisher<msgs::ConstraintSet>>(
                 serviceFor(device.name, ipc::kConstraintSetEvent));
@@ -115,6 +118,14 @@ int runSim(const SimOptions& options) {
         "handsim");
     auto status_writer = participant.createWriter<idl::SimStatusPubSubType>(
         ipc::kSimStatusTopic, ipc::TopicKind::kLatestState);
+    std::unique_ptr<SimLinkDds> dds_link;
+    if (dds_sim) {
+        dds_link = std::make_unique<SimLinkDds>(participant, cfg.devices);
+        spdlog::info("sim link over DDS on domain {} (no RouDi needed)", cfg.dds.domain_id);
+    }
+    msgs::ConstraintSet dds_constraints;
+    msgs::ContactSurface dds_surface;
+    msgs::DeviceState dds_state;
 
     sim::PlaceholderFingertipPlane model(placeholderParameters(cfg));
     spdlog::warn(
@@ -140,8 +151,26 @@ int runSim(const SimOptions& options) {
         model.setTime(t_s);
         const std::int64_t stamp = monotonicNs();
 
-        for (auto& link : links) {
+        for (std::size_t i = 0; i < links.size(); ++i) {
+            auto& link = links[i];
             const std::string& name = link.device->name;
+            if (dds_link) {
+                if (link.device->isExoskeleton()) {
+                    dds_constraints = msgs::ConstraintSet{};
+                    model.fillConstraintSet(dds_constraints);
+                    dds_constraints.header = {++link.seq, stamp, {}};
+                    dds_constraints.header.source_id.assign(name);
+                    link.published += dds_link->publish(i, dds_constraints) ? 1 : 0;
+                } else {
+                    dds_surface = msgs::ContactSurface{};
+                    model.fillContactSurface(dds_surface);
+                    dds_surface.header = {++link.seq, stamp, {}};
+                    dds_surface.header.source_id.assign(name);
+                    link.published += dds_link->publish(i, dds_surface) ? 1 : 0;
+                }
+                link.states_received += dds_link->takeDeviceStates(i, dds_state);
+                continue;
+            }
             if (link.constraint_sets) {
                 link.constraint_sets->loan().and_then([&](auto& sample) {
                     *sample = msgs::ConstraintSet{};
@@ -183,7 +212,7 @@ int runSim(const SimOptions& options) {
             status_writer.write(msgs::toIdl(status));
             step_times_us.clear();
             last_status = now;
-            if (const auto lost = roudi_watch.check()) {
+            if (const auto lost = roudi_watch ? roudi_watch->check() : std::nullopt) {
                 spdlog::error("{}; exiting so that handsim restarts with the new RouDi", *lost);
                 return ipc::kRoudiLostExitCode;
             }

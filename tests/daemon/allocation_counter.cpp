@@ -26,6 +26,23 @@ void* operator new(std::size_t size) {
 void* operator new[](std::size_t size) {
     return countedAllocate(size);
 }
+// The nothrow forms too (Fast DDS's foonathan allocator uses them): otherwise ASan's own
+// nothrow new pairs with the free() below and reports an alloc-dealloc mismatch.
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+    if (t_counting) {
+        ++t_allocations;
+    }
+    return std::malloc(size == 0 ? 1 : size);
+}
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
+    return operator new(size, tag);
+}
+void operator delete(void* p, const std::nothrow_t&) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p, const std::nothrow_t&) noexcept {
+    std::free(p);
+}
 void operator delete(void* p) noexcept {
     std::free(p);
 }

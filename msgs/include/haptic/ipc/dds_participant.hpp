@@ -72,6 +72,8 @@ class DdsReader {
         }
         return take(sample);
     }
+    // For waiting on several readers at once (a DDS WaitSet on each reader's StatusCondition).
+    [[nodiscard]] eprosima::fastdds::dds::DataReader* handle() const noexcept { return reader_; }
 
   private:
     static eprosima::fastrtps::types::ReturnCode_t ReturnOk() {

@@ -5,6 +5,7 @@
 // event, so one subscriber per device sees only its own data. DDS topics follow the
 // architecture's table.
 
+#include <string>
 #include <string_view>
 
 namespace haptic::ipc {
@@ -20,9 +21,19 @@ inline constexpr const char* kCommandTopic = "haptic/command";
 inline constexpr const char* kCommandReplyTopic = "haptic/command_reply";
 inline constexpr const char* kSimStatusTopic = "sim/status";
 inline constexpr const char* kHandPoseTopic = "tracking/hand";
-// The sim -> daemon link over DDS, for a sim on another host.
+// The sim -> daemon link over DDS, for a sim on another host. One topic per device and
+// message (see deviceTopic), as the iceoryx instance is per device: a reader sees only its
+// own device and keep-last-1 cannot drop one device's newest sample for another's.
 inline constexpr const char* kConstraintSetTopic = "sim/constraint_set";
 inline constexpr const char* kContactSurfaceTopic = "sim/contact_surface";
 inline constexpr const char* kDeviceStateTopic = "haptic/device_state";
+
+// "sim/constraint_set/exo" for the base topic kConstraintSetTopic and device "exo".
+inline std::string deviceTopic(std::string_view base, std::string_view device) {
+    std::string topic(base);
+    topic += '/';
+    topic += device;
+    return topic;
+}
 
 }  // namespace haptic::ipc

@@ -48,6 +48,20 @@ class SeqLock {
         }
     }
 
+    // One bounded attempt, for a reader that must never spin (the RT thread: a writer
+    // preempted mid-store on its CPU would never finish while it spins). Returns the version
+    // it copied, or 0 if nothing was stored yet or it raced a write; `out` is then
+    // unspecified and must be ignored.
+    std::uint64_t tryLoad(T& out) const noexcept {
+        const std::uint64_t before = sequence_.load(std::memory_order_acquire);
+        if (before == 0 || (before & 1U) != 0) {
+            return 0;
+        }
+        std::memcpy(&out, &value_, sizeof(T));
+        std::atomic_thread_fence(std::memory_order_acquire);
+        return sequence_.load(std::memory_order_relaxed) == before ? before / 2 : 0;
+    }
+
     [[nodiscard]] std::uint64_t version() const noexcept {
         return sequence_.load(std::memory_order_acquire) / 2;
     }

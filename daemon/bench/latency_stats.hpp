@@ -1,0 +1,34 @@
+#pragma once
+
+// Percentiles for the loop latency benchmark: from raw samples (the daemon's telemetry, the
+// sim-link probe) and from cyclictest's histogram (-h), so both sides use one definition.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace haptic::bench {
+
+struct LatencySummary {
+    std::uint64_t count{0};
+    double p50{0.0};
+    double p99{0.0};
+    double p999{0.0};
+    double max{0.0};
+    // Samples beyond the histogram's range (cyclictest only); a percentile that falls among
+    // them is reported as the range's upper bound, i.e. a lower bound of the true value.
+    std::uint64_t overflows{0};
+};
+
+// Nearest-rank percentiles (the smallest value with at least q of the samples at or below
+// it). Sorts `samples_us`. An empty input gives an all-zero summary.
+LatencySummary summarize(std::vector<double>& samples_us);
+
+// Parses the output of `cyclictest -q -h <range>` for one measurement thread: the
+// "<latency_us> <count>" rows, "# Max Latencies:" and "# Histogram Overflows:". Returns
+// nullopt and sets `error` if the output has no histogram.
+std::optional<LatencySummary> parseCyclictestHistogram(const std::string& output,
+                                                       std::string& error);
+
+}  // namespace haptic::bench

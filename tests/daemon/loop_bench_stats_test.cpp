@@ -1,0 +1,63 @@
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "latency_stats.hpp"
+
+namespace haptic::bench {
+namespace {
+
+TEST(LoopBenchStats, NearestRankPercentilesOfRawSamples) {
+    std::vector<double> samples;
+    for (int i = 1000; i >= 1; --i) {
+        samples.push_back(static_cast<double>(i));
+    }
+    const auto summary = summarize(samples);
+    EXPECT_EQ(summary.count, 1000U);
+    EXPECT_DOUBLE_EQ(summary.p50, 500.0);
+    EXPECT_DOUBLE_EQ(summary.p99, 990.0);
+    EXPECT_DOUBLE_EQ(summary.p999, 999.0);
+    EXPECT_DOUBLE_EQ(summary.max, 1000.0);
+}
+
+// The shape of `cyclictest -q -h 8` output (rt-tests 2.4), trimmed to a small range.
+const std::string kHistogram =
+    "# /dev/cpu_dma_latency set to 0us\n"
+    "# Histogram\n"
+    "000000 000000\n"
+    "000001 000000\n"
+    "000002 000500\n"
+    "000003 000400\n"
+    "000004 000080\n"
+    "000005 000009\n"
+    "000006 000000\n"
+    "000007 000000\n"
+    "# Total: 000000989\n"
+    "# Min Latencies: 00002\n"
+    "# Avg Latencies: 00002\n"
+    "# Max Latencies: 00950\n"
+    "# Histogram Overflows: 00011\n"
+    "# Histogram Overflow at cycle number:\n"
+    "# Thread 0: 00012 00105\n";
+
+TEST(LoopBenchStats, CyclictestHistogramPercentilesCountOverflowsAsSlowest) {
+    std::string error;
+    const auto summary = parseCyclictestHistogram(kHistogram, error);
+    ASSERT_TRUE(summary.has_value()) << error;
+    EXPECT_EQ(summary->count, 1000U);
+    EXPECT_EQ(summary->overflows, 11U);
+    EXPECT_DOUBLE_EQ(summary->p50, 2.0);  // 500th of 1000
+    EXPECT_DOUBLE_EQ(summary->p99, 8.0);  // 990th falls among the overflows: range top
+    EXPECT_DOUBLE_EQ(summary->p999, 8.0);
+    EXPECT_DOUBLE_EQ(summary->max, 950.0);
+}
+
+TEST(LoopBenchStats, OutputWithoutHistogramIsAnError) {
+    std::string error;
+    EXPECT_FALSE(parseCyclictestHistogram("T: 0 ( 1) P:80 I:1000 C: 10 Min: 3\n", error));
+    EXPECT_NE(error.find("no histogram"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace haptic::bench

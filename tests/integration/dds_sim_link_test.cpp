@@ -1,0 +1,130 @@
+// The sim link over DDS only (sim_link.transport: dds), with the shipped hapticd, handsim and
+// hapticctl. No iox-roudi runs during the test: had either process touched iceoryx it would
+// have exited with "RouDi is not running", so every sim message here travelled over DDS.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <regex>
+#include <string>
+#include <thread>
+
+#include "child_process.hpp"
+#include "haptic/ipc/iceoryx_runtime.hpp"
+
+namespace haptic::testing {
+namespace {
+
+using ::testing::HasSubstr;
+using namespace std::chrono_literals;
+
+std::string domainArgument() {
+    // A test-only DDS domain, so a demo on the same host cannot answer for the daemon.
+    return std::to_string(100 + ::getpid() % 100);
+}
+
+struct SimLinkLine {
+    bool found{false};
+    std::string transport;
+    bool connected{false};
+    unsigned long received{0};
+    unsigned long rejected{0};
+};
+
+SimLinkLine parseSimLink(const std::string& status) {
+    std::smatch match;
+    SimLinkLine line;
+    if (std::regex_search(status, match,
+                          std::regex(R"(Sim link: (\w+), (connected|NOT CONNECTED), .*, (\d+) )"
+                                     R"(received, (\d+) rejected)"))) {
+        line.found = true;
+        line.transport = match[1];
+        line.connected = match[2] == "connected";
+        line.received = std::stoul(match[3]);
+        line.rejected = std::stoul(match[4]);
+    }
+    return line;
+}
+
+// Polls hapticctl status until `done` holds or the deadline passes (DDS discovery takes a
+// variable time, especially under ASan); returns the last status text.
+template <typename Done>
+std::string pollStatus(ChildProcess& daemon, std::chrono::seconds limit, Done done) {
+    std::string last;
+    const auto deadline = std::chrono::steady_clock::now() + limit;
+    while (std::chrono::steady_clock::now() < deadline && daemon.running()) {
+        const auto status = runCommand(
+            {HAPTICCTL_PATH, "--dds-domain", domainArgument(), "--timeout", "3", "status"}, 10s);
+        last = status.out + status.err;
+        if (status.exit_code == 0 && done(parseSimLink(status.out))) {
+            break;
+        }
+        std::this_thread::sleep_for(100ms);
+    }
+    return last;
+}
+
+TEST(DdsSimLink, DaemonAndSimTalkOverDdsOnlyAndAKilledSimGoesStale) {
+    ASSERT_FALSE(ipc::probeRoudi().reachable)
+        << "an iox-roudi is running; this test proves the DDS link works without one";
+    const std::string domain = domainArgument();
+    ChildProcess daemon(
+        {HAPTICD_PATH, "--realtime", "ignore", "--dds-domain", domain, "--sim-link", "dds"},
+        "hapticd-dds");
+    ChildProcess sim({HANDSIM_PATH, "--dds-domain", domain, "--sim-link", "dds"}, "handsim-dds");
+
+    std::string status = pollStatus(daemon, 12s, [](const SimLinkLine& link) {
+        return link.found && link.connected && link.received > 0;
+    });
+    ASSERT_TRUE(daemon.running()) << daemon.stderrText();
+    ASSERT_TRUE(sim.running()) << sim.stderrText();
+    SimLinkLine link = parseSimLink(status);
+    ASSERT_TRUE(link.found) << status;
+    EXPECT_EQ(link.transport, "dds") << status;
+    EXPECT_TRUE(link.connected) << status;
+    EXPECT_GT(link.received, 0U) << status;
+    EXPECT_EQ(link.rejected, 0U) << "the placeholder sim produces only valid messages\n" << status;
+
+    // Killed without warning, the sim stops refreshing its input: the link goes stale.
+    ::kill(sim.pid(), SIGKILL);
+    ASSERT_TRUE(sim.waitFor(5s).has_value());
+    status = pollStatus(daemon, 8s,
+                        [](const SimLinkLine& line) { return line.found && !line.connected; });
+    link = parseSimLink(status);
+    EXPECT_THAT(status, HasSubstr("Sim link: dds, NOT CONNECTED")) << status;
+    ASSERT_TRUE(daemon.running()) << "a dead sim must not take the daemon down";
+
+    // A fresh sim reconnects over DDS, and the DeviceState back-channel reaches it. It runs
+    // until the daemon reports the link connected again plus a moment, so a slow DDS
+    // discovery (ASan, a loaded machine) only makes the test wait longer.
+    ChildProcess sim2({HANDSIM_PATH, "--dds-domain", domain, "--sim-link", "dds"}, "handsim-dds2");
+    const unsigned long received_before = link.received;
+    status = pollStatus(daemon, 12s, [&](const SimLinkLine& line) {
+        return line.found && line.connected && line.received > received_before;
+    });
+    EXPECT_THAT(status, HasSubstr("Sim link: dds, connected")) << status;
+    std::this_thread::sleep_for(300ms);
+    ASSERT_EQ(sim2.terminate(), std::optional<int>(0)) << sim2.stderrText();
+    std::smatch received;
+    const std::string sim_log = sim2.stderrText();
+    ASSERT_TRUE(std::regex_search(
+        sim_log, received,
+        std::regex(R"(device 'thimble': published (\d+) targets, received (\d+) device states)")))
+        << sim_log;
+    EXPECT_GT(std::stoul(received[1]), 0U) << sim_log;
+    EXPECT_GT(std::stoul(received[2]), 0U) << "DeviceState did not reach the sim over DDS";
+
+    EXPECT_EQ(daemon.terminate(), std::optional<int>(0)) << daemon.stderrText();
+    const std::string daemon_log = daemon.stderrText();
+    EXPECT_THAT(daemon_log, HasSubstr("sim link over DDS"));
+    std::smatch exo;
+    ASSERT_TRUE(std::regex_search(daemon_log, exo,
+                                  std::regex(R"(sim link dds: device 'exo': received (\d+))")))
+        << daemon_log;
+    EXPECT_GT(std::stoul(exo[1]), 0U);
+}
+
+}  // namespace
+}  // namespace haptic::testing
