@@ -164,8 +164,9 @@ class DeviceSafetyTest : public ::testing::Test {
             std::vector<std::string>{HANDSIM_PATH, "--dds-domain", domain()}, "handsim");
     }
 
+    // A generous --timeout: DDS discovery of a fresh hapticctl takes seconds under ASan.
     CommandResult hapticctl(std::vector<std::string> args) {
-        std::vector<std::string> argv{HAPTICCTL_PATH, "--dds-domain", domain()};
+        std::vector<std::string> argv{HAPTICCTL_PATH, "--dds-domain", domain(), "--timeout", "10"};
         argv.insert(argv.end(), args.begin(), args.end());
         return runCommand(argv, 20s);
     }
@@ -372,7 +373,7 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTime
         thimble = ofDevice(window, kThimble);
         const bool pressing = !thimble.empty() && fromRetract(thimble.back(), retract) > 0.05;
         const bool exo_force = !exo.empty() && std::abs(exo.back().actuator_force_cmd[0]) > 0.5;
-        if (pressing && (exo_force || std::chrono::steady_clock::now() - started > 15s)) {
+        if (pressing && (exo_force || std::chrono::steady_clock::now() - started > 4s)) {
             break;
         }
     }
@@ -425,8 +426,10 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTime
     EXPECT_GT(ramped, 400U);
     ASSERT_FALSE(thimble_after.empty());
     EXPECT_LT(fromRetract(thimble_after.back(), retract), 1e-9) << "not back at the retract pose";
+    waitForStatus("sim link down",
+                  [](const msgs::HapticStatus& s) { return !s.sim_link.connected; });
     const auto status = hapticctl({"status"});
-    EXPECT_THAT(status.out, HasSubstr("NOT CONNECTED"));
+    EXPECT_THAT(status.out, HasSubstr("NOT CONNECTED")) << status.err;
 }
 
 TEST_F(DeviceSafetyTest, EstopClearHeartbeatLossAndBusOffShowInStatusWithZeroForce) {
