@@ -311,13 +311,19 @@ TEST_F(BadSimInputTest, RejectedCountedAndDoesNotChangeTheOutput) {
     const std::string out = waitForOutput(injector, "sent ");
     ASSERT_TRUE(std::regex_search(out, sent_match, std::regex(R"(sent (\d+))"))) << out;
     const std::uint64_t sent = std::stoull(sent_match[1]);
-    const auto after = waitForStatus("the rejections counted", [&](const msgs::HapticStatus& s) {
-        return s.sim_link.rejected - before.sim_link.rejected >= sent;
+    std::this_thread::sleep_for(300ms);  // the last bad messages reach a status snapshot
+    const auto after = waitForStatus("a status after the bad phase", [&](const auto& s) {
+        return s.header.stamp_ns > monotonicNs() - 100'000'000;
     });
     injector.stop();
 
     EXPECT_GT(sent, 100U);
-    EXPECT_EQ(after.sim_link.rejected - before.sim_link.rejected, sent);
+    // Every bad message hapticd took is counted. The subscriber keeps only the newest sample
+    // (a queue of one, by design for control data), so a tick delayed past the next good
+    // message (5 ms) never sees one: allow 2 % of them for a loaded machine under ASan.
+    const std::uint64_t rejected = after.sim_link.rejected - before.sim_link.rejected;
+    EXPECT_LE(rejected, sent);
+    EXPECT_GE(rejected, sent - sent / 50);
     EXPECT_EQ(after.state, msgs::DaemonState::kRendering) << "bad input is not a device fault";
     // The thimble's targets depend only on the accepted surfaces: not one bad message may
     // move them. An accepted one would have sent the plate towards the retract pose for the
