@@ -164,8 +164,9 @@ class DeviceSafetyTest : public ::testing::Test {
             std::vector<std::string>{HANDSIM_PATH, "--dds-domain", domain()}, "handsim");
     }
 
+    // A generous --timeout: DDS discovery of a fresh hapticctl takes seconds under ASan.
     CommandResult hapticctl(std::vector<std::string> args) {
-        std::vector<std::string> argv{HAPTICCTL_PATH, "--dds-domain", domain()};
+        std::vector<std::string> argv{HAPTICCTL_PATH, "--dds-domain", domain(), "--timeout", "10"};
         argv.insert(argv.end(), args.begin(), args.end());
         return runCommand(argv, 20s);
     }
@@ -268,7 +269,16 @@ bool targetsNear(const msgs::TelemetrySample& a, const msgs::TelemetrySample& b)
     return true;
 }
 
-TEST_F(DeviceSafetyTest, BadSimInputIsRejectedCountedAndDoesNotChangeTheOutput) {
+// A stalled injector thread on a loaded machine must not fade the output (that is the stale
+// input path, tested separately): sim_timeout_ms 200 here, so only bad messages could move it.
+class BadSimInputTest : public DeviceSafetyTest {
+  protected:
+    BadSimInputTest() {
+        replaceLine(config_.dir / "daemon.yaml", "sim_timeout_ms: 20", "sim_timeout_ms: 200");
+    }
+};
+
+TEST_F(BadSimInputTest, RejectedCountedAndDoesNotChangeTheOutput) {
     // The injector is its own iceoryx process: RouDi signals every registered process when it
     // stops, which must not be this test.
     EmulatorProcess injector({SIM_INPUT_INJECTOR_PATH});
@@ -301,27 +311,38 @@ TEST_F(DeviceSafetyTest, BadSimInputIsRejectedCountedAndDoesNotChangeTheOutput) 
     const std::string out = waitForOutput(injector, "sent ");
     ASSERT_TRUE(std::regex_search(out, sent_match, std::regex(R"(sent (\d+))"))) << out;
     const std::uint64_t sent = std::stoull(sent_match[1]);
-    const auto after = waitForStatus("the rejections counted", [&](const msgs::HapticStatus& s) {
-        return s.sim_link.rejected - before.sim_link.rejected >= sent;
+    std::this_thread::sleep_for(300ms);  // the last bad messages reach a status snapshot
+    const auto after = waitForStatus("a status after the bad phase", [&](const auto& s) {
+        return s.header.stamp_ns > monotonicNs() - 100'000'000;
     });
     injector.stop();
 
     EXPECT_GT(sent, 100U);
-    EXPECT_EQ(after.sim_link.rejected - before.sim_link.rejected, sent);
+    // Every bad message hapticd took is counted. The subscriber keeps only the newest sample
+    // (a queue of one, by design for control data), so a tick delayed past the next good
+    // message (5 ms) never sees one: allow 2 % of them for a loaded machine under ASan.
+    const std::uint64_t rejected = after.sim_link.rejected - before.sim_link.rejected;
+    EXPECT_LE(rejected, sent);
+    EXPECT_GE(rejected, sent - sent / 50);
     EXPECT_EQ(after.state, msgs::DaemonState::kRendering) << "bad input is not a device fault";
     // The thimble's targets depend only on the accepted surfaces: not one bad message may
-    // move them. An accepted one would have sent the plate towards the retract pose, at least
-    // one servo-rate step (0.007 rad) per tick; re-solving the same good surface from the
-    // warm start moves them by ~1e-4 rad at most (the optimiser's 1 um step tolerance).
+    // move them. An accepted one would have sent the plate towards the retract pose for the
+    // 5 ms until the next good one, a full servo-rate step (400 deg/s: 6.98 mrad) per tick.
+    // Re-solving the same good surface from the warm start creeps by far less per solve.
     ASSERT_GT(thimble.size(), 500U);
     const auto& pressed = thimble.front().actuator_force_cmd;
-    EXPECT_GT(std::abs(pressed[0] - thimble_idle.back().actuator_force_cmd[0]), 0.01)
+    EXPECT_GT(std::abs(pressed[0] - thimble_idle.back().actuator_force_cmd[0]), 0.05)
         << "the plate is not pressing";
-    for (const auto& sample : thimble) {
-        ASSERT_TRUE(targetsNear(sample, thimble.front()))
-            << "tick " << sample.tick << ": " << sample.actuator_force_cmd[0] << " "
-            << sample.actuator_force_cmd[1] << " " << sample.actuator_force_cmd[2] << " vs "
-            << pressed[0] << " " << pressed[1] << " " << pressed[2];
+    const double half_step = 0.5 * 400.0 * M_PI / 180.0 * 1e-3;
+    for (std::size_t i = 1; i < thimble.size(); ++i) {
+        for (std::size_t k = 0; k < 3; ++k) {
+            ASSERT_LT(
+                std::abs(thimble[i].actuator_force_cmd[k] - thimble[i - 1].actuator_force_cmd[k]),
+                half_step)
+                << "tick " << thimble[i].tick << " servo " << k;
+            ASSERT_LT(std::abs(thimble[i].actuator_force_cmd[k] - pressed[k]), 0.01)
+                << "tick " << thimble[i].tick << " servo " << k;
+        }
     }
     const auto status = hapticctl({"status"});
     ASSERT_EQ(status.exit_code, 0) << status.err;
@@ -372,7 +393,7 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTime
         thimble = ofDevice(window, kThimble);
         const bool pressing = !thimble.empty() && fromRetract(thimble.back(), retract) > 0.05;
         const bool exo_force = !exo.empty() && std::abs(exo.back().actuator_force_cmd[0]) > 0.5;
-        if (pressing && (exo_force || std::chrono::steady_clock::now() - started > 15s)) {
+        if (pressing && (exo_force || std::chrono::steady_clock::now() - started > 4s)) {
             break;
         }
     }
@@ -425,8 +446,10 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTime
     EXPECT_GT(ramped, 400U);
     ASSERT_FALSE(thimble_after.empty());
     EXPECT_LT(fromRetract(thimble_after.back(), retract), 1e-9) << "not back at the retract pose";
+    waitForStatus("sim link down",
+                  [](const msgs::HapticStatus& s) { return !s.sim_link.connected; });
     const auto status = hapticctl({"status"});
-    EXPECT_THAT(status.out, HasSubstr("NOT CONNECTED"));
+    EXPECT_THAT(status.out, HasSubstr("NOT CONNECTED")) << status.err;
 }
 
 TEST_F(DeviceSafetyTest, EstopClearHeartbeatLossAndBusOffShowInStatusWithZeroForce) {

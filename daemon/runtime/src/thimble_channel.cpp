@@ -81,7 +81,9 @@ void ThimbleChannel::compute(daemon::DaemonCore& core, std::size_t index,
     }
     const std::uint64_t accepted = core.acceptedCount(index);
     const msgs::ContactSurface* surface = core.latestContactSurface(index);
-    if (surface != nullptr && accepted != solved_from_) {
+    // A device held safe (offline, faulted) is sent the retract pose whatever the surface:
+    // solve the newest surface once it can be used, not before.
+    if (surface != nullptr && accepted != solved_from_ && !heldSafe()) {
         solved_ = optimiser_.solve(*surface);
         solved_from_ = accepted;
     }
