@@ -254,6 +254,16 @@ void Simulation::updateAnchors() {
     }
 }
 
+SurfaceQuery Simulation::queryCollider(int collider, const Vec3& p_world_m) const {
+    const auto& d = colliders_[collider].desc;
+    const Vec3& c = d.body < 0 ? d.position_m : bodies_[d.body].c;
+    const Mat3& rotation = d.body < 0 ? d.rotation : bodies_[d.body].rotation;
+    SurfaceQuery query = querySurface(d.shape, rotation.transpose() * (p_world_m - c));
+    query.normal = rotation * query.normal;
+    query.surface_point_m = c + rotation * query.surface_point_m;
+    return query;
+}
+
 Vec3 Simulation::forceOnCollider(int collider) const {
     Vec3 sum = Vec3::Zero();
     for (const auto& f : contact_forces_) {
