@@ -188,9 +188,6 @@ TEST(ShippedConfig, DefaultScene) {
     ASSERT_EQ(cfg.devices.size(), 2U);
     EXPECT_EQ(cfg.devices.at("exo").finger, Finger::kIndex);
     EXPECT_EQ(cfg.devices.at("thimble").finger, Finger::kIndex);
-    ASSERT_TRUE(cfg.placeholder_contact.has_value());
-    EXPECT_DOUBLE_EQ(cfg.placeholder_contact->plane_height_m, 0.05);
-    EXPECT_DOUBLE_EQ(cfg.placeholder_contact->stiffness_n_per_m, 800.0);
 }
 
 TEST(ShippedConfig, ThimbleOnlyScene) {

@@ -112,7 +112,7 @@ TEST_F(RoudiTest, DaemonAndSimExchangeMessagesAndStatusIsLive) {
     // Two devices at 100 Hz; the rate is measured over one 50 ms status window, so allow
     // for a late frame on a loaded machine.
     EXPECT_GT(std::stod(rate[1]), 100.0) << status.out;
-    EXPECT_EQ(rate[3], "0") << "the placeholder sim must produce only valid messages";
+    EXPECT_EQ(rate[3], "0") << "the soft-hand sim must produce only valid messages";
 
     // Let the sim run a little, then kill it without warning: the daemon must notice.
     std::this_thread::sleep_for(1s);

@@ -182,3 +182,70 @@ TEST(PressSlideEdgeScript, PlacesThePadOnTheScriptedPathAndLoops) {
 
 }  // namespace
 }  // namespace haptic::softhand
+
+namespace haptic::softhand {
+namespace {
+
+// The default demo scene's physics (index finger, table, block, press_slide_edge) for one
+// script period at 100 Hz: the contact force on the block rises while pressing and sliding
+// and is gone once lifted; both devices' outputs follow. Release only (seconds under ASan).
+TEST(SceneSimulationScripted, PressSlideEdgeForcesRiseAndFallAndOutputsFollow) {
+    config::SceneConfig scene;
+    scene.name = "test";
+    scene.rate_hz = 100;
+    scene.hand = handConfig(config::HandModel::kFinger);
+    config::SceneObject table;
+    table.name = "table";
+    table.shape = config::PlaneShape{};
+    table.friction = 0.6;
+    scene.objects = {table, blockObject()};
+    scene.tracking.target_object = "block";
+    const DeviceRequest exo{"exo", config::Finger::kIndex, true, {}, 64};
+    const DeviceRequest thimble{"thimble", config::Finger::kIndex, false, {{0, 0, -0.012}, {}}, 64};
+    SceneSimulation sim(scene, {exo, thimble}, realtimeSceneSettings());
+    const PressSlideEdgeScript script(sim.trackedHand(), scene.hand, scene.objects[1], true);
+    sim.reset(script.at(0.0));
+    const int block = sim.coupling().colliderOf(1);
+    const double dt = 0.01;
+    double lifted_force = 0.0;
+    double pressed_force = 0.0;
+    double pressed_min_distance = 1.0;
+    double lifted_min_distance = 1.0;
+    std::size_t pressed_constraints = 0;
+    std::size_t lifted_constraints = 0;
+    msgs::ConstraintSet constraints;
+    msgs::ContactSurface surface;
+    for (int step = 1; step <= 600; ++step) {
+        const double t = step * dt;
+        ASSERT_EQ(sim.setHandPose(script.at(t)), std::nullopt);
+        const StepReport report = sim.step(dt);
+        ASSERT_FALSE(report.rejected_input) << report.rejection_reason;
+        ASSERT_TRUE(std::isfinite(report.energy_j));
+        sim.fill(0, constraints);
+        sim.fill(1, surface);
+        double min_distance = 1.0;
+        for (const auto& s : surface.samples) {
+            min_distance = std::min(min_distance, s.signed_distance_m);
+        }
+        const double force = sim.model().simulation.forceOnCollider(block).norm();
+        if ((t > 0.05 && t < 0.4) || t > 5.2) {  // lifted 1 cm above the face
+            lifted_force = std::max(lifted_force, force);
+            lifted_min_distance = std::min(lifted_min_distance, min_distance);
+            lifted_constraints = std::max(lifted_constraints, constraints.constraints.size());
+        }
+        if (t > 1.5 && t < 3.0) {  // pressed 3 mm and sliding on the top face
+            pressed_force = std::max(pressed_force, force);
+            pressed_min_distance = std::min(pressed_min_distance, min_distance);
+            pressed_constraints = std::max(pressed_constraints, constraints.constraints.size());
+        }
+    }
+    EXPECT_EQ(lifted_force, 0.0);
+    EXPECT_GT(pressed_force, 0.2);
+    EXPECT_GT(lifted_min_distance, 0.003);
+    EXPECT_LT(pressed_min_distance, -0.0005);
+    EXPECT_EQ(lifted_constraints, 0U);
+    EXPECT_GE(pressed_constraints, 1U);
+}
+
+}  // namespace
+}  // namespace haptic::softhand

@@ -4,6 +4,14 @@
 
 namespace haptic::softhand {
 
+SceneSimulationSettings realtimeSceneSettings() {
+    SceneSimulationSettings settings;
+    settings.solver.pcg_max_iterations = 10;
+    settings.solver.max_backtracks = 2;
+    settings.solver.max_substep_depth = 1;
+    return settings;
+}
+
 SceneSimulation::SceneSimulation(const config::SceneConfig& scene,
                                  const std::vector<DeviceRequest>& devices,
                                  const SceneSimulationSettings& settings)

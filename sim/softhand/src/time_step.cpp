@@ -119,7 +119,9 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
 
     Assembler assembler(n);
     TermStats stats;
-    EnergyTerms::potential(*this, predicted, &assembler, &stats);
+    // The assembled energy at the prediction is the merit's start value (same contact set:
+    // every penetrating node was just detected there), so it is not evaluated twice.
+    const double potential_predicted = EnergyTerms::potential(*this, predicted, &assembler, &stats);
     SparseMatrix tissue_hessian(n, n);
     tissue_hessian.setFromTriplets(assembler.tissue_triplets.begin(),
                                    assembler.tissue_triplets.end());
@@ -175,7 +177,10 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
     };
     const double energy_before =
         0.5 * velocity.dot(mass * velocity) + EnergyTerms::potential(*this, q, nullptr, nullptr);
-    const double merit_start = evaluate(velocity).merit;
+    const double merit_start =
+        potential_predicted + 0.5 * h *
+                                  (alpha * velocity.dot(mass * velocity) +
+                                   gamma * velocity.dot(tissue_hessian * velocity));
     const double energy_slack = 1e-12 + 1e-9 * std::abs(energy_before);
     double step_fraction = 1.0;
     bool accepted = false;

@@ -24,6 +24,11 @@ struct SceneSimulationSettings {
     KinestheticOutputSettings kinesthetic;
 };
 
+// handsim's solver budget: PCG capped at 10 iterations, at most 2 halvings of the Newton
+// step and one level of substeps (2) before the energy check zeroes the step. Chosen so the
+// default scene holds its rate (sim/softhand/BENCHMARK.md, defaultScene).
+[[nodiscard]] SceneSimulationSettings realtimeSceneSettings();
+
 // A device the simulation computes outputs for (one of sim.yaml's devices).
 struct DeviceRequest {
     std::string name;
