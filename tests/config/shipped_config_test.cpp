@@ -166,7 +166,7 @@ TEST(ShippedConfig, DefaultScene) {
     EXPECT_EQ(cfg.rate_hz, 100);
     EXPECT_EQ(cfg.hand.model, HandModel::kFinger);
     EXPECT_EQ(cfg.hand.finger, Finger::kIndex);
-    EXPECT_EQ(cfg.hand.resolution, 2);
+    EXPECT_EQ(cfg.hand.resolution, 1);
     EXPECT_DOUBLE_EQ(cfg.hand.anthropometry.hand_length_m, 0.19);
 
     ASSERT_EQ(cfg.objects.size(), 2U);

@@ -5,6 +5,7 @@
 // Counters: p50_us / p99_us over the steps of the run, pcg_iters per step.
 
 #include <benchmark/benchmark.h>
+#include <malloc.h>
 
 #include <algorithm>
 #include <chrono>
@@ -139,6 +140,9 @@ void defaultScene(benchmark::State& state) {
     msgs::ConstraintSet constraints;
     msgs::ContactSurface surface;
     double substeps = 0.0;
+    double backtracks = 0.0;
+    double substepped_us = 0.0;
+    int substepped = 0;
     int contacts = 0;
     for (auto _ : state) {
         const auto t0 = std::chrono::steady_clock::now();
@@ -150,6 +154,11 @@ void defaultScene(benchmark::State& state) {
         step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
         pcg_iterations += r.pcg_iterations;
         substeps += r.substeps;
+        backtracks += r.backtracks;
+        if (r.substeps > 1) {
+            substepped_us += step_us.back();
+            ++substepped;
+        }
         contacts = std::max(contacts, r.active_contacts);
         benchmark::DoNotOptimize(surface.samples.count);
     }
@@ -157,6 +166,8 @@ void defaultScene(benchmark::State& state) {
     state.counters["tets"] = sim.model().simulation.tetCount();
     state.counters["substeps"] = substeps / static_cast<double>(step_us.size());
     state.counters["max_contacts"] = contacts;
+    state.counters["backtracks"] = backtracks / static_cast<double>(step_us.size());
+    state.counters["substepped_mean_us"] = substepped > 0 ? substepped_us / substepped : 0.0;
     report(state, step_us, pcg_iterations);
 }
 
@@ -176,4 +187,17 @@ BENCHMARK(fingerFlex)
 }  // namespace
 }  // namespace haptic::softhand
 
-BENCHMARK_MAIN();
+// The same heap settings as handsim's main (see there): without them the page faults of the
+// per-step matrices double the step time.
+int main(int argc, char** argv) {
+    mallopt(M_MMAP_THRESHOLD, 256 << 20);
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+    mallopt(M_TOP_PAD, 64 << 20);
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) {
+        return 1;
+    }
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}

@@ -33,6 +33,7 @@ int Simulation::addTissue(const TetMesh& mesh, const TissueMaterial& m) {
     for (const Vec3& p : mesh.nodes_m) {
         rest_.push_back(p);
         x_.push_back(p);
+        ++x_generation_;
         v_.push_back(Vec3::Zero());
         node_mass_.push_back(0.0);
         node_force_.push_back(Vec3::Zero());
@@ -162,6 +163,7 @@ void Simulation::setColliderPose(int collider, const Vec3& position_m, const Mat
 
 void Simulation::setNodePosition(int node, const Vec3& position_m) {
     x_.at(node) = position_m;
+    ++x_generation_;
 }
 
 void Simulation::setBodyPose(int body, const Vec3& position_m, const Mat3& rotation) {

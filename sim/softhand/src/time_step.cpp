@@ -175,8 +175,10 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
         return Evaluation{0.5 * dv.dot(mass * dv) + potential + 0.5 * h * damping,
                           0.5 * v_plus.dot(m_v) + potential};
     };
-    const double energy_before =
-        0.5 * velocity.dot(mass * velocity) + EnergyTerms::potential(*this, q, nullptr, nullptr);
+    const double energy_before = 0.5 * velocity.dot(mass * velocity) + currentTissueEnergy() +
+                                 EnergyTerms::external(*this, q, nullptr) +
+                                 EnergyTerms::skeleton(*this, q, nullptr) +
+                                 EnergyTerms::contact(*this, q, nullptr);
     const double merit_start =
         potential_predicted + 0.5 * h *
                                   (alpha * velocity.dot(mass * velocity) +
@@ -224,6 +226,7 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
     const Configuration next = integrate(q, v_plus, h);
     for (int i = 0; i < layout.nodes; ++i) {
         x_[i] = next.x[i];
+        ++x_generation_;
         v_[i] = v_plus.segment<3>(3 * i);
     }
     for (int b = 0; b < layout.bodies; ++b) {
@@ -282,7 +285,17 @@ double Simulation::totalEnergy() const {
         const Mat3 inertia = b.rotation * b.inertia_body * b.rotation.transpose();
         kinetic += 0.5 * b.mass * b.v.squaredNorm() + 0.5 * b.w.dot(inertia * b.w);
     }
-    return kinetic + EnergyTerms::potential(*this, currentConfiguration(), nullptr, nullptr);
+    const Configuration q = currentConfiguration();
+    return kinetic + currentTissueEnergy() + EnergyTerms::external(*this, q, nullptr) +
+           EnergyTerms::skeleton(*this, q, nullptr) + EnergyTerms::contact(*this, q, nullptr);
+}
+
+double Simulation::currentTissueEnergy() const {
+    if (tissue_energy_generation_ != x_generation_) {
+        tissue_energy_j_ = EnergyTerms::tissue(*this, currentConfiguration(), nullptr, nullptr);
+        tissue_energy_generation_ = x_generation_;
+    }
+    return tissue_energy_j_;
 }
 
 }  // namespace haptic::softhand
