@@ -142,7 +142,9 @@ int runSim(const SimOptions& options) {
     std::uint64_t rejected_inputs = 0;
     std::string last_rejection;
     softhand::StepReport last_report;
-    std::vector<double> run_step_times_us;  // whole run, for the summary at exit
+    std::vector<double> run_step_times_us;  // whole run with --duration, summary at exit
+    run_step_times_us.reserve(
+        static_cast<std::size_t>(options.duration_s * cfg.scene.rate_hz * 1.1) + 16);
     std::vector<double> step_times_us;
     step_times_us.reserve(static_cast<std::size_t>(cfg.scene.rate_hz) + 1);
 
@@ -197,9 +199,11 @@ int runSim(const SimOptions& options) {
         }
         ++steps;
         last_report = report;
-        run_step_times_us.push_back(
-            std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - step_start)
-                .count());
+        if (options.duration_s > 0.0) {  // bounded by --duration
+            run_step_times_us.push_back(std::chrono::duration<double, std::micro>(
+                                            std::chrono::steady_clock::now() - step_start)
+                                            .count());
+        }
         step_times_us.push_back(
             std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - step_start)
                 .count());
@@ -238,12 +242,15 @@ int runSim(const SimOptions& options) {
             next = now;  // fell far behind (debugger, suspend): do not burst to catch up
         }
     }
-    const double run_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    const msgs::Percentiles run = percentiles(run_step_times_us);
-    spdlog::info(
-        "{} steps in {:.1f} s ({:.1f} Hz); step time p50 {:.0f} us, p99 {:.0f} us, max {:.0f} us",
-        steps, run_s, static_cast<double>(steps) / run_s, run.p50, run.p99, run.max);
+    if (!run_step_times_us.empty()) {
+        const double run_s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+        const msgs::Percentiles run = percentiles(run_step_times_us);
+        spdlog::info(
+            "{} steps in {:.1f} s ({:.1f} Hz); step time p50 {:.0f} us, p99 {:.0f} us, max {:.0f} "
+            "us",
+            steps, run_s, static_cast<double>(steps) / run_s, run.p50, run.p99, run.max);
+    }
     for (const auto& link : links) {
         spdlog::info("device '{}': published {} targets, received {} device states",
                      link.device->name, link.published, link.states_received);

@@ -88,14 +88,21 @@ TEST(TrackedHand, BuildPoseAndFlexionOfTheFingerModel) {
 TEST(TrackedHand, FingertipModelFollowsTheSameFingerKinematics) {
     const HandModel model = buildHand(handConfig(config::HandModel::kFingertip), SolverSettings{});
     const TrackedHand hand(model, handConfig(config::HandModel::kFingertip));
-    std::vector<BonePose> poses;
-    hand.bonePoses(hand.buildPose(), poses);
-    ASSERT_EQ(poses.size(), 1U);
-    EXPECT_TRUE(poses[0].position_m.isApprox(model.simulation.bodyPosition(model.bones[0].body)));
+    const HandModel finger = buildHand(handConfig(config::HandModel::kFinger), SolverSettings{});
+    const TrackedHand finger_hand(finger, handConfig(config::HandModel::kFinger));
     HandPoseInput input = hand.buildPose();
+    input.wrist.position_m = Vec3(0.1, -0.02, 0.2);
     input.flexion_rad[3] = 0.2;  // index MCP
     input.flexion_rad[4] = 0.1;
+    std::vector<BonePose> poses;
+    std::vector<BonePose> finger_poses;
     hand.bonePoses(input, poses);
+    finger_hand.bonePoses(input, finger_poses);
+    ASSERT_EQ(poses.size(), 1U);
+    const auto distal =
+        static_cast<std::size_t>(finger.findBone("index_distal") - finger.bones.data());
+    EXPECT_TRUE(poses[0].position_m.isApprox(finger_poses[distal].position_m, 1e-12));
+    EXPECT_TRUE(poses[0].rotation.isApprox(finger_poses[distal].rotation, 1e-12));
     EXPECT_NEAR(Eigen::AngleAxisd(poses[0].rotation).angle(), 0.3, 1e-12);
 }
 
@@ -245,6 +252,54 @@ TEST(SceneSimulationScripted, PressSlideEdgeForcesRiseAndFallAndOutputsFollow) {
     EXPECT_LT(pressed_min_distance, -0.0005);
     EXPECT_EQ(lifted_constraints, 0U);
     EXPECT_GE(pressed_constraints, 1U);
+}
+
+}  // namespace
+}  // namespace haptic::softhand
+
+namespace haptic::softhand {
+namespace {
+
+// The thimble-only scene: a fingertip model, pad samples for the thimble, and an exoskeleton
+// refused because the fingertip has no joints.
+TEST(SceneSimulationFingertip, ThimbleSamplesFollowTheScriptAndExoskeletonIsRefused) {
+    config::SceneConfig scene;
+    scene.name = "tip";
+    scene.hand = handConfig(config::HandModel::kFingertip);
+    scene.objects = {blockObject()};
+    const DeviceRequest thimble{"thimble", config::Finger::kIndex, false, {{0, 0, -0.012}, {}}, 64};
+    SceneSimulation sim(scene, {thimble}, realtimeSceneSettings());
+    const PressSlideEdgeScript script(sim.trackedHand(), scene.hand, scene.objects[0], true);
+    sim.reset(script.at(0.0));
+    msgs::ContactSurface surface;
+    sim.fill(0, surface);
+    ASSERT_GT(surface.samples.size(), 3U);
+    EXPECT_LE(surface.samples.size(), 64U);
+    double lifted = 1.0;
+    for (const auto& s : surface.samples) {
+        lifted = std::min(lifted, s.signed_distance_m);
+    }
+    EXPECT_NEAR(lifted, 0.010, 0.002);  // the script starts 10 mm above the face
+    for (int step = 1; step <= 150; ++step) {
+        (void)sim.setHandPose(script.at(step * 0.01));
+        ASSERT_TRUE(std::isfinite(sim.step(0.01).energy_j));
+    }
+    sim.fill(0, surface);
+    double pressed = 1.0;
+    for (const auto& s : surface.samples) {
+        pressed = std::min(pressed, s.signed_distance_m);
+    }
+    EXPECT_LT(pressed, -0.0005);  // pressed into the face at t = 1.5 s
+
+    const DeviceRequest exo{"exo", config::Finger::kIndex, true, {}, 64};
+    EXPECT_THROW(SceneSimulation(scene, {exo}), std::invalid_argument);
+    HandPoseInput bad = script.at(0.0);
+    bad.flexion_rad[4] = std::numeric_limits<double>::quiet_NaN();
+    // A NaN angle moves the tracked pose to NaN: refused, reported in the next step.
+    EXPECT_NE(sim.setHandPose(bad), std::nullopt);
+    const StepReport report = sim.step(0.01);
+    EXPECT_TRUE(report.rejected_input);
+    EXPECT_THAT(report.rejection_reason, HasSubstr("hand pose"));
 }
 
 }  // namespace

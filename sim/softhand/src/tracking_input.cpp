@@ -22,14 +22,6 @@ HandKinematics referenceKinematics(const HandModel& model, const config::HandCon
     return HandKinematics(buildHand(finger, SolverSettings{}));
 }
 
-BonePose compose(const BonePose& a, const BonePose& b) {
-    return {a.position_m + a.rotation * b.position_m, a.rotation * b.rotation};
-}
-
-BonePose inverse(const BonePose& a) {
-    return {-(a.rotation.transpose() * a.position_m), a.rotation.transpose()};
-}
-
 }  // namespace
 
 std::optional<std::string> fromMessage(const msgs::HandPose& message, HandPoseInput& out) {
@@ -85,11 +77,9 @@ TrackedHand::TrackedHand(const HandModel& model, const config::HandConfig& hand)
         }
     }
     if (fingertip_) {
+        // Both distal bones have the same local frame (centre, x along the phalanx, y the
+        // flexion axis), so the fingertip simply takes the reference distal's pose.
         reference_distal_ = referenceDistal(hand.finger.value_or(config::Finger::kIndex));
-        const BonePose tip0{model.simulation.bodyPosition(model.bones.front().body),
-                            model.simulation.bodyRotation(model.bones.front().body)};
-        tip_from_reference_ =
-            compose(inverse(reference_kinematics_.buildPose(reference_distal_)), tip0);
     }
 }
 
@@ -114,8 +104,7 @@ void TrackedHand::referencePoses(const HandPoseInput& input, std::vector<BonePos
 void TrackedHand::bonePoses(const HandPoseInput& input, std::vector<BonePose>& poses) const {
     referencePoses(input, poses);
     if (fingertip_) {
-        const BonePose tip =
-            compose(poses[static_cast<std::size_t>(reference_distal_)], tip_from_reference_);
+        const BonePose tip = poses[static_cast<std::size_t>(reference_distal_)];
         poses.assign(1, tip);
     }
 }

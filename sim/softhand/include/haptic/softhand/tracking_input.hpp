@@ -53,9 +53,8 @@ class TrackedHand {
     HandKinematics reference_kinematics_;  // of a finger model behind a fingertip model
     std::vector<int> angle_of_joint_;      // reference joint -> index in flexion_rad
     bool fingertip_{false};
-    int reference_distal_{-1};     // fingertip model: its distal phalanx in the reference
-    BonePose tip_from_reference_;  // fingertip model: its build pose in that phalanx's frame  //
-                                   // fingertip model: distal build pose relative to reference
+    int reference_distal_{-1};  // fingertip model: its distal phalanx in the reference
+                                // fingertip model: distal build pose relative to reference
 };
 
 // Replay file (CSV, documented in sim/softhand/README.md): per row
