@@ -163,7 +163,7 @@ TEST(ShippedConfig, Thimble) {
 TEST(ShippedConfig, DefaultScene) {
     const SceneConfig cfg = loadSceneConfig(kConfigDir / "scenes/default.yaml");
     EXPECT_EQ(cfg.name, "default");
-    EXPECT_EQ(cfg.rate_hz, 100);
+    EXPECT_EQ(cfg.rate_hz, 60);
     EXPECT_EQ(cfg.hand.model, HandModel::kFinger);
     EXPECT_EQ(cfg.hand.finger, Finger::kIndex);
     EXPECT_EQ(cfg.hand.resolution, 1);
