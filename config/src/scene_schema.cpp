@@ -149,15 +149,6 @@ std::map<std::string, DeviceBinding, std::less<>> readBindings(MapReader map,
     return out;
 }
 
-PlaceholderContact readPlaceholder(MapReader map) {
-    PlaceholderContact out;
-    out.plane_height_m =
-        map.required("plane_height_m", Real::closed(-detail::kMaxPositionM, detail::kMaxPositionM));
-    out.stiffness_n_per_m = map.required("stiffness_n_per_m", Real::positive(100'000.0));
-    map.finish();
-    return out;
-}
-
 }  // namespace
 
 SceneConfig loadSceneConfig(const std::filesystem::path& path) {
@@ -171,9 +162,6 @@ SceneConfig loadSceneConfig(const std::filesystem::path& path) {
     out.tracking = readTracking(root.requiredMap("tracking"), out.objects);
     if (std::optional<MapReader> bindings = root.optionalMap("devices")) {
         out.devices = readBindings(*std::move(bindings), out.hand);
-    }
-    if (std::optional<MapReader> placeholder = root.optionalMap("placeholder_contact")) {
-        out.placeholder_contact = readPlaceholder(*std::move(placeholder));
     }
     root.finish();
     return out;

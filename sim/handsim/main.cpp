@@ -1,5 +1,7 @@
 // handsim: the soft real-time hand simulation. See README.
 
+#include <malloc.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <cstdlib>
@@ -13,6 +15,13 @@
 #include "sim_app.hpp"
 
 int main(int argc, char** argv) {
+    // Each soft-hand step builds sparse matrices of several MB. With glibc's defaults they are
+    // mmap'ed and unmapped every step, and the page faults cost more than the solve (6 ms
+    // instead of 14 ms of CPU per default-scene step, sim/softhand/BENCHMARK.md). Keep freed
+    // memory in the heap instead.
+    mallopt(M_MMAP_THRESHOLD, 256 << 20);
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+    mallopt(M_TOP_PAD, 64 << 20);
     CLI::App app{"handsim - hand simulation publishing proxy targets and contact surfaces"};
     std::string config_path = HAPTIC_DEFAULT_CONFIG_DIR "/sim.yaml";
     std::string log_level;

@@ -16,10 +16,11 @@
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
 #include "haptic/process/shutdown.hpp"
-#include "haptic/sim/placeholder_fingertip_plane.hpp"
+#include "haptic/softhand/scene_simulation.hpp"
 #include "iceoryx_posh/popo/publisher.hpp"
 #include "iceoryx_posh/popo/subscriber.hpp"
 #include "sim_link_dds.hpp"
+#include "tracking_source.hpp"
 
 namespace haptic::handsim {
 namespace {
@@ -48,14 +49,28 @@ struct DeviceLink {
     std::uint64_t seq{0};
 };
 
-sim::PlaceholderFingerParameters placeholderParameters(const config::SimConfig& cfg) {
-    sim::PlaceholderFingerParameters parameters;
+// The devices of sim.yaml as the soft hand sees them: the finger each is bound to in the
+// scene, and what it needs (constraints for an exoskeleton, pad samples for a thimble).
+std::vector<softhand::DeviceRequest> deviceRequests(const config::SimConfig& cfg) {
+    std::vector<softhand::DeviceRequest> requests;
     for (const auto& device : cfg.devices) {
-        if (device.isExoskeleton()) {
-            parameters.phalanx_lengths_m = device.exoskeleton().finger.phalanx_lengths_m;
+        softhand::DeviceRequest request;
+        request.name = device.name;
+        const auto binding = cfg.scene.devices.find(device.name);
+        if (binding == cfg.scene.devices.end()) {
+            throw std::invalid_argument("device '" + device.name +
+                                        "' is not bound to a finger in " +
+                                        cfg.scene.source.string());
         }
+        request.finger = binding->second.finger;
+        request.kinesthetic = device.isExoskeleton();
+        if (device.isThimble()) {
+            request.finger_from_device = device.thimble().finger_calibration.T_finger_device;
+            request.max_samples = device.thimble().optimiser.pad_samples;
+        }
+        requests.push_back(request);
     }
-    return parameters;
+    return requests;
 }
 
 // Step-time percentiles over the last status window, from stored samples (the sim is not on
@@ -77,13 +92,6 @@ msgs::Percentiles percentiles(std::vector<double>& samples_us) {
 
 int runSim(const SimOptions& options) {
     const auto& cfg = options.config;
-    if (!cfg.scene.placeholder_contact) {
-        spdlog::error(
-            "{}: scene '{}' has no placeholder_contact block; this version simulates only "
-            "the placeholder rigid fingertip against a plane",
-            cfg.scene.source.string(), cfg.scene.name);
-        return EXIT_FAILURE;
-    }
     // Over DDS the sim needs no RouDi (and may run on another host).
     const bool dds_sim = cfg.sim_link.transport == config::SimTransport::kDds;
     std::optional<ipc::RoudiWatch> roudi_watch;
@@ -127,11 +135,14 @@ int runSim(const SimOptions& options) {
     msgs::ContactSurface dds_surface;
     msgs::DeviceState dds_state;
 
-    sim::PlaceholderFingertipPlane model(placeholderParameters(cfg));
-    spdlog::warn(
-        "scene '{}': running the PLACEHOLDER rigid fingertip against the plane z = {:.3f} m "
-        "(no soft hand yet)",
-        cfg.scene.name, cfg.scene.placeholder_contact->plane_height_m);
+    softhand::SceneSimulation physics(cfg.scene, deviceRequests(cfg),
+                                      softhand::realtimeSceneSettings());
+    auto tracking = makeTrackingSource(cfg.scene, physics, participant);
+    physics.reset(tracking->initialPose());
+    const double dt_s = 1.0 / cfg.scene.rate_hz;
+    spdlog::info("scene '{}': soft hand {} ({} nodes, {} tetrahedra), tracking from {}",
+                 cfg.scene.name, physics.modelName(), physics.model().simulation.nodeCount(),
+                 physics.model().simulation.tetCount(), tracking->describe());
     spdlog::info("stepping at {} Hz for {} device(s)", cfg.scene.rate_hz, cfg.devices.size());
 
     const auto period = std::chrono::nanoseconds(1'000'000'000LL / cfg.scene.rate_hz);
@@ -140,6 +151,12 @@ int runSim(const SimOptions& options) {
     auto last_status = started;
     std::uint64_t steps = 0;
     std::uint64_t status_seq = 0;
+    std::uint64_t rejected_inputs = 0;
+    std::string last_rejection;
+    softhand::StepReport last_report;
+    std::vector<double> run_step_times_us;  // whole run with --duration, summary at exit
+    run_step_times_us.reserve(
+        static_cast<std::size_t>(options.duration_s * cfg.scene.rate_hz * 1.1) + 16);
     std::vector<double> step_times_us;
     step_times_us.reserve(static_cast<std::size_t>(cfg.scene.rate_hz) + 1);
 
@@ -147,34 +164,49 @@ int runSim(const SimOptions& options) {
         next += period;
         std::this_thread::sleep_until(next);
         const auto step_start = std::chrono::steady_clock::now();
-        const double t_s = std::chrono::duration<double>(step_start - started).count();
-        model.setTime(t_s);
+        // Simulated time advances by dt per step (the script is a function of it), so a
+        // slow step shows up as a lower rate, not as a jump in the motion.
+        const double t_s = static_cast<double>(steps + 1) * dt_s;
+        std::string rejection;
+        if (const auto pose = tracking->poll(t_s, rejection)) {
+            if (const auto reason = physics.setHandPose(*pose)) {
+                rejection = *reason;
+            }
+        }
+        const softhand::StepReport report = physics.step(dt_s);
+        if (report.rejected_input) {
+            ++rejected_inputs;
+            last_rejection = report.rejection_reason;
+        } else if (!rejection.empty()) {
+            ++rejected_inputs;
+            last_rejection = rejection;
+        }
         const std::int64_t stamp = monotonicNs();
 
-        for (std::size_t i = 0; i < links.size(); ++i) {
-            auto& link = links[i];
+        for (std::size_t index = 0; index < links.size(); ++index) {
+            auto& link = links[index];
             const std::string& name = link.device->name;
             if (dds_link) {
                 if (link.device->isExoskeleton()) {
                     dds_constraints = msgs::ConstraintSet{};
-                    model.fillConstraintSet(dds_constraints);
+                    physics.fill(index, dds_constraints);
                     dds_constraints.header = {++link.seq, stamp, {}};
                     dds_constraints.header.source_id.assign(name);
-                    link.published += dds_link->publish(i, dds_constraints) ? 1 : 0;
+                    link.published += dds_link->publish(index, dds_constraints) ? 1 : 0;
                 } else {
                     dds_surface = msgs::ContactSurface{};
-                    model.fillContactSurface(dds_surface);
+                    physics.fill(index, dds_surface);
                     dds_surface.header = {++link.seq, stamp, {}};
                     dds_surface.header.source_id.assign(name);
-                    link.published += dds_link->publish(i, dds_surface) ? 1 : 0;
+                    link.published += dds_link->publish(index, dds_surface) ? 1 : 0;
                 }
-                link.states_received += dds_link->takeDeviceStates(i, dds_state);
+                link.states_received += dds_link->takeDeviceStates(index, dds_state);
                 continue;
             }
             if (link.constraint_sets) {
                 link.constraint_sets->loan().and_then([&](auto& sample) {
                     *sample = msgs::ConstraintSet{};
-                    model.fillConstraintSet(*sample);
+                    physics.fill(index, *sample);
                     sample->header = {++link.seq, stamp, {}};
                     sample->header.source_id.assign(name);
                     sample.publish();
@@ -183,7 +215,7 @@ int runSim(const SimOptions& options) {
             } else {
                 link.contact_surfaces->loan().and_then([&](auto& sample) {
                     *sample = msgs::ContactSurface{};
-                    model.fillContactSurface(*sample);
+                    physics.fill(index, *sample);
                     sample->header = {++link.seq, stamp, {}};
                     sample->header.source_id.assign(name);
                     sample.publish();
@@ -195,6 +227,12 @@ int runSim(const SimOptions& options) {
             }
         }
         ++steps;
+        last_report = report;
+        if (options.duration_s > 0.0) {  // bounded by --duration
+            run_step_times_us.push_back(std::chrono::duration<double, std::micro>(
+                                            std::chrono::steady_clock::now() - step_start)
+                                            .count());
+        }
         step_times_us.push_back(
             std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - step_start)
                 .count());
@@ -208,7 +246,19 @@ int runSim(const SimOptions& options) {
                              std::chrono::duration<double>(now - last_status).count();
             status.steps = steps;
             status.step_time_us = percentiles(step_times_us);
-            status.model.assign("placeholder_rigid_fingertip_plane");
+            status.node_count = static_cast<std::uint32_t>(physics.model().simulation.nodeCount());
+            status.element_count =
+                static_cast<std::uint32_t>(physics.model().simulation.tetCount());
+            status.solver_residual = last_report.pcg_relative_residual;
+            status.solver_iterations = static_cast<std::uint32_t>(last_report.pcg_iterations);
+            status.energy_j = last_report.energy_j;
+            status.model.assign(physics.modelName());
+            if (rejected_inputs > 0) {
+                spdlog::warn(
+                    "{} tracking input(s) rejected in the last {:.1f} s: {}", rejected_inputs,
+                    std::chrono::duration<double>(now - last_status).count(), last_rejection);
+                rejected_inputs = 0;
+            }
             status_writer.write(msgs::toIdl(status));
             step_times_us.clear();
             last_status = now;
@@ -224,6 +274,15 @@ int runSim(const SimOptions& options) {
         if (now > next + 10 * period) {
             next = now;  // fell far behind (debugger, suspend): do not burst to catch up
         }
+    }
+    if (!run_step_times_us.empty()) {
+        const double run_s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+        const msgs::Percentiles run = percentiles(run_step_times_us);
+        spdlog::info(
+            "{} steps in {:.1f} s ({:.1f} Hz); step time p50 {:.0f} us, p99 {:.0f} us, max {:.0f} "
+            "us",
+            steps, run_s, static_cast<double>(steps) / run_s, run.p50, run.p99, run.max);
     }
     for (const auto& link : links) {
         spdlog::info("device '{}': published {} targets, received {} device states",

@@ -85,7 +85,7 @@ TEST(DdsSimLink, DaemonAndSimTalkOverDdsOnlyAndAKilledSimGoesStale) {
     EXPECT_EQ(link.transport, "dds") << status;
     EXPECT_TRUE(link.connected) << status;
     EXPECT_GT(link.received, 0U) << status;
-    EXPECT_EQ(link.rejected, 0U) << "the placeholder sim produces only valid messages\n" << status;
+    EXPECT_EQ(link.rejected, 0U) << "the sim produces only valid messages\n" << status;
 
     // Killed without warning, the sim stops refreshing its input: the link goes stale.
     ::kill(sim.pid(), SIGKILL);

@@ -5,14 +5,17 @@
 // Counters: p50_us / p99_us over the steps of the run, pcg_iters per step.
 
 #include <benchmark/benchmark.h>
+#include <malloc.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <vector>
 
+#include "haptic/config/scene.hpp"
 #include "haptic/softhand/elastic_tracking.hpp"
 #include "haptic/softhand/hand_builder.hpp"
+#include "haptic/softhand/scene_simulation.hpp"
 
 namespace haptic::softhand {
 namespace {
@@ -112,10 +115,70 @@ void fingerFlex(benchmark::State& state) {
     report(state, step_us, pcg_iterations);
 }
 
+// handsim's physics for the shipped default scene (config/scenes/default.yaml: index finger,
+// table and block, scripted press_slide_edge) at the scene's rate, with both device outputs
+// filled each step: args = resolution, PCG cap, backtracks, substep depth. 1200 steps cover two
+// script periods at 100 Hz.
+void defaultScene(benchmark::State& state) {
+    config::SceneConfig scene =
+        config::loadSceneConfig(HAPTIC_SOURCE_DIR "/config/scenes/default.yaml");
+    scene.hand.resolution = static_cast<int>(state.range(0));
+    SceneSimulationSettings settings;
+    settings.solver.pcg_max_iterations = static_cast<int>(state.range(1));
+    settings.solver.max_backtracks = static_cast<int>(state.range(2));
+    settings.solver.max_substep_depth = static_cast<int>(state.range(3));
+    DeviceRequest exo{"exo", config::Finger::kIndex, true, {}, 64};
+    DeviceRequest thimble{"thimble", config::Finger::kIndex, false, {{0.0, 0.0, -0.012}, {}}, 64};
+    SceneSimulation sim(scene, {exo, thimble}, settings);
+    const TrackedHand& hand = sim.trackedHand();
+    const PressSlideEdgeScript script(hand, scene.hand, *scene.findObject("block"), true);
+    sim.reset(script.at(0.0));
+    const double dt = 1.0 / scene.rate_hz;
+    std::vector<double> step_us;
+    double pcg_iterations = 0.0;
+    int step = 0;
+    msgs::ConstraintSet constraints;
+    msgs::ContactSurface surface;
+    double substeps = 0.0;
+    double backtracks = 0.0;
+    double substepped_us = 0.0;
+    int substepped = 0;
+    int contacts = 0;
+    for (auto _ : state) {
+        const auto t0 = std::chrono::steady_clock::now();
+        (void)sim.setHandPose(script.at(++step * dt));
+        const StepReport r = sim.step(dt);
+        sim.fill(0, constraints);
+        sim.fill(1, surface);
+        const auto t1 = std::chrono::steady_clock::now();
+        step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+        pcg_iterations += r.pcg_iterations;
+        substeps += r.substeps;
+        backtracks += r.backtracks;
+        if (r.substeps > 1) {
+            substepped_us += step_us.back();
+            ++substepped;
+        }
+        contacts = std::max(contacts, r.active_contacts);
+        benchmark::DoNotOptimize(surface.samples.count);
+    }
+    state.counters["nodes"] = sim.model().simulation.nodeCount();
+    state.counters["tets"] = sim.model().simulation.tetCount();
+    state.counters["substeps"] = substeps / static_cast<double>(step_us.size());
+    state.counters["max_contacts"] = contacts;
+    state.counters["backtracks"] = backtracks / static_cast<double>(step_us.size());
+    state.counters["substepped_mean_us"] = substepped > 0 ? substepped_us / substepped : 0.0;
+    report(state, step_us, pcg_iterations);
+}
+
 BENCHMARK(fingertipPress)
     ->ArgsProduct({{1, 2, 3, 4}, {10, 30, 100}})
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(400);
+BENCHMARK(defaultScene)
+    ->ArgsProduct({{1, 2}, {10, 30}, {0, 2, 10}, {0, 1, 3}})
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(1200);
 BENCHMARK(fingerFlex)
     ->ArgsProduct({{1, 2, 3}, {10, 30, 100}})
     ->Unit(benchmark::kMicrosecond)
@@ -124,4 +187,17 @@ BENCHMARK(fingerFlex)
 }  // namespace
 }  // namespace haptic::softhand
 
-BENCHMARK_MAIN();
+// The same heap settings as handsim's main (see there): without them the page faults of the
+// per-step matrices double the step time.
+int main(int argc, char** argv) {
+    mallopt(M_MMAP_THRESHOLD, 256 << 20);
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+    mallopt(M_TOP_PAD, 64 << 20);
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) {
+        return 1;
+    }
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}

@@ -116,6 +116,15 @@ bool ElasticTracking::update(HandModel& model, double dt_s) {
     return clamped;
 }
 
+void ElasticTracking::resetToModel(const HandModel& model) {
+    for (std::size_t k = 0; k < bodies_.size(); ++k) {
+        const int b = model.bones[k].body;
+        tracked_[k] = {model.simulation.bodyPosition(b), model.simulation.bodyRotation(b)};
+        skeleton_.setBodyPose(bodies_[k], tracked_[k].position_m, tracked_[k].rotation);
+    }
+    previous_target_ = tracked_;
+}
+
 BonePose ElasticTracking::intermediatePose(int bone) const {
     return {skeleton_.bodyPosition(bodies_.at(bone)), skeleton_.bodyRotation(bodies_.at(bone))};
 }

@@ -33,6 +33,7 @@ int Simulation::addTissue(const TetMesh& mesh, const TissueMaterial& m) {
     for (const Vec3& p : mesh.nodes_m) {
         rest_.push_back(p);
         x_.push_back(p);
+        ++x_generation_;
         v_.push_back(Vec3::Zero());
         node_mass_.push_back(0.0);
         node_force_.push_back(Vec3::Zero());
@@ -162,6 +163,7 @@ void Simulation::setColliderPose(int collider, const Vec3& position_m, const Mat
 
 void Simulation::setNodePosition(int node, const Vec3& position_m) {
     x_.at(node) = position_m;
+    ++x_generation_;
 }
 
 void Simulation::setBodyPose(int body, const Vec3& position_m, const Mat3& rotation) {
@@ -252,6 +254,16 @@ void Simulation::updateAnchors() {
         contact_forces_.push_back(
             {contact.node, contact.collider, rotation * force_local, sliding});
     }
+}
+
+SurfaceQuery Simulation::queryCollider(int collider, const Vec3& p_world_m) const {
+    const auto& d = colliders_[collider].desc;
+    const Vec3& c = d.body < 0 ? d.position_m : bodies_[d.body].c;
+    const Mat3& rotation = d.body < 0 ? d.rotation : bodies_[d.body].rotation;
+    SurfaceQuery query = querySurface(d.shape, rotation.transpose() * (p_world_m - c));
+    query.normal = rotation * query.normal;
+    query.surface_point_m = c + rotation * query.surface_point_m;
+    return query;
 }
 
 Vec3 Simulation::forceOnCollider(int collider) const {

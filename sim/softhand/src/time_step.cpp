@@ -119,7 +119,9 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
 
     Assembler assembler(n);
     TermStats stats;
-    EnergyTerms::potential(*this, predicted, &assembler, &stats);
+    // The assembled energy at the prediction is the merit's start value (same contact set:
+    // every penetrating node was just detected there), so it is not evaluated twice.
+    const double potential_predicted = EnergyTerms::potential(*this, predicted, &assembler, &stats);
     SparseMatrix tissue_hessian(n, n);
     tissue_hessian.setFromTriplets(assembler.tissue_triplets.begin(),
                                    assembler.tissue_triplets.end());
@@ -162,23 +164,33 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
     struct Evaluation {
         double merit;
         double energy;
+        double tissue;
     };
     const auto evaluate = [&](const Eigen::VectorXd& v_plus) {
         const Eigen::VectorXd dv = v_plus - velocity;
         const Eigen::VectorXd m_v = mass * v_plus;
         const double damping =
             alpha * v_plus.dot(m_v) + gamma * v_plus.dot(tissue_hessian * v_plus);
-        const double potential =
-            EnergyTerms::potential(*this, integrate(q, v_plus, h), nullptr, nullptr);
+        const Configuration next = integrate(q, v_plus, h);
+        const double tissue = EnergyTerms::tissue(*this, next, nullptr, nullptr);
+        const double potential = tissue + EnergyTerms::external(*this, next, nullptr) +
+                                 EnergyTerms::skeleton(*this, next, nullptr) +
+                                 EnergyTerms::contact(*this, next, nullptr);
         return Evaluation{0.5 * dv.dot(mass * dv) + potential + 0.5 * h * damping,
-                          0.5 * v_plus.dot(m_v) + potential};
+                          0.5 * v_plus.dot(m_v) + potential, tissue};
     };
-    const double energy_before =
-        0.5 * velocity.dot(mass * velocity) + EnergyTerms::potential(*this, q, nullptr, nullptr);
-    const double merit_start = evaluate(velocity).merit;
+    const double energy_before = 0.5 * velocity.dot(mass * velocity) + currentTissueEnergy() +
+                                 EnergyTerms::external(*this, q, nullptr) +
+                                 EnergyTerms::skeleton(*this, q, nullptr) +
+                                 EnergyTerms::contact(*this, q, nullptr);
+    const double merit_start =
+        potential_predicted + 0.5 * h *
+                                  (alpha * velocity.dot(mass * velocity) +
+                                   gamma * velocity.dot(tissue_hessian * velocity));
     const double energy_slack = 1e-12 + 1e-9 * std::abs(energy_before);
     double step_fraction = 1.0;
     bool accepted = false;
+    double accepted_tissue = 0.0;
     Eigen::VectorXd v_plus = velocity;
     if (delta.allFinite() && std::isfinite(merit_start)) {
         for (int attempt = 0; attempt <= settings_.max_backtracks; ++attempt) {
@@ -188,6 +200,7 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
                 value.merit <= merit_start + 1e-12 * std::max(1.0, std::abs(merit_start)) &&
                 value.energy <= energy_before + energy_slack) {
                 accepted = true;
+                accepted_tissue = value.tissue;
                 break;
             }
             ++report.backtracks;
@@ -208,17 +221,20 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
 
     // Speed clamp: a tracking teleport must not fling tissue across the scene.
     const double v_max = settings_.max_speed_m_per_s;
+    bool nodes_clamped = false;
     for (int i = 0; i < layout.nodes + layout.bodies; ++i) {
         const int dof = i < layout.nodes ? 3 * i : layout.body(i - layout.nodes);
         const double speed = v_plus.segment<3>(dof).norm();
         if (speed > v_max) {
             v_plus.segment<3>(dof) *= v_max / speed;
             report.clamped = true;
+            nodes_clamped = nodes_clamped || i < layout.nodes;
         }
     }
     const Configuration next = integrate(q, v_plus, h);
     for (int i = 0; i < layout.nodes; ++i) {
         x_[i] = next.x[i];
+        ++x_generation_;
         v_[i] = v_plus.segment<3>(3 * i);
     }
     for (int b = 0; b < layout.bodies; ++b) {
@@ -229,6 +245,11 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
         bodies_[b].rotation = next.rotation[b];
         bodies_[b].v = v_plus.segment<3>(layout.body(b));
         bodies_[b].w = v_plus.segment<3>(layout.body(b) + 3);
+    }
+    if (accepted && !nodes_clamped) {
+        // The nodes are where the accepted evaluation put them: its tissue energy is current.
+        tissue_energy_j_ = accepted_tissue;
+        tissue_energy_generation_ = x_generation_;
     }
     updateAnchors();
     ++report.substeps;
@@ -277,7 +298,17 @@ double Simulation::totalEnergy() const {
         const Mat3 inertia = b.rotation * b.inertia_body * b.rotation.transpose();
         kinetic += 0.5 * b.mass * b.v.squaredNorm() + 0.5 * b.w.dot(inertia * b.w);
     }
-    return kinetic + EnergyTerms::potential(*this, currentConfiguration(), nullptr, nullptr);
+    const Configuration q = currentConfiguration();
+    return kinetic + currentTissueEnergy() + EnergyTerms::external(*this, q, nullptr) +
+           EnergyTerms::skeleton(*this, q, nullptr) + EnergyTerms::contact(*this, q, nullptr);
+}
+
+double Simulation::currentTissueEnergy() const {
+    if (tissue_energy_generation_ != x_generation_) {
+        tissue_energy_j_ = EnergyTerms::tissue(*this, currentConfiguration(), nullptr, nullptr);
+        tissue_energy_generation_ = x_generation_;
+    }
+    return tissue_energy_j_;
 }
 
 }  // namespace haptic::softhand

@@ -151,14 +151,6 @@ struct DeviceBinding {
     Finger finger{Finger::kIndex};
 };
 
-// YAML: placeholder_contact: {plane_height_m, stiffness_n_per_m}. Until the soft hand lands,
-// handsim renders a rigid fingertip point against the plane z = plane_height_m with this
-// penalty stiffness. Remove when the soft-hand contact replaces it.
-struct PlaceholderContact {
-    double plane_height_m{0.0};
-    double stiffness_n_per_m{0.0};
-};
-
 struct SceneConfig {
     std::filesystem::path source;
     std::string name;
@@ -167,7 +159,6 @@ struct SceneConfig {
     std::vector<SceneObject> objects;  // names unique
     TrackingConfig tracking;
     std::map<std::string, DeviceBinding, std::less<>> devices;  // by device name
-    std::optional<PlaceholderContact> placeholder_contact;
 
     [[nodiscard]] const SceneObject* findObject(std::string_view object_name) const noexcept {
         for (const auto& object : objects) {

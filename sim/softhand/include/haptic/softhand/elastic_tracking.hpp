@@ -41,6 +41,10 @@ class ElasticTracking {
     // Returns true when the target speed clamp engaged.
     bool update(HandModel& model, double dt_s);
 
+    // After the model was moved as a whole (SceneSimulation::reset): the current bone poses
+    // become the tracked poses and the rate clamp's reference.
+    void resetToModel(const HandModel& model);
+
     [[nodiscard]] const std::vector<BonePose>& trackedPoses() const { return tracked_; }
     [[nodiscard]] BonePose intermediatePose(int bone) const;
 

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
 #include <map>
 #include <string>
 #include <utility>
@@ -156,6 +157,10 @@ class Simulation {
     // Sum of contact forces the tissue applies to a collider (reaction, world frame).
     [[nodiscard]] Vec3 forceOnCollider(int collider) const;
     [[nodiscard]] double totalEnergy() const;
+    [[nodiscard]] int colliderCount() const { return static_cast<int>(colliders_.size()); }
+    // Closest surface of a collider to a world point, at the collider's current pose; the
+    // normal and surface point are in the world frame.
+    [[nodiscard]] SurfaceQuery queryCollider(int collider, const Vec3& p_world_m) const;
     [[nodiscard]] const SolverSettings& settings() const { return settings_; }
     SolverSettings& settings() { return settings_; }
 
@@ -250,6 +255,12 @@ class Simulation {
     std::vector<ContactForce> contact_forces_;
     Eigen::VectorXd warm_start_;
     StepReport pending_;  // input rejections and clamps waiting for the next report
+    // Tissue energy of the current node positions (it depends on nothing else): the end of
+    // one step's report and the start of the next step's energy check share it.
+    [[nodiscard]] double currentTissueEnergy() const;
+    std::uint64_t x_generation_{0};  // bumped whenever x_ changes
+    mutable std::uint64_t tissue_energy_generation_{~std::uint64_t{0}};
+    mutable double tissue_energy_j_{0.0};
 
     friend struct EnergyTerms;
 };

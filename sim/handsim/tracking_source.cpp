@@ -1,0 +1,126 @@
+#include "tracking_source.hpp"
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "HandPosePubSubTypes.h"
+#include "haptic/msgs/conversions.hpp"
+
+namespace haptic::handsim {
+namespace {
+
+class ScriptedSource final : public TrackingSource {
+  public:
+    ScriptedSource(const config::SceneConfig& scene, const softhand::SceneSimulation& sim)
+        : script_(sim.trackedHand(), scene.hand, target(scene), scene.tracking.loop),
+          name_(scene.tracking.target_object) {}
+    [[nodiscard]] softhand::HandPoseInput initialPose() const override { return script_.at(0.0); }
+    std::optional<softhand::HandPoseInput> poll(double t_s, std::string&) override {
+        return script_.at(t_s);
+    }
+    [[nodiscard]] std::string describe() const override {
+        return "scripted press_slide_edge on '" + name_ + "'";
+    }
+
+  private:
+    static const config::SceneObject& target(const config::SceneConfig& scene) {
+        const auto* object = scene.findObject(scene.tracking.target_object);
+        if (object == nullptr) {
+            throw std::invalid_argument("tracking.target_object '" + scene.tracking.target_object +
+                                        "' is not in the scene");
+        }
+        return *object;
+    }
+    softhand::PressSlideEdgeScript script_;
+    std::string name_;
+};
+
+class ReplaySource final : public TrackingSource {
+  public:
+    explicit ReplaySource(const config::TrackingConfig& tracking)
+        : track_(load(tracking.replay_file)), loop_(tracking.loop), path_(tracking.replay_file) {}
+    [[nodiscard]] softhand::HandPoseInput initialPose() const override {
+        return track_.at(0.0, loop_);
+    }
+    std::optional<softhand::HandPoseInput> poll(double t_s, std::string&) override {
+        return track_.at(t_s, loop_);
+    }
+    [[nodiscard]] std::string describe() const override {
+        return "replay of " + path_.string() + " (" + std::to_string(track_.frames().size()) +
+               " frames" + (loop_ ? ", looping)" : ")");
+    }
+
+  private:
+    static softhand::ReplayTrack load(const std::filesystem::path& path) {
+        std::ifstream file(path);
+        if (!file) {
+            throw std::runtime_error(path.string() + ": cannot open the replay file");
+        }
+        std::stringstream text;
+        text << file.rdbuf();
+        return softhand::ReplayTrack::parse(text.str(), path.string());
+    }
+    softhand::ReplayTrack track_;
+    bool loop_;
+    std::filesystem::path path_;
+};
+
+class TopicSource final : public TrackingSource {
+  public:
+    TopicSource(const config::SceneConfig& scene, const softhand::SceneSimulation& sim,
+                ipc::DdsParticipant& participant)
+        : reader_(participant.createReader<idl::HandPosePubSubType>(scene.tracking.topic,
+                                                                    ipc::TopicKind::kStream)),
+          initial_(sim.trackedHand().buildPose()),
+          topic_(scene.tracking.topic) {
+        // Until the tracker speaks, the hand waits well above the scene's objects.
+        initial_.wrist.position_m.z() += 0.3;
+    }
+    [[nodiscard]] softhand::HandPoseInput initialPose() const override { return initial_; }
+    std::optional<softhand::HandPoseInput> poll(double, std::string& rejection) override {
+        std::optional<softhand::HandPoseInput> latest;
+        idl::HandPose sample;
+        while (reader_.take(sample)) {
+            msgs::HandPose message;
+            softhand::HandPoseInput input;
+            const auto converted = msgs::fromIdl(sample, message);
+            if (!converted.ok()) {
+                rejection = "HandPose on '" + topic_ + "': " + converted.error;
+                continue;
+            }
+            if (const auto reason = softhand::fromMessage(message, input)) {
+                rejection = "HandPose on '" + topic_ + "': " + *reason;
+                continue;
+            }
+            latest = input;
+        }
+        return latest;
+    }
+    [[nodiscard]] std::string describe() const override {
+        return "HandPose topic '" + topic_ + "'";
+    }
+
+  private:
+    ipc::DdsReader<idl::HandPose> reader_;
+    softhand::HandPoseInput initial_;
+    std::string topic_;
+};
+
+}  // namespace
+
+std::unique_ptr<TrackingSource> makeTrackingSource(const config::SceneConfig& scene,
+                                                   const softhand::SceneSimulation& sim,
+                                                   ipc::DdsParticipant& participant) {
+    switch (scene.tracking.source) {
+        case config::TrackingSource::kScripted:
+            return std::make_unique<ScriptedSource>(scene, sim);
+        case config::TrackingSource::kReplay:
+            return std::make_unique<ReplaySource>(scene.tracking);
+        case config::TrackingSource::kTopic:
+            return std::make_unique<TopicSource>(scene, sim, participant);
+    }
+    throw std::invalid_argument("unknown tracking source");
+}
+
+}  // namespace haptic::handsim

@@ -1,0 +1,32 @@
+#pragma once
+
+// Where handsim's hand pose comes from (scene tracking.source): the scripted motion, a
+// replay file, or the HandPose DDS topic. Poll once per step.
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "haptic/config/scene.hpp"
+#include "haptic/ipc/dds_participant.hpp"
+#include "haptic/softhand/scene_simulation.hpp"
+
+namespace haptic::handsim {
+
+class TrackingSource {
+  public:
+    virtual ~TrackingSource() = default;
+    // The pose to start from (the hand is placed there at rest).
+    [[nodiscard]] virtual softhand::HandPoseInput initialPose() const = 0;
+    // The pose at time t_s since start, or nullopt when there is no new input (topic).
+    // `rejection` receives the reason when an input was refused (NaN, bad quaternion, ...).
+    virtual std::optional<softhand::HandPoseInput> poll(double t_s, std::string& rejection) = 0;
+    [[nodiscard]] virtual std::string describe() const = 0;
+};
+
+// Throws std::runtime_error (replay file errors carry file:line) or std::invalid_argument.
+[[nodiscard]] std::unique_ptr<TrackingSource> makeTrackingSource(
+    const config::SceneConfig& scene, const softhand::SceneSimulation& sim,
+    ipc::DdsParticipant& participant);
+
+}  // namespace haptic::handsim

@@ -1,0 +1,80 @@
+#pragma once
+
+// What the soft hand sends to the daemon each simulation step (msgs/idl/ConstraintSet.idl,
+// ContactSurface.idl). Conventions are listed in sim/softhand/README.md, "Device outputs".
+//
+// Kinesthetic (exoskeleton on a finger): q_sim_rad = the simulated finger's flexion
+// [MCP, PIP, DIP] (rad, flexion positive, HandKinematics), and for each (phalanx, object)
+// pair whose closest skin node is nearer than the contact margin one linearised
+// non-penetration constraint a^T q >= b: phi(q_sim) + a^T (q - q_sim) >= 0 with
+// a_j = n . (axis_j x (x_node - anchor_j)), the node carried rigidly by its phalanx.
+//
+// Tactile (thimble on the fingertip): the finger-pad skin nodes, carried rigidly by the
+// distal phalanx (the undeformed pad), in the device base frame D, with their signed distance
+// to the nearest object (negative = penetrating), that object's outward normal in D, and
+// weight = sample area x pad stiffness per area (N/m).
+
+#include "haptic/config/types.hpp"
+#include "haptic/msgs/messages.hpp"
+#include "haptic/softhand/hand_kinematics.hpp"
+
+namespace haptic::softhand {
+
+struct KinestheticOutputSettings {
+    double contact_margin_m{0.003};  // constraints are sent for gaps below this
+    double min_gradient_m{1e-6};     // |a| below this carries no information: not sent
+};
+
+class KinestheticOutput {
+  public:
+    // Throws std::invalid_argument when the model does not simulate the finger's phalanges.
+    KinestheticOutput(const HandModel& model, const HandKinematics& kinematics,
+                      config::Finger finger, KinestheticOutputSettings settings = {});
+
+    [[nodiscard]] std::array<double, 3> jointAngles(const Simulation& sim) const;
+    // Fills everything but the header.
+    void fill(const Simulation& sim, msgs::ConstraintSet& out) const;
+
+  private:
+    HandKinematics kinematics_;
+    KinestheticOutputSettings settings_;
+    FingerChain chain_;
+    std::array<std::vector<int>, 3> skin_;  // skin nodes of each phalanx
+};
+
+struct TactileOutputSettings {
+    int max_samples{64};  // the thimble optimiser's pad_samples
+    // Pad stiffness per unit area (Pa/m): the pressure rise per metre of indentation of the
+    // stand-in pad, E / (pad tissue thickness) at the build material. 0 = derive it so.
+    double pad_stiffness_pa_per_m{0.0};
+};
+
+class TactileOutput {
+  public:
+    // `finger_from_device` is the thimble's finger_calibration.T_finger_device. Finger frame
+    // F: origin at the centre of the distal phalanx on its axis, x along the phalanx towards
+    // the tip, z from the nail towards the pad, y = z x x. Throws std::invalid_argument when
+    // the model has no distal phalanx for `finger`.
+    TactileOutput(const HandModel& model, config::Finger finger,
+                  const config::Transform& finger_from_device, const TissueMaterial& material,
+                  TactileOutputSettings settings = {});
+
+    [[nodiscard]] int sampleCount() const { return static_cast<int>(samples_.size()); }
+    // Device base frame in the world at the current state.
+    [[nodiscard]] BonePose deviceFrame(const Simulation& sim) const;
+    // Fills everything but the header.
+    void fill(const Simulation& sim, msgs::ContactSurface& out) const;
+
+  private:
+    struct Sample {
+        Vec3 p_bone_m;  // rest position in the distal bone frame
+        double area_m2;
+    };
+    int body_{-1};
+    Mat3 bone_from_device_rotation_;
+    Vec3 bone_from_device_translation_m_;
+    double pad_stiffness_pa_per_m_{0.0};
+    std::vector<Sample> samples_;
+};
+
+}  // namespace haptic::softhand

@@ -1,0 +1,205 @@
+#include "haptic/softhand/device_outputs.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+#include "haptic/softhand/bullet_coupling.hpp"
+
+namespace haptic::softhand {
+
+namespace {
+
+std::vector<int> skinOf(const Simulation& sim, const BoneInfo& bone) {
+    std::vector<int> nodes;
+    for (int node : sim.skinNodes()) {
+        if (node >= bone.first_node && node < bone.first_node + bone.node_count) {
+            nodes.push_back(node);
+        }
+    }
+    return nodes;
+}
+
+const BoneInfo& distalBone(const HandModel& model, config::Finger finger) {
+    for (const auto& bone : model.bones) {
+        if (bone.finger == finger && bone.segment == Segment::kDistal) {
+            return bone;
+        }
+    }
+    throw std::invalid_argument("the hand model has no distal phalanx of the " +
+                                std::string(config::toString(finger)) + " finger");
+}
+
+// Finger frame F in the distal bone frame: same origin, x along the bone, z towards the pad
+// (the bone's -z: the palm faces -z at build time).
+const Mat3& boneFromFinger() {
+    static const Mat3 rotation =
+        Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()).toRotationMatrix();
+    return rotation;
+}
+
+}  // namespace
+
+KinestheticOutput::KinestheticOutput(const HandModel& model, const HandKinematics& kinematics,
+                                     config::Finger finger, KinestheticOutputSettings settings)
+    : kinematics_(kinematics), settings_(settings) {
+    const auto chain = kinematics_.chain(finger);
+    if (!chain) {
+        throw std::invalid_argument("the hand model does not simulate the joints of the " +
+                                    std::string(config::toString(finger)) +
+                                    " finger (an exoskeleton needs hand.model finger or hand)");
+    }
+    chain_ = *chain;
+    for (std::size_t s = 0; s < 3; ++s) {
+        skin_[s] = skinOf(model.simulation, model.bones[static_cast<std::size_t>(chain_.bones[s])]);
+    }
+}
+
+std::array<double, 3> KinestheticOutput::jointAngles(const Simulation& sim) const {
+    return {kinematics_.flexion(sim, chain_.joints[0]), kinematics_.flexion(sim, chain_.joints[1]),
+            kinematics_.flexion(sim, chain_.joints[2])};
+}
+
+void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) const {
+    const auto q = jointAngles(sim);
+    out.dof = 3;
+    out.q_sim_rad.fill(0.0);
+    std::copy(q.begin(), q.end(), out.q_sim_rad.begin());
+    out.constraints.clear();
+    std::array<Vec3, 3> axes;
+    std::array<Vec3, 3> anchors;
+    for (std::size_t j = 0; j < 3; ++j) {
+        axes[j] = kinematics_.axis(sim, chain_.joints[j]);
+        anchors[j] = kinematics_.anchor(sim, chain_.joints[j]);
+    }
+    for (std::size_t s = 0; s < 3; ++s) {
+        for (int collider = 0; collider < sim.colliderCount(); ++collider) {
+            // The closest skin node of this phalanx to this object stands for the contact.
+            int closest = -1;
+            SurfaceQuery nearest;
+            nearest.phi_m = std::numeric_limits<double>::infinity();
+            for (int node : skin_[s]) {
+                const SurfaceQuery query = sim.queryCollider(collider, sim.nodePosition(node));
+                if (query.phi_m < nearest.phi_m) {
+                    nearest = query;
+                    closest = node;
+                }
+            }
+            if (closest < 0 || !(nearest.phi_m < settings_.contact_margin_m) ||
+                out.constraints.full()) {
+                continue;
+            }
+            // A node on phalanx s moves with joints 0..s: d phi / d q_j = n . (u_j x r_j).
+            msgs::LinearConstraint constraint;
+            double b = -nearest.phi_m;
+            double norm_squared = 0.0;
+            for (std::size_t j = 0; j <= s; ++j) {
+                const double a =
+                    nearest.normal.dot(axes[j].cross(sim.nodePosition(closest) - anchors[j]));
+                constraint.a[j] = a;
+                b += a * q[j];
+                norm_squared += a * a;
+            }
+            if (!(norm_squared > settings_.min_gradient_m * settings_.min_gradient_m)) {
+                continue;
+            }
+            constraint.b = b;
+            out.constraints.push_back(constraint);
+        }
+    }
+}
+
+TactileOutput::TactileOutput(const HandModel& model, config::Finger finger,
+                             const config::Transform& finger_from_device,
+                             const TissueMaterial& material, TactileOutputSettings settings) {
+    const BoneInfo& bone = distalBone(model, finger);
+    const Simulation& sim = model.simulation;
+    body_ = bone.body;
+    const Mat3 finger_rotation_device = rotationFromRpy(finger_from_device.rpy_rad);
+    const Vec3 finger_translation_device(finger_from_device.translation_m[0],
+                                         finger_from_device.translation_m[1],
+                                         finger_from_device.translation_m[2]);
+    bone_from_device_rotation_ = boneFromFinger() * finger_rotation_device;
+    bone_from_device_translation_m_ = boneFromFinger() * finger_translation_device;
+
+    // Pad radius and length from the rest skin: the largest distance from the bone axis.
+    const Vec3& centre = sim.bodyPosition(body_);
+    const Mat3& rotation = sim.bodyRotation(body_);
+    const double half_length = 0.5 * bone.length_m;
+    double radius = 0.0;
+    const std::vector<int> skin = skinOf(sim, bone);
+    for (int node : skin) {
+        const Vec3 p_bone = rotation.transpose() * (sim.nodePosition(node) - centre);
+        radius = std::max(radius, std::hypot(p_bone.y(), p_bone.z()));
+    }
+    std::vector<std::pair<double, Vec3>> candidates;  // (distance to D origin, rest point)
+    for (int node : skin) {
+        const Vec3 p_bone = rotation.transpose() * (sim.nodePosition(node) - centre);
+        // The pad: skin facing the palm side, clear of the flanks at the axis height.
+        if ((boneFromFinger().transpose() * p_bone).z() > 0.25 * radius) {
+            candidates.emplace_back((p_bone - bone_from_device_translation_m_).norm(), p_bone);
+        }
+    }
+    if (candidates.empty() || !(radius > 0.0)) {
+        throw std::invalid_argument("tactile output: the distal phalanx has no pad skin nodes");
+    }
+    // The pad half of the tissue surface: half the cylinder side plus the lower quarter of
+    // the tip sphere, shared evenly by the pad-side skin nodes.
+    const double pad_area =
+        std::numbers::pi * radius * 2.0 * half_length * 0.5 + std::numbers::pi * radius * radius;
+    const double area = pad_area / static_cast<double>(candidates.size());
+    std::sort(candidates.begin(), candidates.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    const auto count = std::min<std::size_t>(
+        candidates.size(),
+        std::min<std::size_t>(static_cast<std::size_t>(std::max(settings.max_samples, 1)),
+                              msgs::kMaxContactSamples));
+    for (std::size_t i = 0; i < count; ++i) {
+        samples_.push_back({candidates[i].second, area});
+    }
+    // The bone radius is 0.35 r (hand_builder); the pad tissue is the rest.
+    pad_stiffness_pa_per_m_ = settings.pad_stiffness_pa_per_m > 0.0
+                                  ? settings.pad_stiffness_pa_per_m
+                                  : material.youngs_modulus_pa / (0.65 * radius);
+}
+
+BonePose TactileOutput::deviceFrame(const Simulation& sim) const {
+    const Mat3& rotation = sim.bodyRotation(body_);
+    return {sim.bodyPosition(body_) + rotation * bone_from_device_translation_m_,
+            rotation * bone_from_device_rotation_};
+}
+
+void TactileOutput::fill(const Simulation& sim, msgs::ContactSurface& out) const {
+    out.samples.clear();
+    const Mat3& bone_rotation = sim.bodyRotation(body_);
+    const Vec3& bone_position = sim.bodyPosition(body_);
+    const BonePose device = deviceFrame(sim);
+    for (const Sample& sample : samples_) {
+        const Vec3 p_world = bone_position + bone_rotation * sample.p_bone_m;
+        SurfaceQuery nearest;
+        nearest.phi_m = std::numeric_limits<double>::infinity();
+        for (int collider = 0; collider < sim.colliderCount(); ++collider) {
+            const SurfaceQuery query = sim.queryCollider(collider, p_world);
+            if (query.phi_m < nearest.phi_m) {
+                nearest = query;
+            }
+        }
+        msgs::ContactSample out_sample;
+        const Vec3 p_device = device.rotation.transpose() * (p_world - device.position_m);
+        const Vec3 normal_device = device.rotation.transpose() * nearest.normal.normalized();
+        for (int i = 0; i < 3; ++i) {
+            out_sample.p_device_m[static_cast<std::size_t>(i)] = p_device[i];
+            out_sample.normal_device[static_cast<std::size_t>(i)] = normal_device[i];
+        }
+        // No object at all: far away, pointing back at the pad.
+        out_sample.signed_distance_m = std::isfinite(nearest.phi_m) ? nearest.phi_m : 1.0;
+        out_sample.weight = sample.area_m2 * pad_stiffness_pa_per_m_;
+        out.samples.push_back(out_sample);
+    }
+}
+
+}  // namespace haptic::softhand

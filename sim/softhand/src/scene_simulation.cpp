@@ -1,0 +1,104 @@
+#include "haptic/softhand/scene_simulation.hpp"
+
+#include <stdexcept>
+
+namespace haptic::softhand {
+
+SceneSimulationSettings realtimeSceneSettings() {
+    SceneSimulationSettings settings;
+    settings.solver.pcg_max_iterations = 10;
+    settings.solver.max_backtracks = 2;
+    settings.solver.max_substep_depth = 1;
+    return settings;
+}
+
+SceneSimulation::SceneSimulation(const config::SceneConfig& scene,
+                                 const std::vector<DeviceRequest>& devices,
+                                 const SceneSimulationSettings& settings)
+    : model_(buildHand(scene.hand, settings.solver, settings.build)), hand_(scene.hand) {
+    // Everything that reads the build pose comes before the hand is placed.
+    tracked_hand_ = std::make_unique<TrackedHand>(model_, scene.hand);
+    const HandKinematics kinematics(model_);
+    for (const auto& device : devices) {
+        if (device.kinesthetic) {
+            kinesthetic_.emplace_back(
+                KinestheticOutput(model_, kinematics, device.finger, settings.kinesthetic));
+            tactile_.emplace_back();
+        } else {
+            TactileOutputSettings tactile;
+            tactile.max_samples = device.max_samples;
+            tactile_.emplace_back(TactileOutput(model_, device.finger, device.finger_from_device,
+                                                settings.build.tissue, tactile));
+            kinesthetic_.emplace_back();
+        }
+    }
+    tracking_ = std::make_unique<ElasticTracking>(model_, settings.tracking);
+    coupling_ = std::make_unique<BulletCoupling>(scene.objects, model_.simulation, settings.engine);
+}
+
+void SceneSimulation::reset(const HandPoseInput& pose) {
+    tracked_hand_->bonePoses(pose, poses_);
+    Simulation& sim = model_.simulation;
+    for (std::size_t k = 0; k < model_.bones.size(); ++k) {
+        const BoneInfo& bone = model_.bones[k];
+        const Vec3 c0 = sim.bodyPosition(bone.body);
+        const Mat3 r0 = sim.bodyRotation(bone.body);
+        const Mat3 rotation = poses_[k].rotation * r0.transpose();
+        for (int node = bone.first_node; node < bone.first_node + bone.node_count; ++node) {
+            sim.setNodePosition(node,
+                                poses_[k].position_m + rotation * (sim.nodePosition(node) - c0));
+        }
+        sim.setBodyPose(bone.body, poses_[k].position_m, poses_[k].rotation);
+        sim.setBodyVelocity(bone.body, Vec3::Zero(), Vec3::Zero());
+        sim.setTrackingTarget(bone.body, poses_[k].position_m, poses_[k].rotation);
+    }
+    tracking_->resetToModel(model_);
+}
+
+std::optional<std::string> SceneSimulation::setHandPose(const HandPoseInput& pose) {
+    tracked_hand_->bonePoses(pose, poses_);
+    std::string reason;
+    if (!tracking_->setTrackedPoses(poses_, &reason)) {
+        pending_rejection_ = reason;
+        return reason;
+    }
+    return std::nullopt;
+}
+
+StepReport SceneSimulation::step(double dt_s) {
+    const bool target_clamped = tracking_->update(model_, dt_s);
+    StepReport report = model_.simulation.step(dt_s);
+    coupling_->exchange(model_.simulation, dt_s);
+    report.clamped = report.clamped || target_clamped;
+    if (!pending_rejection_.empty()) {
+        report.rejected_input = true;
+        report.rejection_reason = "hand pose: " + pending_rejection_;
+        pending_rejection_.clear();
+    }
+    return report;
+}
+
+void SceneSimulation::fill(std::size_t device, msgs::ConstraintSet& out) const {
+    kinesthetic_.at(device).value().fill(model_.simulation, out);
+}
+
+void SceneSimulation::fill(std::size_t device, msgs::ContactSurface& out) const {
+    tactile_.at(device).value().fill(model_.simulation, out);
+}
+
+const KinestheticOutput* SceneSimulation::kinesthetic(std::size_t device) const {
+    return kinesthetic_.at(device) ? &*kinesthetic_[device] : nullptr;
+}
+
+const TactileOutput* SceneSimulation::tactile(std::size_t device) const {
+    return tactile_.at(device) ? &*tactile_[device] : nullptr;
+}
+
+std::string SceneSimulation::modelName() const {
+    const std::string finger(config::toString(hand_.finger.value_or(config::Finger::kIndex)));
+    return "softhand_" + std::string(config::toString(hand_.model)) +
+           (hand_.model == config::HandModel::kHand ? "" : "_" + finger) + "_res" +
+           std::to_string(hand_.resolution);
+}
+
+}  // namespace haptic::softhand

@@ -1,0 +1,111 @@
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "haptic/softhand/bullet_coupling.hpp"
+#include "haptic/softhand/tracking_input.hpp"
+
+namespace haptic::softhand {
+
+namespace {
+
+// 0 -> 1 with zero slope at both ends.
+double smooth(double s) {
+    s = std::clamp(s, 0.0, 1.0);
+    return s * s * (3.0 - 2.0 * s);
+}
+
+// Phases of one period (s): descend and press, slide over the edge, lift, return.
+constexpr double kPressEnd = 1.0;
+constexpr double kSlideEnd = 4.0;
+constexpr double kLiftEnd = 4.75;
+
+// Finger posture while pressing (index..little; thumb stays straight): a slightly curled
+// finger whose distal pad meets the face at about 20 degrees, curling a little more as it
+// presses (so the exoskeleton's joints move with the press).
+constexpr std::array<double, 3> kRestFlexion{0.20, 0.10, 0.05};
+constexpr std::array<double, 3> kPressFlexion{0.08, 0.06, 0.04};
+
+}  // namespace
+
+PressSlideEdgeScript::PressSlideEdgeScript(const TrackedHand& hand,
+                                           const config::HandConfig& config,
+                                           const config::SceneObject& target, bool loop)
+    : hand_(hand), finger_(config.finger.value_or(config::Finger::kIndex)), loop_(loop) {
+    const auto* box = std::get_if<config::BoxShape>(&target.shape);
+    if (box == nullptr) {
+        throw std::invalid_argument("press_slide_edge: target_object '" + target.name +
+                                    "' must be a box (it needs a top face and an edge)");
+    }
+    half_extents_ = Vec3(box->half_extents_m[0], box->half_extents_m[1], box->half_extents_m[2]);
+    object_.position_m =
+        Vec3(target.pose.position_m[0], target.pose.position_m[1], target.pose.position_m[2]);
+    object_.rotation = rotationFromRpy(target.pose.rpy_rad);
+    pad_radius_m_ = 0.5 * config.anthropometry.fingertip_diameter_m;
+    distal_half_length_m_ = 0.5 * phalanxLengths(finger_, config.anthropometry.hand_length_m)[2];
+    (void)hand_.referenceDistal(finger_);  // throws when the finger is not simulated
+}
+
+double PressSlideEdgeScript::press(double t_s) const {
+    const double t = loop_ ? std::fmod(std::max(t_s, 0.0), kPeriod) : std::clamp(t_s, 0.0, kPeriod);
+    if (t < kPressEnd) {
+        return smooth(t / kPressEnd);
+    }
+    if (t < kSlideEnd) {
+        return 1.0;
+    }
+    return 1.0 - smooth((t - kSlideEnd) / (kLiftEnd - kSlideEnd));
+}
+
+Vec3 PressSlideEdgeScript::padTargetInObject(double t_s) const {
+    const double t = loop_ ? std::fmod(std::max(t_s, 0.0), kPeriod) : std::clamp(t_s, 0.0, kPeriod);
+    const double x_start = -0.5 * half_extents_.x();
+    const double x_end = half_extents_.x() + 0.010;  // the pad ends beyond the +x edge
+    const double top = half_extents_.z();
+    double x = x_start;
+    if (t >= kPressEnd && t < kSlideEnd) {
+        x = x_start + (x_end - x_start) * smooth((t - kPressEnd) / (kSlideEnd - kPressEnd));
+    } else if (t >= kSlideEnd && t < kLiftEnd) {
+        x = x_end;
+    } else if (t >= kLiftEnd) {
+        x = x_end + (x_start - x_end) * smooth((t - kLiftEnd) / (kPeriod - kLiftEnd));
+    }
+    const double p = press(t_s);
+    const double z = top + kLiftHeight + (-kPressDepth - kLiftHeight) * p;
+    return {x, 0.0, z};
+}
+
+std::array<double, kHandPoseAngles> PressSlideEdgeScript::posture(double p) const {
+    std::array<double, kHandPoseAngles> flexion{};
+    for (std::size_t finger = 1; finger < 5; ++finger) {
+        for (std::size_t s = 0; s < 3; ++s) {
+            flexion[3 * finger + s] = kRestFlexion[s] + p * kPressFlexion[s];
+        }
+    }
+    return flexion;
+}
+
+HandPoseInput PressSlideEdgeScript::at(double t_s) const {
+    HandPoseInput input;
+    input.flexion_rad = posture(press(t_s));
+    input.wrist = {Vec3::Zero(), Mat3::Identity()};
+    // Where the lowest point of the distal pad lands with the wrist at the object's origin,
+    // in the object frame (the hand is carried with the object's orientation).
+    std::vector<BonePose> poses;
+    hand_.referencePoses(input, poses);
+    const BonePose& distal = poses[static_cast<std::size_t>(hand_.referenceDistal(finger_))];
+    const Vec3 axis = distal.rotation * Vec3::UnitX();
+    // The distal bone runs half its length either side of its centre; the lowest point of
+    // its tissue is a pad radius below the lower end.
+    const Vec3 tip = distal.position_m + axis * distal_half_length_m_;
+    const Vec3 base = distal.position_m - axis * distal_half_length_m_;
+    Vec3 lowest = tip.z() < base.z() ? tip : base;
+    lowest.z() -= pad_radius_m_;
+    const Vec3 wrist_in_object = padTargetInObject(t_s) - lowest;
+    input.wrist.position_m = object_.position_m + object_.rotation * wrist_in_object;
+    input.wrist.rotation = object_.rotation;
+    return input;
+}
+
+}  // namespace haptic::softhand

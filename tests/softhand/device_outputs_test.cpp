@@ -1,0 +1,225 @@
+// Device outputs of the soft hand against geometry computed here by hand: the exoskeleton's
+// linearised contact constraint (plane under a straight finger), its prediction of the gap
+// after a small flexion, and the thimble's pad samples in the device frame.
+
+#include "haptic/softhand/device_outputs.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <limits>
+
+#include "haptic/daemon/sim_input_validation.hpp"
+
+namespace haptic::softhand {
+namespace {
+
+config::HandConfig handConfig(config::HandModel model) {
+    config::HandConfig hand;
+    hand.model = model;
+    hand.finger = config::Finger::kIndex;
+    hand.resolution = 1;
+    hand.anthropometry = {0.19, 0.085, 0.016};
+    return hand;
+}
+
+const BoneInfo& bone(const HandModel& model, const char* name) {
+    const BoneInfo* found = model.findBone(name);
+    EXPECT_NE(found, nullptr) << name;
+    return *found;
+}
+
+// Smallest n . (x - p0) over the skin nodes of one bone: the gap to a plane.
+double planeGap(const Simulation& sim, const BoneInfo& b, const Vec3& normal, const Vec3& point) {
+    double gap = std::numeric_limits<double>::infinity();
+    for (int node : sim.skinNodes()) {
+        if (node >= b.first_node && node < b.first_node + b.node_count) {
+            gap = std::min(gap, normal.dot(sim.nodePosition(node) - point));
+        }
+    }
+    return gap;
+}
+
+// Moves every bone and its tissue rigidly to the poses (no solve).
+void placeRigidly(HandModel& model, const std::vector<BonePose>& poses) {
+    Simulation& sim = model.simulation;
+    for (std::size_t k = 0; k < model.bones.size(); ++k) {
+        const BoneInfo& b = model.bones[k];
+        const Vec3 c0 = sim.bodyPosition(b.body);
+        const Mat3 rotation = poses[k].rotation * sim.bodyRotation(b.body).transpose();
+        for (int node = b.first_node; node < b.first_node + b.node_count; ++node) {
+            sim.setNodePosition(node,
+                                poses[k].position_m + rotation * (sim.nodePosition(node) - c0));
+        }
+        sim.setBodyPose(b.body, poses[k].position_m, poses[k].rotation);
+    }
+}
+
+class KinestheticOutputTest : public ::testing::Test {
+  protected:
+    // A plane tilted by 0.2 rad about y, facing up and back, 1 mm below the fingertip's
+    // closest skin node: only the distal phalanx is within the 3 mm margin.
+    void SetUp() override {
+        const double lowest =
+            planeGap(model.simulation, bone(model, "index_distal"), normal, Vec3::Zero());
+        point = normal * (lowest - 0.001);
+        model.simulation.addCollider({HalfSpace{}, point, plane_rotation, 0.5});
+    }
+
+    HandModel model = buildHand(handConfig(config::HandModel::kFinger), SolverSettings{});
+    HandKinematics kinematics{model};
+    KinestheticOutput output{model, kinematics, config::Finger::kIndex};
+    Mat3 plane_rotation = Eigen::AngleAxisd(-0.2, Vec3::UnitY()).toRotationMatrix();
+    Vec3 normal = plane_rotation * Vec3::UnitZ();
+    Vec3 point;
+};
+
+TEST_F(KinestheticOutputTest, StraightFingerOverTiltedPlaneGivesOneHandComputedConstraint) {
+    msgs::ConstraintSet set;
+    output.fill(model.simulation, set);
+    ASSERT_EQ(set.dof, 3);
+    EXPECT_THAT(std::vector<double>(set.q_sim_rad.begin(), set.q_sim_rad.begin() + 3),
+                ::testing::Each(::testing::DoubleNear(0.0, 1e-12)));
+    ASSERT_EQ(set.constraints.size(), 1U);
+
+    // Closest distal skin node and the joint anchors of the straight finger (MCP at the front
+    // of the palm, then the phalanx lengths along x), flexion axis +y.
+    const Simulation& sim = model.simulation;
+    const BoneInfo& distal = bone(model, "index_distal");
+    int closest = -1;
+    double gap = std::numeric_limits<double>::infinity();
+    for (int node : sim.skinNodes()) {
+        if (node >= distal.first_node && node < distal.first_node + distal.node_count &&
+            normal.dot(sim.nodePosition(node) - point) < gap) {
+            gap = normal.dot(sim.nodePosition(node) - point);
+            closest = node;
+        }
+    }
+    EXPECT_NEAR(gap, 0.001, 1e-12);
+    const auto lengths = phalanxLengths(config::Finger::kIndex, 0.19);
+    const double mcp_x = 0.5 * 0.45 * 0.19;
+    const std::array<double, 3> anchor_x{mcp_x, mcp_x + lengths[0],
+                                         mcp_x + lengths[0] + lengths[1]};
+    const Vec3 p = sim.nodePosition(closest);
+    const auto& c = set.constraints[0];
+    for (std::size_t j = 0; j < 3; ++j) {
+        // n . (y x (p - anchor)) with y x d = (d_z, 0, -d_x).
+        const Vec3 d = p - Vec3(anchor_x[j], 0.0, 0.0);
+        EXPECT_NEAR(c.a[j], normal.dot(Vec3(d.z(), 0.0, -d.x())), 1e-12) << "joint " << j;
+    }
+    EXPECT_NEAR(c.b, -gap, 1e-12);  // a^T q >= b at q = 0 holds with 1 mm to spare
+    EXPECT_LT(c.a[2], 0.0);         // flexing the DIP moves the pad into this plane
+
+    set.header.source_id.assign("exo");
+    EXPECT_EQ(daemon::validate(set, "exo", 3), daemon::InputRejection::kNone);
+}
+
+TEST_F(KinestheticOutputTest, ConstraintPredictsTheGapAfterASmallFlexion) {
+    msgs::ConstraintSet set;
+    output.fill(model.simulation, set);
+    ASSERT_EQ(set.constraints.size(), 1U);
+    const auto& c = set.constraints[0];
+
+    const std::array<double, 3> dq{0.004, 0.006, 0.01};
+    std::vector<BonePose> poses;
+    kinematics.forward(kinematics.buildPose(0), dq, poses);
+    placeRigidly(model, poses);
+    const auto q = output.jointAngles(model.simulation);
+    for (std::size_t j = 0; j < 3; ++j) {
+        EXPECT_NEAR(q[j], dq[j], 1e-9);
+    }
+    const double predicted = c.a[0] * dq[0] + c.a[1] * dq[1] + c.a[2] * dq[2] - c.b;
+    const double actual = planeGap(model.simulation, bone(model, "index_distal"), normal, point);
+    EXPECT_LT(actual, 0.001 - 5e-4);  // the flexion really moved the pad towards the plane
+    EXPECT_NEAR(predicted, actual, 2e-5);
+}
+
+TEST_F(KinestheticOutputTest, FarPlaneGivesNoConstraint) {
+    HandModel far = buildHand(handConfig(config::HandModel::kFinger), SolverSettings{});
+    far.simulation.addCollider({HalfSpace{}, Vec3(0, 0, -0.02), Mat3::Identity(), 0.5});
+    const HandKinematics far_kinematics(far);
+    const KinestheticOutput far_output(far, far_kinematics, config::Finger::kIndex);
+    msgs::ConstraintSet set;
+    far_output.fill(far.simulation, set);
+    EXPECT_EQ(set.constraints.size(), 0U);
+}
+
+TEST(KinestheticOutput, FingertipModelHasNoJointsForAnExoskeleton) {
+    const HandModel tip = buildHand(handConfig(config::HandModel::kFingertip), SolverSettings{});
+    const HandKinematics kinematics(tip);
+    EXPECT_THROW(KinestheticOutput(tip, kinematics, config::Finger::kIndex), std::invalid_argument);
+}
+
+class TactileOutputTest : public ::testing::Test {
+  protected:
+    HandModel model = buildHand(handConfig(config::HandModel::kFingertip), SolverSettings{});
+    // Thimble calibration: device base 12 mm from the finger frame origin towards the nail.
+    config::Transform finger_from_device{{0.0, 0.0, -0.012}, {0.0, 0.0, 0.0}};
+    TissueMaterial material;
+    double table_z = -0.009;  // 1 mm below the 8 mm pad radius
+};
+
+TEST_F(TactileOutputTest, StraightFingertipOverTableMatchesHandGeometry) {
+    model.simulation.addCollider({HalfSpace{}, Vec3(0, 0, table_z), Mat3::Identity(), 0.5});
+    TactileOutputSettings settings;
+    settings.max_samples = 40;
+    const TactileOutput output(model, config::Finger::kIndex, finger_from_device, material,
+                               settings);
+    msgs::ContactSurface surface;
+    output.fill(model.simulation, surface);
+    ASSERT_GT(surface.samples.size(), 5U);
+    EXPECT_LE(surface.samples.size(), 40U);
+    // D: origin 12 mm above the bone axis (world z = +0.012), z_D = -z_W, y_D = -y_W.
+    const Vec3 centre = model.simulation.bodyPosition(model.bones.front().body);
+    const double weight = surface.samples[0].weight;
+    EXPECT_GT(weight, 0.0);
+    for (const auto& s : surface.samples) {
+        const Vec3 p_world =
+            centre + Vec3(s.p_device_m[0], -s.p_device_m[1], 0.012 - s.p_device_m[2]);
+        EXPECT_GT(s.p_device_m[2], 0.012 + 0.002);  // pad side: well below the bone axis
+        EXPECT_NEAR(s.signed_distance_m, p_world.z() - table_z, 1e-12);
+        EXPECT_NEAR(s.normal_device[0], 0.0, 1e-12);
+        EXPECT_NEAR(s.normal_device[1], 0.0, 1e-12);
+        EXPECT_NEAR(s.normal_device[2], -1.0, 1e-12);
+        EXPECT_DOUBLE_EQ(s.weight, weight);
+    }
+    // The lowest pad sample is 1 mm above the table.
+    double lowest = 1.0;
+    for (const auto& s : surface.samples) {
+        lowest = std::min(lowest, s.signed_distance_m);
+    }
+    EXPECT_NEAR(lowest, 0.001, 1e-9);
+    surface.header.source_id.assign("thimble");
+    EXPECT_EQ(daemon::validate(surface, "thimble"), daemon::InputRejection::kNone);
+}
+
+TEST_F(TactileOutputTest, PitchedFingertipPressingTableReportsPenetrationAndTiltedNormal) {
+    model.simulation.addCollider({HalfSpace{}, Vec3(0, 0, table_z + 0.003), Mat3::Identity(), 0.5});
+    const TactileOutput output(model, config::Finger::kIndex, finger_from_device, material);
+    const int body = model.bones.front().body;
+    const double pitch = 0.3;
+    const Mat3 rotation = Eigen::AngleAxisd(pitch, Vec3::UnitY()).toRotationMatrix();
+    model.simulation.setBodyPose(body, model.simulation.bodyPosition(body), rotation);
+    msgs::ContactSurface surface;
+    output.fill(model.simulation, surface);
+    ASSERT_FALSE(surface.samples.empty());
+    double deepest = 1.0;
+    const BonePose device = output.deviceFrame(model.simulation);
+    for (const auto& s : surface.samples) {
+        // R_WD = R_y(pitch) R_x(pi): world +z seen in D is (-sin, 0, -cos).
+        EXPECT_NEAR(s.normal_device[0], -std::sin(pitch), 1e-12);
+        EXPECT_NEAR(s.normal_device[1], 0.0, 1e-12);
+        EXPECT_NEAR(s.normal_device[2], -std::cos(pitch), 1e-12);
+        const Vec3 p_world =
+            device.position_m +
+            device.rotation * Vec3(s.p_device_m[0], s.p_device_m[1], s.p_device_m[2]);
+        EXPECT_NEAR(s.signed_distance_m, p_world.z() - (table_z + 0.003), 1e-12);
+        deepest = std::min(deepest, s.signed_distance_m);
+    }
+    EXPECT_LT(deepest, -0.001);  // the undeformed pad reaches 2 mm into the raised table
+}
+
+}  // namespace
+}  // namespace haptic::softhand

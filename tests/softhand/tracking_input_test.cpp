@@ -1,0 +1,306 @@
+// Tracking input: HandPose checks (NaN refused), hand pose -> bone poses, the replay file
+// format and its errors, the scripted press_slide_edge motion, and the scene simulation
+// driven by it (forces rise on the press and fall off the edge).
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <limits>
+
+#include "haptic/softhand/scene_simulation.hpp"
+
+namespace haptic::softhand {
+namespace {
+
+using ::testing::HasSubstr;
+
+config::HandConfig handConfig(config::HandModel model) {
+    config::HandConfig hand;
+    hand.model = model;
+    hand.finger = config::Finger::kIndex;
+    hand.resolution = 1;
+    hand.anthropometry = {0.19, 0.085, 0.016};
+    return hand;
+}
+
+msgs::HandPose validMessage() {
+    msgs::HandPose message;
+    message.wrist_position_m = {0.1, 0.0, 0.2};
+    message.wrist_orientation_wxyz = {1.0, 0.0, 0.0, 0.0};
+    for (std::size_t i = 0; i < kHandPoseAngles; ++i) {
+        message.joint_angles_rad.push_back(0.1);
+    }
+    return message;
+}
+
+TEST(HandPoseMessage, AcceptsAValidPoseAndRefusesNanWithAReason) {
+    HandPoseInput input;
+    EXPECT_EQ(fromMessage(validMessage(), input), std::nullopt);
+    EXPECT_DOUBLE_EQ(input.wrist.position_m.z(), 0.2);
+    EXPECT_DOUBLE_EQ(input.flexion_rad[4], 0.1);
+
+    auto nan_wrist = validMessage();
+    nan_wrist.wrist_position_m[1] = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THAT(fromMessage(nan_wrist, input).value_or(""), HasSubstr("wrist_position_m"));
+    auto nan_angle = validMessage();
+    nan_angle.joint_angles_rad[7] = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THAT(fromMessage(nan_angle, input).value_or(""), HasSubstr("joint_angles_rad[7]"));
+    auto nan_quaternion = validMessage();
+    nan_quaternion.wrist_orientation_wxyz[2] = std::numeric_limits<double>::infinity();
+    EXPECT_THAT(fromMessage(nan_quaternion, input).value_or(""), HasSubstr("not finite"));
+    auto not_unit = validMessage();
+    not_unit.wrist_orientation_wxyz = {1.0, 0.5, 0.0, 0.0};
+    EXPECT_THAT(fromMessage(not_unit, input).value_or(""), HasSubstr("unit quaternion"));
+    auto short_angles = validMessage();
+    short_angles.joint_angles_rad.clear();
+    short_angles.joint_angles_rad.push_back(0.0);
+    EXPECT_THAT(fromMessage(short_angles, input).value_or(""), HasSubstr("expected 15"));
+}
+
+TEST(TrackedHand, BuildPoseAndFlexionOfTheFingerModel) {
+    const HandModel model = buildHand(handConfig(config::HandModel::kFinger), SolverSettings{});
+    const TrackedHand hand(model, handConfig(config::HandModel::kFinger));
+    std::vector<BonePose> poses;
+    hand.bonePoses(hand.buildPose(), poses);
+    ASSERT_EQ(poses.size(), model.bones.size());
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+        EXPECT_TRUE(
+            poses[k].position_m.isApprox(model.simulation.bodyPosition(model.bones[k].body)));
+    }
+    // Index DIP (entry 5) flexed by 0.3 rad: the distal phalanx turns by 0.3 about +y around
+    // the DIP joint and its tip goes down.
+    HandPoseInput input = hand.buildPose();
+    input.flexion_rad[5] = 0.3;
+    hand.bonePoses(input, poses);
+    const BoneInfo* distal = model.findBone("index_distal");
+    const auto k = static_cast<std::size_t>(distal - model.bones.data());
+    const Eigen::AngleAxisd turn(poses[k].rotation);
+    EXPECT_NEAR(turn.angle(), 0.3, 1e-12);
+    EXPECT_TRUE(turn.axis().isApprox(Vec3::UnitY()));
+    const double dip_x = distal->rest_position_m.x() - 0.5 * distal->length_m;
+    const Vec3 expected(dip_x + 0.5 * distal->length_m * std::cos(0.3), distal->rest_position_m.y(),
+                        -0.5 * distal->length_m * std::sin(0.3));
+    EXPECT_TRUE(poses[k].position_m.isApprox(expected, 1e-12)) << poses[k].position_m.transpose();
+}
+
+TEST(TrackedHand, FingertipModelFollowsTheSameFingerKinematics) {
+    const HandModel model = buildHand(handConfig(config::HandModel::kFingertip), SolverSettings{});
+    const TrackedHand hand(model, handConfig(config::HandModel::kFingertip));
+    const HandModel finger = buildHand(handConfig(config::HandModel::kFinger), SolverSettings{});
+    const TrackedHand finger_hand(finger, handConfig(config::HandModel::kFinger));
+    HandPoseInput input = hand.buildPose();
+    input.wrist.position_m = Vec3(0.1, -0.02, 0.2);
+    input.flexion_rad[3] = 0.2;  // index MCP
+    input.flexion_rad[4] = 0.1;
+    std::vector<BonePose> poses;
+    std::vector<BonePose> finger_poses;
+    hand.bonePoses(input, poses);
+    finger_hand.bonePoses(input, finger_poses);
+    ASSERT_EQ(poses.size(), 1U);
+    const auto distal =
+        static_cast<std::size_t>(finger.findBone("index_distal") - finger.bones.data());
+    EXPECT_TRUE(poses[0].position_m.isApprox(finger_poses[distal].position_m, 1e-12));
+    EXPECT_TRUE(poses[0].rotation.isApprox(finger_poses[distal].rotation, 1e-12));
+    EXPECT_NEAR(Eigen::AngleAxisd(poses[0].rotation).angle(), 0.3, 1e-12);
+}
+
+std::string replayRow(double t, double x, double qw = 1.0, const std::string& angle = "0.1") {
+    std::string row = std::to_string(t) + ", " + std::to_string(x) + ", 0, 0.1, " +
+                      std::to_string(qw) + ", 0, 0, 0";
+    for (std::size_t i = 0; i < kHandPoseAngles; ++i) {
+        row += ", " + (i == 4 ? angle : std::string("0.1"));
+    }
+    return row + "\n";
+}
+
+TEST(ReplayTrack, ParsesInterpolatesAndLoops) {
+    const std::string text = "# t_s, wrist xyz, quaternion, 15 angles\n\n" + replayRow(0.0, 0.0) +
+                             replayRow(1.0, 0.1, 1.0, "0.3") + "  # trailing comment\n";
+    const ReplayTrack track = ReplayTrack::parse(text, "r.csv");
+    ASSERT_EQ(track.frames().size(), 2U);
+    const HandPoseInput mid = track.at(0.25, false);
+    EXPECT_NEAR(mid.wrist.position_m.x(), 0.025, 1e-12);
+    EXPECT_NEAR(mid.flexion_rad[4], 0.15, 1e-12);
+    EXPECT_NEAR(track.at(5.0, false).wrist.position_m.x(), 0.1, 1e-12);  // held at the end
+    EXPECT_NEAR(track.at(1.25, true).wrist.position_m.x(), 0.025, 1e-12);
+}
+
+TEST(ReplayTrack, MalformedRowsNameFileAndLine) {
+    const auto error = [](const std::string& text) {
+        try {
+            (void)ReplayTrack::parse(text, "r.csv");
+        } catch (const std::runtime_error& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    const std::string good = replayRow(0.0, 0.0);
+    EXPECT_THAT(error(good + "1.0, 2.0\n"), HasSubstr("r.csv:2: expected 23 columns"));
+    EXPECT_THAT(error(good + replayRow(1.0, 0.0, 1.0, "abc")),
+                HasSubstr("r.csv:2: column 13: 'abc' is not a number"));
+    EXPECT_THAT(error("# header\n" + good + replayRow(1.0, 0.0, 1.0, "nan")),
+                HasSubstr("r.csv:3: column 13 is not finite"));
+    EXPECT_THAT(error(good + replayRow(0.0, 0.1)), HasSubstr("r.csv:2: t_s"));
+    EXPECT_THAT(error(good + replayRow(1.0, 0.1, 0.5)), HasSubstr("r.csv:2: wrist quaternion"));
+    EXPECT_THAT(error("# only a comment\n"), HasSubstr("r.csv: no frames"));
+}
+
+config::SceneObject blockObject() {
+    config::SceneObject block;
+    block.name = "block";
+    block.shape = config::BoxShape{{0.04, 0.03, 0.025}};
+    block.pose.position_m = {0.0, 0.0, 0.025};
+    block.friction = 0.5;
+    return block;
+}
+
+TEST(PressSlideEdgeScript, PlacesThePadOnTheScriptedPathAndLoops) {
+    const auto config = handConfig(config::HandModel::kFinger);
+    const HandModel model = buildHand(config, SolverSettings{});
+    const TrackedHand hand(model, config);
+    const PressSlideEdgeScript script(hand, config, blockObject(), true);
+    std::vector<BonePose> poses;
+    for (double t : {0.0, 0.5, 1.0, 2.5, 3.9, 4.5, 5.5}) {
+        const HandPoseInput input = script.at(t);
+        hand.referencePoses(input, poses);
+        const BonePose& distal =
+            poses[static_cast<std::size_t>(hand.referenceDistal(config::Finger::kIndex))];
+        // Lowest point of the distal tissue: a pad radius below the lower end of the bone.
+        const Vec3 axis = distal.rotation * Vec3::UnitX();
+        const double half = 0.5 * phalanxLengths(config::Finger::kIndex, 0.19)[2];
+        Vec3 lowest = (distal.position_m + half * axis).z() < (distal.position_m - half * axis).z()
+                          ? Vec3(distal.position_m + half * axis)
+                          : Vec3(distal.position_m - half * axis);
+        lowest.z() -= 0.008;
+        const Vec3 target = script.padTargetInObject(t) + Vec3(0.0, 0.0, 0.025);
+        EXPECT_TRUE(lowest.isApprox(target, 1e-9)) << "t = " << t;
+        const HandPoseInput again = script.at(t + PressSlideEdgeScript::kPeriod);
+        EXPECT_TRUE(again.wrist.position_m.isApprox(input.wrist.position_m, 1e-12));
+    }
+    EXPECT_NEAR(script.padTargetInObject(0.0).z(), 0.025 + 0.010, 1e-12);  // lifted
+    EXPECT_NEAR(script.padTargetInObject(2.0).z(), 0.025 - 0.003, 1e-12);  // pressed
+    EXPECT_GT(script.padTargetInObject(4.2).x(), 0.04);                    // past the edge
+    config::SceneObject ball = blockObject();
+    ball.shape = config::SphereShape{0.02};
+    EXPECT_THROW(PressSlideEdgeScript(hand, config, ball, true), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace haptic::softhand
+
+namespace haptic::softhand {
+namespace {
+
+// The default demo scene's physics (index finger, table, block, press_slide_edge) for one
+// script period at 100 Hz: the contact force on the block rises while pressing and sliding
+// and is gone once lifted; both devices' outputs follow. Release only (seconds under ASan).
+TEST(SceneSimulationScripted, PressSlideEdgeForcesRiseAndFallAndOutputsFollow) {
+    config::SceneConfig scene;
+    scene.name = "test";
+    scene.rate_hz = 100;
+    scene.hand = handConfig(config::HandModel::kFinger);
+    config::SceneObject table;
+    table.name = "table";
+    table.shape = config::PlaneShape{};
+    table.friction = 0.6;
+    scene.objects = {table, blockObject()};
+    scene.tracking.target_object = "block";
+    const DeviceRequest exo{"exo", config::Finger::kIndex, true, {}, 64};
+    const DeviceRequest thimble{"thimble", config::Finger::kIndex, false, {{0, 0, -0.012}, {}}, 64};
+    SceneSimulation sim(scene, {exo, thimble}, realtimeSceneSettings());
+    const PressSlideEdgeScript script(sim.trackedHand(), scene.hand, scene.objects[1], true);
+    sim.reset(script.at(0.0));
+    const int block = sim.coupling().colliderOf(1);
+    const double dt = 0.01;
+    double lifted_force = 0.0;
+    double pressed_force = 0.0;
+    double pressed_min_distance = 1.0;
+    double lifted_min_distance = 1.0;
+    std::size_t pressed_constraints = 0;
+    std::size_t lifted_constraints = 0;
+    msgs::ConstraintSet constraints;
+    msgs::ContactSurface surface;
+    for (int step = 1; step <= 600; ++step) {
+        const double t = step * dt;
+        ASSERT_EQ(sim.setHandPose(script.at(t)), std::nullopt);
+        const StepReport report = sim.step(dt);
+        ASSERT_FALSE(report.rejected_input) << report.rejection_reason;
+        ASSERT_TRUE(std::isfinite(report.energy_j));
+        sim.fill(0, constraints);
+        sim.fill(1, surface);
+        double min_distance = 1.0;
+        for (const auto& s : surface.samples) {
+            min_distance = std::min(min_distance, s.signed_distance_m);
+        }
+        const double force = sim.model().simulation.forceOnCollider(block).norm();
+        if ((t > 0.05 && t < 0.4) || t > 5.2) {  // lifted 1 cm above the face
+            lifted_force = std::max(lifted_force, force);
+            lifted_min_distance = std::min(lifted_min_distance, min_distance);
+            lifted_constraints = std::max(lifted_constraints, constraints.constraints.size());
+        }
+        if (t > 1.5 && t < 3.0) {  // pressed 3 mm and sliding on the top face
+            pressed_force = std::max(pressed_force, force);
+            pressed_min_distance = std::min(pressed_min_distance, min_distance);
+            pressed_constraints = std::max(pressed_constraints, constraints.constraints.size());
+        }
+    }
+    EXPECT_EQ(lifted_force, 0.0);
+    EXPECT_GT(pressed_force, 0.2);
+    EXPECT_GT(lifted_min_distance, 0.003);
+    EXPECT_LT(pressed_min_distance, -0.0005);
+    EXPECT_EQ(lifted_constraints, 0U);
+    EXPECT_GE(pressed_constraints, 1U);
+}
+
+}  // namespace
+}  // namespace haptic::softhand
+
+namespace haptic::softhand {
+namespace {
+
+// The thimble-only scene: a fingertip model, pad samples for the thimble, and an exoskeleton
+// refused because the fingertip has no joints.
+TEST(SceneSimulationFingertip, ThimbleSamplesFollowTheScriptAndExoskeletonIsRefused) {
+    config::SceneConfig scene;
+    scene.name = "tip";
+    scene.hand = handConfig(config::HandModel::kFingertip);
+    scene.objects = {blockObject()};
+    const DeviceRequest thimble{"thimble", config::Finger::kIndex, false, {{0, 0, -0.012}, {}}, 64};
+    SceneSimulation sim(scene, {thimble}, realtimeSceneSettings());
+    const PressSlideEdgeScript script(sim.trackedHand(), scene.hand, scene.objects[0], true);
+    sim.reset(script.at(0.0));
+    msgs::ContactSurface surface;
+    sim.fill(0, surface);
+    ASSERT_GT(surface.samples.size(), 3U);
+    EXPECT_LE(surface.samples.size(), 64U);
+    double lifted = 1.0;
+    for (const auto& s : surface.samples) {
+        lifted = std::min(lifted, s.signed_distance_m);
+    }
+    EXPECT_NEAR(lifted, 0.010, 0.002);  // the script starts 10 mm above the face
+    for (int step = 1; step <= 150; ++step) {
+        (void)sim.setHandPose(script.at(step * 0.01));
+        ASSERT_TRUE(std::isfinite(sim.step(0.01).energy_j));
+    }
+    sim.fill(0, surface);
+    double pressed = 1.0;
+    for (const auto& s : surface.samples) {
+        pressed = std::min(pressed, s.signed_distance_m);
+    }
+    EXPECT_LT(pressed, -0.0005);  // pressed into the face at t = 1.5 s
+
+    const DeviceRequest exo{"exo", config::Finger::kIndex, true, {}, 64};
+    EXPECT_THROW(SceneSimulation(scene, {exo}), std::invalid_argument);
+    HandPoseInput bad = script.at(0.0);
+    bad.flexion_rad[4] = std::numeric_limits<double>::quiet_NaN();
+    // A NaN angle moves the tracked pose to NaN: refused, reported in the next step.
+    EXPECT_NE(sim.setHandPose(bad), std::nullopt);
+    const StepReport report = sim.step(0.01);
+    EXPECT_TRUE(report.rejected_input);
+    EXPECT_THAT(report.rejection_reason, HasSubstr("hand pose"));
+}
+
+}  // namespace
+}  // namespace haptic::softhand
