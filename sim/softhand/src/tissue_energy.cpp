@@ -81,11 +81,17 @@ double EnergyTerms::tissue(const Sim& sim, const Sim::Configuration& q, Assemble
         for (int j = 0; j < 4; ++j) {
             assembler->addGradient(nodeDof(n[j]), tet.volume_m3 * piola * g[j]);
         }
+        // R K_ij R^T with K_ij = mu (g_i.g_j) I + mu g_j g_i^T + lambda g_i g_j^T, written
+        // with the rotated gradients R g_i so each block costs two outer products.
+        std::array<Vec3, 4> rotated;
+        for (int i = 0; i < 4; ++i) {
+            rotated[i] = rotation * g[i];
+        }
         for (int i = 0; i < 4; ++i) {
             for (int j = 0; j < 4; ++j) {
-                Mat3 k = tet.mu * g[i].dot(g[j]) * Mat3::Identity() +
-                         tet.mu * g[j] * g[i].transpose() + tet.lambda * g[i] * g[j].transpose();
-                Mat3 block = tet.volume_m3 * rotation * k * rotation.transpose();
+                Mat3 block = tet.volume_m3 * (tet.mu * g[i].dot(g[j]) * Mat3::Identity() +
+                                              tet.mu * rotated[j] * rotated[i].transpose() +
+                                              tet.lambda * rotated[i] * rotated[j].transpose());
                 if (limited) {
                     for (int a = 0; a < 3; ++a) {
                         if (excess(a) == 0.0) {

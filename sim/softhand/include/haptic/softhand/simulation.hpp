@@ -9,12 +9,13 @@
 
 #include <Eigen/Core>
 #include <array>
-#include <map>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "haptic/softhand/block_sparse.hpp"
 #include "haptic/softhand/collider.hpp"
+#include "haptic/softhand/pcg.hpp"
 #include "haptic/softhand/rotation.hpp"
 #include "haptic/softhand/tet_mesh.hpp"
 
@@ -225,11 +226,33 @@ class Simulation {
         std::vector<Mat3> rotation;
     };
 
+    // Buffers of the step, sized once and reused, so a step allocates nothing after the
+    // first (the Hessian pattern only grows when a contact couples a node to a new body).
+    struct Workspace {
+        BlockPattern pattern;
+        std::vector<double> hessian;         // 9 values per pattern block
+        std::vector<double> tissue_hessian;  // the tissue part of `hessian`
+        std::vector<double> system;          // (1 + h alpha) M + h^2 H + h gamma H_tissue
+        std::vector<std::pair<int, int>> missing;
+        std::vector<char> free_mask;
+        std::vector<Mat3> body_inertia;  // world frame
+        Eigen::VectorXd gradient, velocity, rhs, delta, v_plus;
+        Eigen::VectorXd mass_velocity, mass_trial, tissue_trial;
+        Configuration start, predicted, trial;
+        BlockJacobiPreconditioner preconditioner;
+        PcgWorkspace pcg;
+    };
+
   private:
     bool advance(double dt_s, int depth, StepReport& report);
     void detectContacts(const Configuration& q);
     void updateAnchors();
+    [[nodiscard]] std::size_t anchorSlot(int node, int collider) const {
+        return static_cast<std::size_t>(collider) * x_.size() + static_cast<std::size_t>(node);
+    }
     [[nodiscard]] Configuration currentConfiguration() const;
+    void currentConfiguration(Configuration& out) const;
+    [[nodiscard]] double energyNow();
     [[nodiscard]] std::pair<Vec3, Mat3> colliderPose(const Configuration& q, int collider) const;
 
     SolverSettings settings_;
@@ -246,10 +269,13 @@ class Simulation {
     std::vector<Attachment> attachments_;
     std::vector<Collider> colliders_;
     std::vector<Contact> contacts_;
-    std::map<std::pair<int, int>, Anchor> anchors_;  // by (node, collider)
+    // Friction anchors by collider * nodeCount() + node; only pairs in contact are valid.
+    std::vector<Anchor> anchors_;
+    std::vector<char> anchor_valid_;
     std::vector<ContactForce> contact_forces_;
     Eigen::VectorXd warm_start_;
     StepReport pending_;  // input rejections and clamps waiting for the next report
+    Workspace work_;
 
     friend struct EnergyTerms;
 };
