@@ -49,6 +49,8 @@ void fingertipPress(benchmark::State& state) {
     const Vec3 start = model.simulation.bodyPosition(bone);
     std::vector<double> step_us;
     double pcg_iterations = 0.0;
+    double backtracks = 0.0;
+    double substeps = 0.0;
     int step = 0;
     for (auto _ : state) {
         const double t = (step++ % 200) * kDt;  // 1 s cycle: press 4 mm, slide 1 cm, lift
@@ -61,11 +63,15 @@ void fingertipPress(benchmark::State& state) {
         const auto t1 = std::chrono::steady_clock::now();
         step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
         pcg_iterations += r.pcg_iterations;
+        backtracks += r.backtracks;
+        substeps += r.substeps;
         benchmark::DoNotOptimize(r.energy_j);
     }
     state.counters["nodes"] = model.simulation.nodeCount();
     state.counters["tets"] = model.simulation.tetCount();
     report(state, step_us, pcg_iterations);
+    state.counters["backtracks"] = backtracks / static_cast<double>(step_us.size());
+    state.counters["substeps"] = substeps / static_cast<double>(step_us.size());
 }
 
 void fingerFlex(benchmark::State& state) {
@@ -83,6 +89,8 @@ void fingerFlex(benchmark::State& state) {
     }
     std::vector<double> step_us;
     double pcg_iterations = 0.0;
+    double backtracks = 0.0;
+    double substeps = 0.0;
     int step = 0;
     for (auto _ : state) {
         // Flex all three joints together by up to 0.8 rad and back, 1 s period; the palm
@@ -105,11 +113,15 @@ void fingerFlex(benchmark::State& state) {
         const auto t1 = std::chrono::steady_clock::now();
         step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
         pcg_iterations += r.pcg_iterations;
+        backtracks += r.backtracks;
+        substeps += r.substeps;
         benchmark::DoNotOptimize(r.energy_j);
     }
     state.counters["nodes"] = model.simulation.nodeCount();
     state.counters["tets"] = model.simulation.tetCount();
     report(state, step_us, pcg_iterations);
+    state.counters["backtracks"] = backtracks / static_cast<double>(step_us.size());
+    state.counters["substeps"] = substeps / static_cast<double>(step_us.size());
 }
 
 BENCHMARK(fingertipPress)
