@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "energy_terms.hpp"
 #include "haptic/softhand/pcg.hpp"
@@ -216,6 +217,7 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
     const double merit_start = potential_predicted + 0.5 * h * damping_start;
     const double energy_slack = 1e-12 + 1e-9 * std::abs(energy_before);
     double step_fraction = 1.0;
+    double previous_excess = std::numeric_limits<double>::infinity();
     bool accepted = false;
     Eigen::VectorXd& v_plus = w.v_plus;
     v_plus = velocity;
@@ -223,13 +225,22 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
         for (int attempt = 0; attempt <= settings_.max_backtracks; ++attempt) {
             v_plus = velocity + step_fraction * w.delta;
             const Evaluation value = evaluate(v_plus);
-            if (std::isfinite(value.merit) &&
-                value.merit <= merit_start + 1e-12 * std::max(1.0, std::abs(merit_start)) &&
-                value.energy <= energy_before + energy_slack) {
+            const bool merit_lowered =
+                std::isfinite(value.merit) &&
+                value.merit <= merit_start + 1e-12 * std::max(1.0, std::abs(merit_start));
+            const double excess = value.energy - energy_before;
+            if (merit_lowered && excess <= energy_slack) {
                 accepted = true;
                 break;
             }
             ++report.backtracks;
+            // Only the energy rose, and a shorter step did not shrink the rise at least in
+            // proportion: the rise is in the inertial prediction itself, which no shorter
+            // Newton step removes; go straight to substeps instead of halving ten times.
+            if (merit_lowered && !(excess < 0.75 * previous_excess)) {
+                break;
+            }
+            previous_excess = merit_lowered ? excess : previous_excess;
             step_fraction *= 0.5;
         }
     }
