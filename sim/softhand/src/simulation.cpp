@@ -202,9 +202,20 @@ void Simulation::detectContacts(const Configuration& q) {
     contacts_.clear();
     const std::size_t slots = colliders_.size() * x_.size();
     if (anchors_.size() != slots) {
-        // Layout changed (new nodes or colliders): anchors start afresh.
-        anchors_.assign(slots, Anchor{Vec3::Zero(), false});
-        anchor_valid_.assign(slots, 0);
+        // Tissue or colliders were added: every live anchor keeps its (node, collider).
+        std::vector<Anchor> anchors(slots, Anchor{Vec3::Zero(), false});
+        std::vector<char> valid(slots, 0);
+        for (std::size_t slot = 0; slot < anchor_valid_.size(); ++slot) {
+            if (anchor_valid_[slot] != 0) {
+                const auto node = static_cast<int>(slot % anchor_node_count_);
+                const auto collider = static_cast<int>(slot / anchor_node_count_);
+                anchors[anchorSlot(node, collider)] = anchors_[slot];
+                valid[anchorSlot(node, collider)] = 1;
+            }
+        }
+        anchors_ = std::move(anchors);
+        anchor_valid_ = std::move(valid);
+        anchor_node_count_ = x_.size();
     }
     for (int ci = 0; ci < static_cast<int>(colliders_.size()); ++ci) {
         const auto [c, rotation] = colliderPose(q, ci);

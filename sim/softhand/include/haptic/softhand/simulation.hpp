@@ -272,6 +272,7 @@ class Simulation {
     // Friction anchors by collider * nodeCount() + node; only pairs in contact are valid.
     std::vector<Anchor> anchors_;
     std::vector<char> anchor_valid_;
+    std::size_t anchor_node_count_{0};  // node count the anchor slots were laid out for
     std::vector<ContactForce> contact_forces_;
     Eigen::VectorXd warm_start_;
     StepReport pending_;  // input rejections and clamps waiting for the next report
