@@ -15,7 +15,7 @@ std::array<JacobianBlock, 2> angularPair(int dof_a, int dof_b) {
 
 double EnergyTerms::skeleton(const Sim& sim, const Sim::Configuration& q, Assembler* assembler) {
     double energy = 0.0;
-    std::vector<JacobianBlock> blocks;
+    JacobianBlocks blocks;
     for (const auto& attachment : sim.attachments_) {
         const int b = attachment.body;
         const Vec3 lever = q.rotation[b] * attachment.offset_local;
@@ -104,7 +104,7 @@ double EnergyTerms::contact(const Sim& sim, const Sim::Configuration& q, Assembl
             }
         }
     }
-    std::vector<JacobianBlock> blocks;
+    JacobianBlocks blocks;
     for (const auto& contact : sim.contacts_) {
         const auto& collider = sim.colliders_[contact.collider];
         const auto [c, rotation] = sim.colliderPose(q, contact.collider);

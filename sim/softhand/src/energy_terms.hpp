@@ -3,38 +3,59 @@
 // Internal: the potential energy terms of ALGORITHMS.md §2.4, each able to return its energy
 // alone (energy check) or also add its gradient and Gauss-Newton Hessian (Newton step).
 
-#include <Eigen/Sparse>
 #include <span>
 #include <vector>
 
+#include "haptic/softhand/block_sparse.hpp"
 #include "haptic/softhand/simulation.hpp"
 
 namespace haptic::softhand {
 
 // Gradient and PSD Hessian blocks of the potential over the stacked DoFs: 3 per node, then
-// 6 per body (linear, angular).
+// 6 per body (linear, angular). Blocks go straight into the values of a pattern kept between
+// steps; a block the pattern lacks (a contact that couples a node to a new body) is listed in
+// `missing`, and the caller grows the pattern and assembles again.
 class Assembler {
   public:
-    explicit Assembler(int dof_count) : gradient(Eigen::VectorXd::Zero(dof_count)) {}
+    Assembler(const BlockPattern& pattern, std::vector<double>& hessian,
+              std::vector<double>& tissue_hessian, Eigen::VectorXd& gradient,
+              std::vector<std::pair<int, int>>& missing)
+        : gradient(gradient),
+          pattern_(pattern),
+          hessian_(hessian),
+          tissue_hessian_(tissue_hessian),
+          missing_(missing) {
+        const auto values = static_cast<std::size_t>(9 * pattern.blockCount());
+        hessian_.assign(values, 0.0);
+        tissue_hessian_.assign(values, 0.0);
+        gradient.setZero(3 * static_cast<Eigen::Index>(pattern.blockRows()));
+        missing_.clear();
+    }
 
     void addBlock(int row, int col, const Mat3& block) {
-        for (int i = 0; i < 3; ++i) {
-            for (int j = 0; j < 3; ++j) {
-                if (block(i, j) != 0.0) {
-                    (collecting_tissue ? tissue_triplets : triplets)
-                        .emplace_back(row + i, col + j, block(i, j));
-                }
-            }
+        const int k = pattern_.find(row / 3, col / 3);
+        if (k < 0) {
+            missing_.emplace_back(row / 3, col / 3);
+            return;
+        }
+        using RowBlock = Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>;
+        RowBlock(hessian_.data() + 9 * k) += block;
+        if (collecting_tissue) {
+            RowBlock(tissue_hessian_.data() + 9 * k) += block;
         }
     }
     void addGradient(int dof, const Vec3& g) { gradient.segment<3>(dof) += g; }
 
-    Eigen::VectorXd gradient;
-    // Tissue blocks are kept apart: Rayleigh stiffness damping applies to them only. Damping
-    // the contact and friction springs would turn Coulomb sliding into viscous creep.
+    Eigen::VectorXd& gradient;
+    // Tissue blocks are also kept apart: Rayleigh stiffness damping applies to them only.
+    // Damping the contact and friction springs would turn Coulomb sliding into viscous creep.
     bool collecting_tissue{false};
-    std::vector<Eigen::Triplet<double>> tissue_triplets;
-    std::vector<Eigen::Triplet<double>> triplets;
+
+  private:
+    const BlockPattern& pattern_;
+    std::vector<double>& hessian_;
+    std::vector<double>& tissue_hessian_;
+    std::vector<std::pair<int, int>>& missing_;
 };
 
 // One Jacobian block d(residual)/d(dof .. dof+2).
@@ -81,9 +102,20 @@ struct EnergyTerms {
     }
 };
 
+// The Jacobian blocks of one term (at most two bodies of two blocks each), without allocation.
+class JacobianBlocks {
+  public:
+    void clear() { count_ = 0; }
+    void push_back(const JacobianBlock& block) { items_[count_++] = block; }
+    operator std::span<const JacobianBlock>() const { return {items_.data(), count_}; }
+
+  private:
+    std::array<JacobianBlock, 4> items_{};
+    std::size_t count_{0};
+};
+
 // 3x3 Jacobian blocks of a body-fixed point with world lever arm r: [I, -[r]x] (§1.1).
-inline void appendBodyPoint(std::vector<JacobianBlock>& out, int body_dof, const Vec3& lever,
-                            double sign) {
+inline void appendBodyPoint(JacobianBlocks& out, int body_dof, const Vec3& lever, double sign) {
     out.push_back({body_dof, sign * Mat3::Identity()});
     out.push_back({body_dof + 3, -sign * skew(lever)});
 }

@@ -5,83 +5,116 @@
 
 namespace haptic::softhand {
 
-void BlockJacobiPreconditioner::compute(const SparseMatrix& a,
-                                        const std::vector<std::pair<int, int>>& blocks,
+namespace {
+
+using RowBlock = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>;
+
+// Inverse of an SPD block; plain Jacobi when it is not SPD (should not happen with the
+// Gauss-Newton blocks).
+template <int N>
+Eigen::Matrix<double, N, N> invertBlock(Eigen::Matrix<double, N, N> block, const char* free) {
+    for (int r = 0; r < N; ++r) {
+        if (free[r] == 0) {
+            block.row(r).setZero();
+            block.col(r).setZero();
+            block(r, r) = 1.0;
+        }
+    }
+    const Eigen::LDLT<Eigen::Matrix<double, N, N>> ldlt(block);
+    if (ldlt.info() == Eigen::Success && ldlt.isPositive() &&
+        (ldlt.vectorD().array() > 0.0).all()) {
+        return ldlt.solve(Eigen::Matrix<double, N, N>::Identity());
+    }
+    const Eigen::Matrix<double, N, 1> diag = block.diagonal().cwiseAbs().cwiseMax(1e-300);
+    return diag.cwiseInverse().asDiagonal();
+}
+
+}  // namespace
+
+void BlockJacobiPreconditioner::compute(const BlockPattern& pattern,
+                                        const std::vector<double>& values, int node_count,
                                         const std::vector<char>& free_mask) {
-    blocks_ = blocks;
-    inverses_.resize(blocks.size());
-    for (std::size_t bi = 0; bi < blocks.size(); ++bi) {
-        const auto [start, size] = blocks[bi];
-        Eigen::MatrixXd block = Eigen::MatrixXd::Zero(size, size);
-        for (int r = 0; r < size; ++r) {
-            for (SparseMatrix::InnerIterator it(a, start + r); it; ++it) {
-                const auto col = static_cast<int>(it.col());
-                if (col >= start && col < start + size) {
-                    block(r, col - start) = it.value();
+    const int body_count = (pattern.blockRows() - node_count) / 2;
+    node_inverses_.resize(static_cast<std::size_t>(node_count));
+    body_inverses_.resize(static_cast<std::size_t>(body_count));
+    for (int i = 0; i < node_count; ++i) {
+        const Eigen::Matrix3d block = RowBlock(values.data() + 9 * pattern.diagonal(i));
+        node_inverses_[i] = invertBlock<3>(block, free_mask.data() + 3 * i);
+    }
+    for (int b = 0; b < body_count; ++b) {
+        const int first = node_count + 2 * b;
+        Mat6 block = Mat6::Zero();
+        for (int r = 0; r < 2; ++r) {
+            for (int c = 0; c < 2; ++c) {
+                const int k = pattern.find(first + r, first + c);
+                if (k >= 0) {
+                    block.block<3, 3>(3 * r, 3 * c) = RowBlock(values.data() + 9 * k);
                 }
             }
         }
-        for (int r = 0; r < size; ++r) {
-            if (free_mask[start + r] == 0) {
-                block.row(r).setZero();
-                block.col(r).setZero();
-                block(r, r) = 1.0;
-            }
-        }
-        const Eigen::LDLT<Eigen::MatrixXd> ldlt(block);
-        if (ldlt.info() == Eigen::Success && ldlt.isPositive() &&
-            (ldlt.vectorD().array() > 0.0).all()) {
-            inverses_[bi] = ldlt.solve(Eigen::MatrixXd::Identity(size, size));
-        } else {
-            // Not SPD (should not happen with the Gauss-Newton blocks): plain Jacobi.
-            Eigen::VectorXd diag = block.diagonal().cwiseAbs().cwiseMax(1e-300);
-            inverses_[bi] = diag.cwiseInverse().asDiagonal();
-        }
+        body_inverses_[b] = invertBlock<6>(block, free_mask.data() + 3 * first);
     }
 }
 
 void BlockJacobiPreconditioner::apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const {
-    for (std::size_t bi = 0; bi < blocks_.size(); ++bi) {
-        const auto [start, size] = blocks_[bi];
-        z.segment(start, size).noalias() = inverses_[bi] * r.segment(start, size);
+    const auto nodes = static_cast<Eigen::Index>(node_inverses_.size());
+    for (Eigen::Index i = 0; i < nodes; ++i) {
+        z.segment<3>(3 * i).noalias() = node_inverses_[i] * r.segment<3>(3 * i);
+    }
+    for (std::size_t b = 0; b < body_inverses_.size(); ++b) {
+        const Eigen::Index start = 3 * nodes + 6 * static_cast<Eigen::Index>(b);
+        z.segment<6>(start).noalias() = body_inverses_[b] * r.segment<6>(start);
     }
 }
 
-PcgResult solvePcg(const SparseMatrix& a, const Eigen::VectorXd& b,
-                   const std::vector<char>& free_mask, const BlockJacobiPreconditioner& pre,
-                   int max_iterations, double relative_tolerance, Eigen::VectorXd& x) {
+void PcgWorkspace::resize(Eigen::Index n) {
+    for (Eigen::VectorXd* v : {&mask, &r, &z, &p, &ap, &best}) {
+        v->resize(n);
+    }
+}
+
+PcgResult solvePcg(const BlockPattern& pattern, const std::vector<double>& values,
+                   const Eigen::VectorXd& b, const std::vector<char>& free_mask,
+                   const BlockJacobiPreconditioner& pre, int max_iterations,
+                   double relative_tolerance, Eigen::VectorXd& x, PcgWorkspace& work) {
     const auto n = b.size();
-    Eigen::VectorXd mask(n);
+    work.resize(n);
+    Eigen::VectorXd& mask = work.mask;
+    Eigen::VectorXd& r = work.r;
+    Eigen::VectorXd& z = work.z;
+    Eigen::VectorXd& p = work.p;
+    Eigen::VectorXd& ap = work.ap;
     for (Eigen::Index i = 0; i < n; ++i) {
         mask(i) = free_mask[static_cast<std::size_t>(i)] != 0 ? 1.0 : 0.0;
     }
     PcgResult result;
-    const double b_norm = b.cwiseProduct(mask).norm();
+    r = b.cwiseProduct(mask);
+    const double b_norm = r.norm();
     if (b_norm == 0.0) {
         x.setZero();
         result.converged = true;
         return result;
     }
     x = x.cwiseProduct(mask);
-    Eigen::VectorXd r = (b - a * x).cwiseProduct(mask);
+    pattern.multiply(values, x, ap);
+    r = (b - ap).cwiseProduct(mask);
     if (!(r.norm() < b_norm)) {
         // The warm start is worse than nothing (the system changed a lot): start from zero.
         x.setZero();
         r = b.cwiseProduct(mask);
     }
-    Eigen::VectorXd z(n);
     pre.apply(r, z);
     z = z.cwiseProduct(mask);
-    Eigen::VectorXd p = z;
-    Eigen::VectorXd ap(n);
+    p = z;
     double rz = r.dot(z);
     const double target = relative_tolerance * b_norm;
     double r_norm = r.norm();
     // With an iteration cap the last iterate is not always the best one; keep the best.
-    Eigen::VectorXd best = x;
+    Eigen::VectorXd& best = work.best;
+    best = x;
     double best_norm = r_norm;
     while (r_norm > target && result.iterations < max_iterations) {
-        ap.noalias() = a * p;
+        pattern.multiply(values, p, ap);
         ap = ap.cwiseProduct(mask);
         const double curvature = p.dot(ap);
         if (!(curvature > 0.0)) {

@@ -33,7 +33,6 @@ int Simulation::addTissue(const TetMesh& mesh, const TissueMaterial& m) {
     for (const Vec3& p : mesh.nodes_m) {
         rest_.push_back(p);
         x_.push_back(p);
-        ++x_generation_;
         v_.push_back(Vec3::Zero());
         node_mass_.push_back(0.0);
         node_force_.push_back(Vec3::Zero());
@@ -163,7 +162,6 @@ void Simulation::setColliderPose(int collider, const Vec3& position_m, const Mat
 
 void Simulation::setNodePosition(int node, const Vec3& position_m) {
     x_.at(node) = position_m;
-    ++x_generation_;
 }
 
 void Simulation::setBodyPose(int body, const Vec3& position_m, const Mat3& rotation) {
@@ -178,12 +176,18 @@ void Simulation::setBodyVelocity(int body, const Vec3& linear, const Vec3& angul
 
 Simulation::Configuration Simulation::currentConfiguration() const {
     Configuration q;
-    q.x = x_;
-    for (const auto& b : bodies_) {
-        q.c.push_back(b.c);
-        q.rotation.push_back(b.rotation);
-    }
+    currentConfiguration(q);
     return q;
+}
+
+void Simulation::currentConfiguration(Configuration& out) const {
+    out.x = x_;
+    out.c.resize(bodies_.size());
+    out.rotation.resize(bodies_.size());
+    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+        out.c[b] = bodies_[b].c;
+        out.rotation[b] = bodies_[b].rotation;
+    }
 }
 
 std::pair<Vec3, Mat3> Simulation::colliderPose(const Configuration& q, int collider) const {
@@ -196,52 +200,68 @@ std::pair<Vec3, Mat3> Simulation::colliderPose(const Configuration& q, int colli
 
 void Simulation::detectContacts(const Configuration& q) {
     contacts_.clear();
-    std::map<std::pair<int, int>, Anchor> kept;
+    const std::size_t slots = colliders_.size() * x_.size();
+    if (anchors_.size() != slots) {
+        // Tissue or colliders were added: every live anchor keeps its (node, collider).
+        std::vector<Anchor> anchors(slots, Anchor{Vec3::Zero(), false});
+        std::vector<char> valid(slots, 0);
+        for (std::size_t slot = 0; slot < anchor_valid_.size(); ++slot) {
+            if (anchor_valid_[slot] != 0) {
+                const auto node = static_cast<int>(slot % anchor_node_count_);
+                const auto collider = static_cast<int>(slot / anchor_node_count_);
+                anchors[anchorSlot(node, collider)] = anchors_[slot];
+                valid[anchorSlot(node, collider)] = 1;
+            }
+        }
+        anchors_ = std::move(anchors);
+        anchor_valid_ = std::move(valid);
+        anchor_node_count_ = x_.size();
+    }
     for (int ci = 0; ci < static_cast<int>(colliders_.size()); ++ci) {
         const auto [c, rotation] = colliderPose(q, ci);
         for (int node : skin_) {
             const auto query =
                 querySurface(colliders_[ci].desc.shape, rotation.transpose() * (q.x[node] - c));
+            const std::size_t slot = anchorSlot(node, ci);
             if (query.phi_m >= 0.0) {
+                anchor_valid_[slot] = 0;  // contact lost: its anchor goes
                 continue;
             }
-            const auto key = std::make_pair(node, ci);
-            const auto found = anchors_.find(key);
             // A new contact anchors where the node meets the surface: zero friction force.
-            const Anchor anchor =
-                found != anchors_.end()
-                    ? found->second
-                    : Anchor{rotation.transpose() * (q.x[node] - c) - query.phi_m * query.normal,
-                             false};
-            kept[key] = anchor;
+            if (anchor_valid_[slot] == 0) {
+                anchors_[slot] = Anchor{
+                    rotation.transpose() * (q.x[node] - c) - query.phi_m * query.normal, false};
+                anchor_valid_[slot] = 1;
+            }
+            const Anchor& anchor = anchors_[slot];
             const double limit =
                 colliders_[ci].desc.friction * settings_.contact_stiffness_n_per_m * -query.phi_m;
             contacts_.push_back(
                 {node, ci, rotation * query.normal, anchor.local, limit, anchor.sliding});
         }
     }
-    anchors_ = std::move(kept);
 }
 
 void Simulation::updateAnchors() {
-    const Configuration q = currentConfiguration();
+    currentConfiguration(work_.start);
+    const Configuration& q = work_.start;
     const double k_n = settings_.contact_stiffness_n_per_m;
     const double k_f = settings_.friction_stiffness_n_per_m;
     contact_forces_.clear();
     for (const auto& contact : contacts_) {
-        const auto key = std::make_pair(contact.node, contact.collider);
+        const std::size_t slot = anchorSlot(contact.node, contact.collider);
         const auto [c, rotation] = colliderPose(q, contact.collider);
         const Vec3 local = rotation.transpose() * (x_[contact.node] - c);
         const auto query = querySurface(colliders_[contact.collider].desc.shape, local);
         if (query.phi_m >= 0.0) {
-            anchors_.erase(key);
+            anchor_valid_[slot] = 0;
             continue;
         }
         // Explicit Coulomb projection of the anchor (ALGORITHMS §2.4.7), in the object frame.
         const double normal_force = k_n * -query.phi_m;
         const Vec3 projected = local - query.phi_m * query.normal;
         const Mat3 tangent = Mat3::Identity() - query.normal * query.normal.transpose();
-        Vec3 anchor = anchors_[key].local;
+        Vec3 anchor = anchors_[slot].local;
         Vec3 stretch = tangent * (local - anchor);
         const double limit = colliders_[contact.collider].desc.friction * normal_force;
         const bool sliding = k_f * stretch.norm() > limit;
@@ -249,7 +269,7 @@ void Simulation::updateAnchors() {
             anchor = projected - (limit / k_f) * stretch.normalized();
             stretch = tangent * (local - anchor);
         }
-        anchors_[key] = Anchor{anchor, sliding};
+        anchors_[slot] = Anchor{anchor, sliding};
         const Vec3 force_local = normal_force * query.normal - k_f * stretch;
         contact_forces_.push_back(
             {contact.node, contact.collider, rotation * force_local, sliding});

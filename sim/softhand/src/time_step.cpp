@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "energy_terms.hpp"
 #include "haptic/softhand/pcg.hpp"
@@ -20,54 +21,13 @@ struct Layout {
 
 }  // namespace
 
-// Mass matrix, DoF mask and velocity vector, built by a friend so src/ can see the layout.
-struct StepAssembly {
-    static void build(const Simulation& sim, const std::vector<Simulation::Body>& bodies,
-                      const std::vector<std::array<bool, 3>>& pinned,
-                      const std::vector<double>& node_mass, const std::vector<Vec3>& v,
-                      SparseMatrix& mass, std::vector<char>& free_mask, Eigen::VectorXd& velocity,
-                      std::vector<std::pair<int, int>>& blocks) {
-        const Layout layout{sim.nodeCount(), sim.bodyCount()};
-        const int n = layout.dofs();
-        std::vector<Eigen::Triplet<double>> triplets;
-        free_mask.assign(static_cast<std::size_t>(n), 1);
-        velocity.resize(n);
-        blocks.clear();
-        for (int i = 0; i < layout.nodes; ++i) {
-            for (int a = 0; a < 3; ++a) {
-                triplets.emplace_back(3 * i + a, 3 * i + a, node_mass[i]);
-                free_mask[3 * i + a] = pinned[i][a] ? 0 : 1;
-            }
-            velocity.segment<3>(3 * i) = v[i];
-            blocks.emplace_back(3 * i, 3);
-        }
-        for (int b = 0; b < layout.bodies; ++b) {
-            const auto& body = bodies[b];
-            const int dof = layout.body(b);
-            const Mat3 inertia = body.rotation * body.inertia_body * body.rotation.transpose();
-            for (int r = 0; r < 3; ++r) {
-                triplets.emplace_back(dof + r, dof + r, body.mass);
-                for (int c = 0; c < 3; ++c) {
-                    triplets.emplace_back(dof + 3 + r, dof + 3 + c, inertia(r, c));
-                }
-            }
-            for (int k = 0; k < 6; ++k) {
-                free_mask[dof + k] = body.kinematic ? 0 : 1;
-            }
-            velocity.segment<3>(dof) = body.kinematic ? Vec3::Zero() : body.v;
-            velocity.segment<3>(dof + 3) = body.kinematic ? Vec3::Zero() : body.w;
-            blocks.emplace_back(dof, 6);
-        }
-        mass.resize(n, n);
-        mass.setFromTriplets(triplets.begin(), triplets.end());
-    }
-};
-
 namespace {
 
-Simulation::Configuration integrate(const Simulation::Configuration& q,
-                                    const Eigen::VectorXd& velocity, double h) {
-    Simulation::Configuration out = q;
+void integrate(const Simulation::Configuration& q, const Eigen::VectorXd& velocity, double h,
+               Simulation::Configuration& out) {
+    out.x = q.x;
+    out.c = q.c;
+    out.rotation = q.rotation;
     const int nodes = static_cast<int>(q.x.size());
     for (int i = 0; i < nodes; ++i) {
         out.x[i] += h * velocity.segment<3>(3 * i);
@@ -77,10 +37,73 @@ Simulation::Configuration integrate(const Simulation::Configuration& q,
         out.c[b] += h * velocity.segment<3>(dof);
         out.rotation[b] = orthonormalized(expMap(h * velocity.segment<3>(dof + 3)) * q.rotation[b]);
     }
-    return out;
 }
 
 }  // namespace
+
+// Mass matrix products, DoF mask and velocity vector, by a friend so src/ sees the layout.
+struct StepAssembly {
+    static void gatherState(const Simulation& sim, const std::vector<Simulation::Body>& bodies,
+                            const std::vector<std::array<bool, 3>>& pinned,
+                            const std::vector<Vec3>& v, Simulation::Workspace& w) {
+        const Layout layout{sim.nodeCount(), sim.bodyCount()};
+        const int n = layout.dofs();
+        w.free_mask.assign(static_cast<std::size_t>(n), 1);
+        w.velocity.resize(n);
+        w.body_inertia.resize(bodies.size());
+        for (int i = 0; i < layout.nodes; ++i) {
+            for (int a = 0; a < 3; ++a) {
+                w.free_mask[3 * i + a] = pinned[i][a] ? 0 : 1;
+            }
+            w.velocity.segment<3>(3 * i) = v[i];
+        }
+        for (int b = 0; b < layout.bodies; ++b) {
+            const auto& body = bodies[b];
+            const int dof = layout.body(b);
+            w.body_inertia[b] = body.rotation * body.inertia_body * body.rotation.transpose();
+            for (int k = 0; k < 6; ++k) {
+                w.free_mask[dof + k] = body.kinematic ? 0 : 1;
+            }
+            w.velocity.segment<3>(dof) = body.kinematic ? Vec3::Zero() : body.v;
+            w.velocity.segment<3>(dof + 3) = body.kinematic ? Vec3::Zero() : body.w;
+        }
+    }
+
+    // out = M v (lumped node masses, 6x6 body blocks).
+    static void massTimes(const std::vector<double>& node_mass,
+                          const std::vector<Simulation::Body>& bodies,
+                          const Simulation::Workspace& w, const Eigen::VectorXd& v,
+                          Eigen::VectorXd& out) {
+        const int nodes = static_cast<int>(node_mass.size());
+        out.resize(v.size());
+        for (int i = 0; i < nodes; ++i) {
+            out.segment<3>(3 * i) = node_mass[i] * v.segment<3>(3 * i);
+        }
+        for (std::size_t b = 0; b < bodies.size(); ++b) {
+            const int dof = 3 * nodes + 6 * static_cast<int>(b);
+            out.segment<3>(dof) = bodies[b].mass * v.segment<3>(dof);
+            out.segment<3>(dof + 3) = w.body_inertia[b] * v.segment<3>(dof + 3);
+        }
+    }
+
+    // Adds c M to the diagonal blocks of `values`.
+    static void addMass(const std::vector<double>& node_mass,
+                        const std::vector<Simulation::Body>& bodies, Simulation::Workspace& w,
+                        double c) {
+        using RowBlock = Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>;
+        const int nodes = static_cast<int>(node_mass.size());
+        for (int i = 0; i < nodes; ++i) {
+            RowBlock(w.system.data() + 9 * w.pattern.diagonal(i)).diagonal().array() +=
+                c * node_mass[i];
+        }
+        for (std::size_t b = 0; b < bodies.size(); ++b) {
+            const int row = nodes + 2 * static_cast<int>(b);
+            RowBlock(w.system.data() + 9 * w.pattern.diagonal(row)).diagonal().array() +=
+                c * bodies[b].mass;
+            RowBlock(w.system.data() + 9 * w.pattern.diagonal(row + 1)) += c * w.body_inertia[b];
+        }
+    }
+};
 
 StepReport Simulation::step(double dt_s) {
     StepReport report = pending_;
@@ -90,63 +113,75 @@ StepReport Simulation::step(double dt_s) {
         report.rejected_input = true;
         report.rejection_reason = "time step must be finite and in (0, 1] s";
         report.substeps = 0;
-        report.energy_j = totalEnergy();
+        report.energy_j = energyNow();
         return report;
     }
     advance(dt_s, 0, report);
     report.substepped = report.substeps > 1;
     report.active_contacts = static_cast<int>(contact_forces_.size());
-    report.energy_j = totalEnergy();
+    report.energy_j = energyNow();
     return report;
 }
 
 bool Simulation::advance(double h, int depth, StepReport& report) {
     const Layout layout{nodeCount(), bodyCount()};
     const int n = layout.dofs();
-    const Configuration q = currentConfiguration();
-
-    SparseMatrix mass;
-    std::vector<char> free_mask;
-    Eigen::VectorXd velocity;
-    std::vector<std::pair<int, int>> blocks;
-    StepAssembly::build(*this, bodies_, pinned_, node_mass_, v_, mass, free_mask, velocity, blocks);
+    Workspace& w = work_;
+    // Nested substeps reuse the workspace: the caller only returns after them.
+    currentConfiguration(w.start);
+    const Configuration& q = w.start;
+    StepAssembly::gatherState(*this, bodies_, pinned_, v_, w);
+    const Eigen::VectorXd& velocity = w.velocity;
 
     // The Newton step starts from the inertial prediction q + h v, where the merit below is
     // evaluated first: linearising there makes the direction a descent direction of the
     // merit, and contacts about to happen this step are already in the set.
-    const Configuration predicted = integrate(q, velocity, h);
-    detectContacts(predicted);
+    integrate(q, velocity, h, w.predicted);
+    detectContacts(w.predicted);
 
-    Assembler assembler(n);
+    const int block_rows = layout.nodes + 2 * layout.bodies;
+    if (w.pattern.blockRows() != block_rows) {
+        w.pattern.build(block_rows, {});
+    }
     TermStats stats;
-    // The assembled energy at the prediction is the merit's start value (same contact set:
-    // every penetrating node was just detected there), so it is not evaluated twice.
-    const double potential_predicted = EnergyTerms::potential(*this, predicted, &assembler, &stats);
-    SparseMatrix tissue_hessian(n, n);
-    tissue_hessian.setFromTriplets(assembler.tissue_triplets.begin(),
-                                   assembler.tissue_triplets.end());
-    SparseMatrix hessian(n, n);
-    hessian.setFromTriplets(assembler.triplets.begin(), assembler.triplets.end());
-    hessian += tissue_hessian;
+    double potential_predicted = 0.0;
+    for (;;) {
+        stats = TermStats{};
+        Assembler assembler(w.pattern, w.hessian, w.tissue_hessian, w.gradient, w.missing);
+        potential_predicted = EnergyTerms::potential(*this, w.predicted, &assembler, &stats);
+        if (w.missing.empty()) {
+            break;
+        }
+        // New blocks (first step, or a contact coupling a node to a new body): the pattern
+        // grows and keeps them, so later steps assemble in place.
+        std::vector<std::pair<int, int>> blocks = w.missing;
+        w.pattern.appendBlocks(blocks);
+        w.pattern.build(block_rows, std::move(blocks));
+    }
 
     const double alpha = settings_.mass_damping_per_s;
     const double gamma = settings_.stiffness_damping_s;
-    // D = alpha M + gamma H_tissue (Rayleigh on the tissue only).
-    const SparseMatrix system =
-        (1.0 + h * alpha) * mass + (h * h) * hessian + (h * gamma) * tissue_hessian;
-    const Eigen::VectorXd damping_v =
-        alpha * (mass * velocity) + gamma * (tissue_hessian * velocity);
-    const Eigen::VectorXd rhs = -h * (assembler.gradient + damping_v);
+    // System (1 + h alpha) M + h^2 H + h gamma H_tissue, i.e. D = alpha M + gamma H_tissue
+    // (Rayleigh on the tissue only).
+    w.system.resize(w.hessian.size());
+    for (std::size_t k = 0; k < w.system.size(); ++k) {
+        w.system[k] = (h * h) * w.hessian[k] + (h * gamma) * w.tissue_hessian[k];
+    }
+    StepAssembly::addMass(node_mass_, bodies_, w, 1.0 + h * alpha);
+    StepAssembly::massTimes(node_mass_, bodies_, w, velocity, w.mass_velocity);
+    w.pattern.multiply(w.tissue_hessian, velocity, w.tissue_trial);
+    w.rhs = -h * (w.gradient + alpha * w.mass_velocity + gamma * w.tissue_trial);
+    const double damping_start =
+        alpha * velocity.dot(w.mass_velocity) + gamma * velocity.dot(w.tissue_trial);
 
-    BlockJacobiPreconditioner preconditioner;
-    preconditioner.compute(system, blocks, free_mask);
+    w.preconditioner.compute(w.pattern, w.system, layout.nodes, w.free_mask);
     if (warm_start_.size() != n || !warm_start_.allFinite()) {
         warm_start_ = Eigen::VectorXd::Zero(n);
     }
-    Eigen::VectorXd delta = warm_start_;
+    w.delta = warm_start_;
     const PcgResult pcg =
-        solvePcg(system, rhs, free_mask, preconditioner, settings_.pcg_max_iterations,
-                 settings_.pcg_relative_tolerance, delta);
+        solvePcg(w.pattern, w.system, w.rhs, w.free_mask, w.preconditioner,
+                 settings_.pcg_max_iterations, settings_.pcg_relative_tolerance, w.delta, w.pcg);
     report.pcg_iterations += pcg.iterations;
     report.pcg_relative_residual = pcg.relative_residual;
     if (!pcg.converged) {
@@ -164,46 +199,48 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
     struct Evaluation {
         double merit;
         double energy;
-        double tissue;
     };
     const auto evaluate = [&](const Eigen::VectorXd& v_plus) {
-        const Eigen::VectorXd dv = v_plus - velocity;
-        const Eigen::VectorXd m_v = mass * v_plus;
+        StepAssembly::massTimes(node_mass_, bodies_, w, v_plus, w.mass_trial);
+        w.pattern.multiply(w.tissue_hessian, v_plus, w.tissue_trial);
         const double damping =
-            alpha * v_plus.dot(m_v) + gamma * v_plus.dot(tissue_hessian * v_plus);
-        const Configuration next = integrate(q, v_plus, h);
-        const double tissue = EnergyTerms::tissue(*this, next, nullptr, nullptr);
-        const double potential = tissue + EnergyTerms::external(*this, next, nullptr) +
-                                 EnergyTerms::skeleton(*this, next, nullptr) +
-                                 EnergyTerms::contact(*this, next, nullptr);
-        return Evaluation{0.5 * dv.dot(mass * dv) + potential + 0.5 * h * damping,
-                          0.5 * v_plus.dot(m_v) + potential, tissue};
+            alpha * v_plus.dot(w.mass_trial) + gamma * v_plus.dot(w.tissue_trial);
+        integrate(q, v_plus, h, w.trial);
+        const double potential = EnergyTerms::potential(*this, w.trial, nullptr, nullptr);
+        const double kinetic_change = (v_plus - velocity).dot(w.mass_trial - w.mass_velocity);
+        return Evaluation{0.5 * kinetic_change + potential + 0.5 * h * damping,
+                          0.5 * v_plus.dot(w.mass_trial) + potential};
     };
-    const double energy_before = 0.5 * velocity.dot(mass * velocity) + currentTissueEnergy() +
-                                 EnergyTerms::external(*this, q, nullptr) +
-                                 EnergyTerms::skeleton(*this, q, nullptr) +
-                                 EnergyTerms::contact(*this, q, nullptr);
-    const double merit_start =
-        potential_predicted + 0.5 * h *
-                                  (alpha * velocity.dot(mass * velocity) +
-                                   gamma * velocity.dot(tissue_hessian * velocity));
+    const double energy_before =
+        0.5 * velocity.dot(w.mass_velocity) + EnergyTerms::potential(*this, q, nullptr, nullptr);
+    // Phi(v) is the potential at the prediction, already summed by the assembly above.
+    const double merit_start = potential_predicted + 0.5 * h * damping_start;
     const double energy_slack = 1e-12 + 1e-9 * std::abs(energy_before);
     double step_fraction = 1.0;
+    double previous_excess = std::numeric_limits<double>::infinity();
     bool accepted = false;
-    double accepted_tissue = 0.0;
-    Eigen::VectorXd v_plus = velocity;
-    if (delta.allFinite() && std::isfinite(merit_start)) {
+    Eigen::VectorXd& v_plus = w.v_plus;
+    v_plus = velocity;
+    if (w.delta.allFinite() && std::isfinite(merit_start)) {
         for (int attempt = 0; attempt <= settings_.max_backtracks; ++attempt) {
-            v_plus = velocity + step_fraction * delta;
+            v_plus = velocity + step_fraction * w.delta;
             const Evaluation value = evaluate(v_plus);
-            if (std::isfinite(value.merit) &&
-                value.merit <= merit_start + 1e-12 * std::max(1.0, std::abs(merit_start)) &&
-                value.energy <= energy_before + energy_slack) {
+            const bool merit_lowered =
+                std::isfinite(value.merit) &&
+                value.merit <= merit_start + 1e-12 * std::max(1.0, std::abs(merit_start));
+            const double excess = value.energy - energy_before;
+            if (merit_lowered && excess <= energy_slack) {
                 accepted = true;
-                accepted_tissue = value.tissue;
                 break;
             }
             ++report.backtracks;
+            // Only the energy rose, and a shorter step did not shrink the rise at least in
+            // proportion: the rise is in the inertial prediction itself, which no shorter
+            // Newton step removes; go straight to substeps instead of halving ten times.
+            if (merit_lowered && !(excess < 0.75 * previous_excess)) {
+                break;
+            }
+            previous_excess = merit_lowered ? excess : previous_excess;
             step_fraction *= 0.5;
         }
     }
@@ -217,24 +254,26 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
         report.clamped = true;
         v_plus.setZero();
     }
-    warm_start_ = accepted ? delta : Eigen::VectorXd::Zero(n);
+    if (accepted) {
+        warm_start_ = w.delta;
+    } else {
+        warm_start_.setZero();
+    }
 
     // Speed clamp: a tracking teleport must not fling tissue across the scene.
     const double v_max = settings_.max_speed_m_per_s;
-    bool nodes_clamped = false;
     for (int i = 0; i < layout.nodes + layout.bodies; ++i) {
         const int dof = i < layout.nodes ? 3 * i : layout.body(i - layout.nodes);
         const double speed = v_plus.segment<3>(dof).norm();
         if (speed > v_max) {
             v_plus.segment<3>(dof) *= v_max / speed;
             report.clamped = true;
-            nodes_clamped = nodes_clamped || i < layout.nodes;
         }
     }
-    const Configuration next = integrate(q, v_plus, h);
+    integrate(q, v_plus, h, w.trial);
+    const Configuration& next = w.trial;
     for (int i = 0; i < layout.nodes; ++i) {
         x_[i] = next.x[i];
-        ++x_generation_;
         v_[i] = v_plus.segment<3>(3 * i);
     }
     for (int b = 0; b < layout.bodies; ++b) {
@@ -245,11 +284,6 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
         bodies_[b].rotation = next.rotation[b];
         bodies_[b].v = v_plus.segment<3>(layout.body(b));
         bodies_[b].w = v_plus.segment<3>(layout.body(b) + 3);
-    }
-    if (accepted && !nodes_clamped) {
-        // The nodes are where the accepted evaluation put them: its tissue energy is current.
-        tissue_energy_j_ = accepted_tissue;
-        tissue_energy_generation_ = x_generation_;
     }
     updateAnchors();
     ++report.substeps;
@@ -298,17 +332,23 @@ double Simulation::totalEnergy() const {
         const Mat3 inertia = b.rotation * b.inertia_body * b.rotation.transpose();
         kinetic += 0.5 * b.mass * b.v.squaredNorm() + 0.5 * b.w.dot(inertia * b.w);
     }
-    const Configuration q = currentConfiguration();
-    return kinetic + currentTissueEnergy() + EnergyTerms::external(*this, q, nullptr) +
-           EnergyTerms::skeleton(*this, q, nullptr) + EnergyTerms::contact(*this, q, nullptr);
+    return kinetic + EnergyTerms::potential(*this, currentConfiguration(), nullptr, nullptr);
 }
 
-double Simulation::currentTissueEnergy() const {
-    if (tissue_energy_generation_ != x_generation_) {
-        tissue_energy_j_ = EnergyTerms::tissue(*this, currentConfiguration(), nullptr, nullptr);
-        tissue_energy_generation_ = x_generation_;
+double Simulation::energyNow() {
+    double kinetic = 0.0;
+    for (int i = 0; i < nodeCount(); ++i) {
+        kinetic += 0.5 * node_mass_[i] * v_[i].squaredNorm();
     }
-    return tissue_energy_j_;
+    for (const auto& b : bodies_) {
+        if (b.kinematic) {
+            continue;
+        }
+        const Mat3 inertia = b.rotation * b.inertia_body * b.rotation.transpose();
+        kinetic += 0.5 * b.mass * b.v.squaredNorm() + 0.5 * b.w.dot(inertia * b.w);
+    }
+    currentConfiguration(work_.start);
+    return kinetic + EnergyTerms::potential(*this, work_.start, nullptr, nullptr);
 }
 
 }  // namespace haptic::softhand

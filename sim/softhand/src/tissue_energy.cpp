@@ -1,3 +1,5 @@
+#include <algorithm>
+
 #include "energy_terms.hpp"
 
 namespace haptic::softhand {
@@ -36,9 +38,20 @@ double EnergyTerms::tissue(const Sim& sim, const Sim::Configuration& q, Assemble
         ds.col(1) = q.x[n[2]] - q.x[n[0]];
         ds.col(2) = q.x[n[3]] - q.x[n[0]];
         const Mat3 f = ds * tet.rest_inverse;
-        const RotationVariantSvd svd = rotationVariantSvd(f);
-        const Mat3 rotation = svd.rotation();
-        const Mat3 strain = rotation.transpose() * f - Mat3::Identity();
+        // Most elements are well inside the strain limits: the polar rotation alone gives
+        // the energy, and since |sigma_i - 1| <= |R^T F - I|_F the limits cannot be active
+        // below that margin. Elements near a limit, flat or inverted take the full SVD.
+        Mat3 rotation;
+        const bool polar = polarRotation(f, rotation);
+        Mat3 strain = polar ? Mat3(rotation.transpose() * f - Mat3::Identity()) : Mat3::Zero();
+        const double margin = std::min(tet.strain_max - 1.0, 1.0 - tet.strain_min);
+        const bool need_svd = !polar || (tet.strain_limits && !(strain.norm() < margin));
+        RotationVariantSvd svd{Mat3::Identity(), Vec3::Ones(), Mat3::Identity()};
+        if (need_svd) {
+            svd = rotationVariantSvd(f);
+            rotation = svd.rotation();
+            strain = rotation.transpose() * f - Mat3::Identity();
+        }
         const double trace = strain.trace();
         energy += tet.volume_m3 *
                   (tet.mu * (f - rotation).squaredNorm() + 0.5 * tet.lambda * trace * trace);
@@ -54,7 +67,7 @@ double EnergyTerms::tissue(const Sim& sim, const Sim::Configuration& q, Assemble
         // inverted, which is far below strain_min, so the penalty restores orientation).
         Vec3 excess = Vec3::Zero();
         bool limited = false;
-        if (tet.strain_limits) {
+        if (tet.strain_limits && need_svd) {
             for (int i = 0; i < 3; ++i) {
                 const double s = svd.sigma(i);
                 if (s > tet.strain_max) {
@@ -68,7 +81,7 @@ double EnergyTerms::tissue(const Sim& sim, const Sim::Configuration& q, Assemble
         }
         if (stats != nullptr) {
             stats->strain_limited_elements += limited ? 1 : 0;
-            stats->inverted_elements += svd.sigma(2) < 0.0 ? 1 : 0;
+            stats->inverted_elements += need_svd && svd.sigma(2) < 0.0 ? 1 : 0;
         }
         if (assembler == nullptr) {
             continue;
@@ -81,11 +94,17 @@ double EnergyTerms::tissue(const Sim& sim, const Sim::Configuration& q, Assemble
         for (int j = 0; j < 4; ++j) {
             assembler->addGradient(nodeDof(n[j]), tet.volume_m3 * piola * g[j]);
         }
+        // R K_ij R^T with K_ij = mu (g_i.g_j) I + mu g_j g_i^T + lambda g_i g_j^T, written
+        // with the rotated gradients R g_i so each block costs two outer products.
+        std::array<Vec3, 4> rotated;
+        for (int i = 0; i < 4; ++i) {
+            rotated[i] = rotation * g[i];
+        }
         for (int i = 0; i < 4; ++i) {
             for (int j = 0; j < 4; ++j) {
-                Mat3 k = tet.mu * g[i].dot(g[j]) * Mat3::Identity() +
-                         tet.mu * g[j] * g[i].transpose() + tet.lambda * g[i] * g[j].transpose();
-                Mat3 block = tet.volume_m3 * rotation * k * rotation.transpose();
+                Mat3 block = tet.volume_m3 * (tet.mu * g[i].dot(g[j]) * Mat3::Identity() +
+                                              tet.mu * rotated[j] * rotated[i].transpose() +
+                                              tet.lambda * rotated[i] * rotated[j].transpose());
                 if (limited) {
                     for (int a = 0; a < 3; ++a) {
                         if (excess(a) == 0.0) {

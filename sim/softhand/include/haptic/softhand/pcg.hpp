@@ -3,16 +3,15 @@
 // Preconditioned conjugate gradient with a block-Jacobi preconditioner (3x3 node blocks, 6x6
 // body blocks) and Dirichlet filtering (Baraff-Witkin style): pinned DoFs stay at zero.
 // Eigen's ConjugateGradient has no filter and no per-call report of the cap being hit, which
-// the solver report needs, so the iteration is written out here on Eigen's sparse types.
+// the solver report needs, so the iteration is written out here, on the 3x3-block matrix of
+// block_sparse.hpp, with every vector in a workspace that is sized once.
 
 #include <Eigen/Core>
-#include <Eigen/Sparse>
-#include <utility>
 #include <vector>
 
-namespace haptic::softhand {
+#include "haptic/softhand/block_sparse.hpp"
 
-using SparseMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+namespace haptic::softhand {
 
 struct PcgResult {
     int iterations{0};
@@ -22,19 +21,28 @@ struct PcgResult {
 
 class BlockJacobiPreconditioner {
   public:
-    // blocks: (first dof, size) covering every DoF once; free_mask: 1 = unknown, 0 = pinned.
-    void compute(const SparseMatrix& a, const std::vector<std::pair<int, int>>& blocks,
+    using Mat6 = Eigen::Matrix<double, 6, 6>;
+    // The first `node_count` block rows are nodes (3x3 blocks); each body then spans two
+    // block rows (linear, angular), inverted together as one 6x6 block. free_mask: 1 =
+    // unknown, 0 = pinned (its row and column are replaced by the identity).
+    void compute(const BlockPattern& pattern, const std::vector<double>& values, int node_count,
                  const std::vector<char>& free_mask);
     void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const;
 
   private:
-    std::vector<std::pair<int, int>> blocks_;
-    std::vector<Eigen::MatrixXd> inverses_;
+    std::vector<Eigen::Matrix3d> node_inverses_;
+    std::vector<Mat6> body_inverses_;
 };
 
-// Solves a x = b on the free DoFs, starting from x (warm start).
-PcgResult solvePcg(const SparseMatrix& a, const Eigen::VectorXd& b,
-                   const std::vector<char>& free_mask, const BlockJacobiPreconditioner& pre,
-                   int max_iterations, double relative_tolerance, Eigen::VectorXd& x);
+struct PcgWorkspace {
+    Eigen::VectorXd mask, r, z, p, ap, best;
+    void resize(Eigen::Index n);
+};
+
+// Solves A x = b on the free DoFs, starting from x (warm start); A is `values` on `pattern`.
+PcgResult solvePcg(const BlockPattern& pattern, const std::vector<double>& values,
+                   const Eigen::VectorXd& b, const std::vector<char>& free_mask,
+                   const BlockJacobiPreconditioner& pre, int max_iterations,
+                   double relative_tolerance, Eigen::VectorXd& x, PcgWorkspace& work);
 
 }  // namespace haptic::softhand

@@ -9,13 +9,13 @@
 
 #include <Eigen/Core>
 #include <array>
-#include <cstdint>
-#include <map>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "haptic/softhand/block_sparse.hpp"
 #include "haptic/softhand/collider.hpp"
+#include "haptic/softhand/pcg.hpp"
 #include "haptic/softhand/rotation.hpp"
 #include "haptic/softhand/tet_mesh.hpp"
 
@@ -157,10 +157,6 @@ class Simulation {
     // Sum of contact forces the tissue applies to a collider (reaction, world frame).
     [[nodiscard]] Vec3 forceOnCollider(int collider) const;
     [[nodiscard]] double totalEnergy() const;
-    [[nodiscard]] int colliderCount() const { return static_cast<int>(colliders_.size()); }
-    // Closest surface of a collider to a world point, at the collider's current pose; the
-    // normal and surface point are in the world frame.
-    [[nodiscard]] SurfaceQuery queryCollider(int collider, const Vec3& p_world_m) const;
     [[nodiscard]] const SolverSettings& settings() const { return settings_; }
     SolverSettings& settings() { return settings_; }
 
@@ -230,11 +226,33 @@ class Simulation {
         std::vector<Mat3> rotation;
     };
 
+    // Buffers of the step, sized once and reused, so a step allocates nothing after the
+    // first (the Hessian pattern only grows when a contact couples a node to a new body).
+    struct Workspace {
+        BlockPattern pattern;
+        std::vector<double> hessian;         // 9 values per pattern block
+        std::vector<double> tissue_hessian;  // the tissue part of `hessian`
+        std::vector<double> system;          // (1 + h alpha) M + h^2 H + h gamma H_tissue
+        std::vector<std::pair<int, int>> missing;
+        std::vector<char> free_mask;
+        std::vector<Mat3> body_inertia;  // world frame
+        Eigen::VectorXd gradient, velocity, rhs, delta, v_plus;
+        Eigen::VectorXd mass_velocity, mass_trial, tissue_trial;
+        Configuration start, predicted, trial;
+        BlockJacobiPreconditioner preconditioner;
+        PcgWorkspace pcg;
+    };
+
   private:
     bool advance(double dt_s, int depth, StepReport& report);
     void detectContacts(const Configuration& q);
     void updateAnchors();
+    [[nodiscard]] std::size_t anchorSlot(int node, int collider) const {
+        return static_cast<std::size_t>(collider) * x_.size() + static_cast<std::size_t>(node);
+    }
     [[nodiscard]] Configuration currentConfiguration() const;
+    void currentConfiguration(Configuration& out) const;
+    [[nodiscard]] double energyNow();
     [[nodiscard]] std::pair<Vec3, Mat3> colliderPose(const Configuration& q, int collider) const;
 
     SolverSettings settings_;
@@ -251,16 +269,14 @@ class Simulation {
     std::vector<Attachment> attachments_;
     std::vector<Collider> colliders_;
     std::vector<Contact> contacts_;
-    std::map<std::pair<int, int>, Anchor> anchors_;  // by (node, collider)
+    // Friction anchors by collider * nodeCount() + node; only pairs in contact are valid.
+    std::vector<Anchor> anchors_;
+    std::vector<char> anchor_valid_;
+    std::size_t anchor_node_count_{0};  // node count the anchor slots were laid out for
     std::vector<ContactForce> contact_forces_;
     Eigen::VectorXd warm_start_;
     StepReport pending_;  // input rejections and clamps waiting for the next report
-    // Tissue energy of the current node positions (it depends on nothing else): the end of
-    // one step's report and the start of the next step's energy check share it.
-    [[nodiscard]] double currentTissueEnergy() const;
-    std::uint64_t x_generation_{0};  // bumped whenever x_ changes
-    mutable std::uint64_t tissue_energy_generation_{~std::uint64_t{0}};
-    mutable double tissue_energy_j_{0.0};
+    Workspace work_;
 
     friend struct EnergyTerms;
 };
