@@ -157,6 +157,10 @@ class Simulation {
     // Sum of contact forces the tissue applies to a collider (reaction, world frame).
     [[nodiscard]] Vec3 forceOnCollider(int collider) const;
     [[nodiscard]] double totalEnergy() const;
+    [[nodiscard]] int colliderCount() const { return static_cast<int>(colliders_.size()); }
+    // Closest surface of a collider to a world point, at the collider's current pose; the
+    // normal and surface point are in the world frame.
+    [[nodiscard]] SurfaceQuery queryCollider(int collider, const Vec3& p_world_m) const;
     [[nodiscard]] const SolverSettings& settings() const { return settings_; }
     SolverSettings& settings() { return settings_; }
 
