@@ -3,19 +3,23 @@
 # pools, `hapticemu` for the exoskeleton and the thimble on the UDP CAN bus (the shipped device
 # files say can.transport: udp), then hapticd and handsim, and shows `hapticctl status` live.
 # Stops everything on Ctrl-C or after --duration and checks that no shared memory is left
-# behind.
+# behind. Once both devices are up it enables rendering, records haptic/telemetry for the
+# first RECORD seconds (the scripted press / slide / edge motion loops every 6 s) and writes
+# a PNG of the rendered forces and loop timing with `hapticctl plot`.
 #
-#   scripts/demo.sh [--duration SECONDS] [--realtime enforce|ignore]
+#   scripts/demo.sh [--duration SECONDS] [--record SECONDS] [--realtime enforce|ignore]
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 DURATION=0
 REALTIME=ignore   # this VM has no PREEMPT_RT kernel; use 'enforce' on a lab PC
+RECORD=15         # seconds of telemetry in the PNG: two and a half loops of the script
 while (($#)); do
   case "$1" in
     --duration) DURATION=$2; shift 2 ;;
     --realtime) REALTIME=$2; shift 2 ;;
-    -h|--help) sed -n '2,7p' "$0"; exit 0 ;;
+    --record) RECORD=$2; shift 2 ;;
+    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -58,6 +62,7 @@ cleanup() {
   trap - EXIT INT TERM
   echo
   echo "demo: shutting down"
+  [[ -n "${RECORD_PID:-}" ]] && stop "$RECORD_PID" "hapticctl record"
   [[ -n "${SIM_PID:-}" ]] && stop "$SIM_PID" handsim
   [[ -n "${DAEMON_PID:-}" ]] && stop "$DAEMON_PID" hapticd
   [[ -n "${THIMBLE_EMU_PID:-}" ]] && stop "$THIMBLE_EMU_PID" hapticemu-thimble
@@ -111,6 +116,37 @@ DAEMON_PID=$!
 setsid "$HANDSIM" >"$LOGS/handsim.log" 2>&1 &
 SIM_PID=$!
 
+# Rendering starts once the daemon answers and both devices report in (hapticd refuses
+# `enable` while a device is still OFFLINE or a fault is latched).
+echo "demo: enabling rendering"
+enabled=0
+for _ in $(seq 30); do
+  if "$HAPTICCTL" enable >"$LOGS/enable.log" 2>&1; then enabled=1; break; fi
+  sleep 1
+done
+if ((enabled)); then
+  cat "$LOGS/enable.log"
+else
+  echo "demo: hapticd did not accept 'enable' within 30 s:" >&2
+  cat "$LOGS/enable.log" >&2
+fi
+if ((DURATION > 0 && RECORD > DURATION - 2)); then RECORD=$((DURATION > 4 ? DURATION - 2 : 2)); fi
+CSV="$LOGS/telemetry.csv"
+PNG="$LOGS/forces_and_timing.png"
+"$HAPTICCTL" record "$CSV" --duration "$RECORD" >"$LOGS/record.log" 2>&1 &
+RECORD_PID=$!
+plotted=0
+plot_recording() {
+  wait "$RECORD_PID" 2>/dev/null || true
+  RECORD_PID=
+  plotted=1
+  if "$HAPTICCTL" plot "$CSV" --output "$PNG" >"$LOGS/plot.log" 2>&1; then
+    PLOT_MESSAGE="demo: $RECORD s of forces and loop timing plotted to $PNG (data: $CSV)"
+  else
+    PLOT_MESSAGE="demo: plotting failed: $(tail -n 1 "$LOGS/plot.log")"
+  fi
+}
+
 start=$SECONDS
 while :; do
   sleep 2
@@ -122,10 +158,17 @@ while :; do
       exit 1
     fi
   done
-  [[ -t 1 ]] && clear
-  echo "--- hapticctl status ($((SECONDS - start)) s; Ctrl-C to stop) ---"
-  "$HAPTICCTL" status || true
+  if ((!plotted)) && ! kill -0 "$RECORD_PID" 2>/dev/null; then
+    plot_recording
+  fi
+  # Two redraws of the live view per round; watch clears the screen on a terminal.
+  "$HAPTICCTL" watch --interval 1 --count 2 || true
+  echo "--- $((SECONDS - start)) s; Ctrl-C to stop ---"
+  [[ -n "${PLOT_MESSAGE:-}" ]] && echo "$PLOT_MESSAGE"
   if ((DURATION > 0 && SECONDS - start >= DURATION)); then
     break
   fi
 done
+# A --duration run ends with the picture: wait for the recording if it is still going.
+if ((!plotted)); then plot_recording; fi
+echo "$PLOT_MESSAGE"
