@@ -21,8 +21,8 @@
 #include <utility>
 #include <vector>
 
-#include "haptic/softhand/elastic_tracking.hpp"
 #include "haptic/config/scene.hpp"
+#include "haptic/softhand/elastic_tracking.hpp"
 #include "haptic/softhand/hand_builder.hpp"
 #include "haptic/softhand/scene_simulation.hpp"
 
