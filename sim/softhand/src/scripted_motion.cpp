@@ -21,12 +21,17 @@ constexpr double kPressEnd = 1.0;
 constexpr double kSlideEnd = 4.0;
 constexpr double kLiftEnd = 4.75;
 
-// Finger posture while pressing (index..little; thumb stays straight): a slightly curled
-// finger whose distal pad meets the face at about 20 degrees, curling a little more as it
-// presses (so the exoskeleton's joints move with the press).
-constexpr std::array<double, 3> kRestFlexion{0.20, 0.10, 0.05};
-constexpr std::array<double, 3> kPressFlexion{0.08, 0.06, 0.04};
-
+// Finger posture while pressing (index..little; thumb stays straight): nearly straight,
+// curling a little at MCP and PIP as it presses (so the exoskeleton's joints move with the
+// press). The DIP stays straight: with DIP flexion the distal phalanx is the finger's
+// steepest segment and the tip, not the pad, meets the face.
+constexpr std::array<double, 3> kRestFlexion{0.06, 0.04, 0.0};
+constexpr std::array<double, 3> kPressFlexion{0.04, 0.03, 0.0};
+// The whole hand is pitched so that the distal phalanx meets the face at this angle, tip
+// lower: the pad under the thimble's plate presses, and the knuckles stay above the face.
+// (With a curled finger and a level hand the tip met the face at ~30 degrees, outside the
+// region under the plate, so the thimble never rendered the demo's contact.)
+constexpr double kDistalPitchRad = 0.10;
 }  // namespace
 
 PressSlideEdgeScript::PressSlideEdgeScript(const TrackedHand& hand,
@@ -95,16 +100,26 @@ HandPoseInput PressSlideEdgeScript::at(double t_s) const {
     std::vector<BonePose> poses;
     hand_.referencePoses(input, poses);
     const BonePose& distal = poses[static_cast<std::size_t>(hand_.referenceDistal(finger_))];
-    const Vec3 axis = distal.rotation * Vec3::UnitX();
+    const Vec3 curled_axis = distal.rotation * Vec3::UnitX();
+    Mat3 pitch = Mat3::Identity();
+    const Vec3 level(curled_axis.x(), curled_axis.y(), 0.0);
+    if (level.norm() > 1e-6) {
+        const Vec3 wanted = std::cos(kDistalPitchRad) * level.normalized() -
+                            std::sin(kDistalPitchRad) * Vec3::UnitZ();
+        pitch = Eigen::Quaterniond::FromTwoVectors(curled_axis, wanted).toRotationMatrix();
+    }
     // The distal bone runs half its length either side of its centre; the lowest point of
-    // its tissue is a pad radius below the lower end.
-    const Vec3 tip = distal.position_m + axis * distal_half_length_m_;
-    const Vec3 base = distal.position_m - axis * distal_half_length_m_;
+    // its tissue is a pad radius below the lower end. Pitching the wrist about its origin
+    // carries every bone with it.
+    const Vec3 axis = pitch * curled_axis;
+    const Vec3 centre = pitch * distal.position_m;
+    const Vec3 tip = centre + axis * distal_half_length_m_;
+    const Vec3 base = centre - axis * distal_half_length_m_;
     Vec3 lowest = tip.z() < base.z() ? tip : base;
     lowest.z() -= pad_radius_m_;
     const Vec3 wrist_in_object = padTargetInObject(t_s) - lowest;
     input.wrist.position_m = object_.position_m + object_.rotation * wrist_in_object;
-    input.wrist.rotation = object_.rotation;
+    input.wrist.rotation = object_.rotation * pitch;
     return input;
 }
 

@@ -25,10 +25,24 @@ using namespace haptic;
 
 // The shipped device files' values (config/devices/*.yaml). The fuzz build cannot link the
 // YAML loader (see CMakeLists.txt), and the decoders only need ids and limits.
+config::CanConfig canConfig(std::uint32_t command, std::uint32_t state, std::uint32_t heartbeat,
+                            std::uint32_t fault) {
+    config::CanConfig can;
+    can.interface = "can0";
+    can.bitrate = 1000000;
+    can.command_id = command;
+    can.state_id = state;
+    can.heartbeat_id = heartbeat;
+    can.fault_id = fault;
+    can.heartbeat_timeout_ms = 50;
+    can.state_timeout_ms = 10;
+    return can;
+}
+
 config::DeviceConfig exoskeletonConfig() {
     config::DeviceConfig device;
     device.name = "exo";
-    device.can = {"can0", 1000000, false, 0x101, 0x181, 0x701, 0x081, 50, 10};
+    device.can = canConfig(0x101, 0x181, 0x701, 0x081);
     config::ExoskeletonConfig exo;
     exo.actuator = {0.0, 0.025, 40.0, 0.08, 0.005};
     constexpr double kDeg = 3.14159265358979323846 / 180.0;
@@ -41,7 +55,7 @@ config::DeviceConfig exoskeletonConfig() {
 config::DeviceConfig thimbleConfig() {
     config::DeviceConfig device;
     device.name = "thimble";
-    device.can = {"can0", 1000000, false, 0x102, 0x182, 0x702, 0x082, 50, 10};
+    device.can = canConfig(0x102, 0x182, 0x702, 0x082);
     config::ThimbleConfig thimble;
     constexpr double kDeg = 3.14159265358979323846 / 180.0;
     thimble.servos = {-30.0 * kDeg, 90.0 * kDeg, 400.0 * kDeg, 0.03};
