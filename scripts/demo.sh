@@ -170,5 +170,7 @@ while :; do
   fi
 done
 # A --duration run ends with the picture: wait for the recording if it is still going.
-if ((!plotted)); then plot_recording; fi
-echo "$PLOT_MESSAGE"
+if ((!plotted)); then
+  plot_recording
+  echo "$PLOT_MESSAGE"
+fi
