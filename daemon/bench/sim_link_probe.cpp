@@ -10,6 +10,7 @@
 #include "dds_sim_link.hpp"
 #include "haptic/daemon/periodic_timer.hpp"
 #include "haptic/ipc/dds_participant.hpp"
+#include "haptic/ipc/iceoryx_channels.hpp"
 #include "haptic/ipc/iceoryx_runtime.hpp"
 #include "haptic/ipc/topics.hpp"
 #include "iceoryx_posh/popo/subscriber.hpp"
@@ -18,23 +19,6 @@
 
 namespace haptic::bench {
 namespace {
-
-iox::capro::ServiceDescription serviceFor(const std::string& device, std::string_view event) {
-    const std::string service(ipc::kIceoryxService);
-    const std::string event_name(event);
-    return {iox::capro::IdString_t(iox::cxx::TruncateToCapacity, service.c_str()),
-            iox::capro::IdString_t(iox::cxx::TruncateToCapacity, device.c_str()),
-            iox::capro::IdString_t(iox::cxx::TruncateToCapacity, event_name.c_str())};
-}
-
-// The same options hapticd's RT thread subscribes with (daemon_app.cpp).
-iox::popo::SubscriberOptions latestValueOptions() {
-    iox::popo::SubscriberOptions options;
-    options.queueCapacity = 1;
-    options.historyRequest = 1;
-    options.queueFullPolicy = iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
-    return options;
-}
 
 struct IceoryxInputs {
     std::vector<std::unique_ptr<iox::popo::Subscriber<msgs::ConstraintSet>>> constraint_sets;
@@ -62,7 +46,7 @@ class DeliveryWatcher {
                 iox::popo::SubscriberOptions options;
                 options.queueCapacity = 16;
                 iceoryx_ = std::make_unique<iox::popo::Subscriber<msgs::ConstraintSet>>(
-                    serviceFor(device.name, ipc::kConstraintSetEvent), options);
+                    ipc::deviceService(device.name, ipc::kConstraintSetEvent), options);
                 thread_ = std::thread([this] { runIceoryx(); });
             }
             break;
@@ -131,11 +115,13 @@ int runSimLinkProbe(const config::DaemonConfig& cfg, ProbeTransport transport, d
             if (device.isExoskeleton()) {
                 iceoryx.constraint_sets.push_back(
                     std::make_unique<iox::popo::Subscriber<msgs::ConstraintSet>>(
-                        serviceFor(device.name, ipc::kConstraintSetEvent), latestValueOptions()));
+                        ipc::deviceService(device.name, ipc::kConstraintSetEvent),
+                        ipc::latestValueSubscriberOptions()));
             } else {
                 iceoryx.contact_surfaces.push_back(
                     std::make_unique<iox::popo::Subscriber<msgs::ContactSurface>>(
-                        serviceFor(device.name, ipc::kContactSurfaceEvent), latestValueOptions()));
+                        ipc::deviceService(device.name, ipc::kContactSurfaceEvent),
+                        ipc::latestValueSubscriberOptions()));
             }
         }
     } else {

@@ -20,6 +20,7 @@
 #include "haptic/daemon/seqlock.hpp"
 #include "haptic/daemon/watchdog_gate.hpp"
 #include "haptic/ipc/dds_participant.hpp"
+#include "haptic/ipc/iceoryx_channels.hpp"
 #include "haptic/ipc/iceoryx_runtime.hpp"
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
@@ -33,27 +34,10 @@ namespace {
 
 using daemon::monotonicNowNs;
 
-iox::capro::ServiceDescription serviceFor(const std::string& device, std::string_view event) {
-    const std::string service(ipc::kIceoryxService);
-    const std::string event_name(event);
-    return {iox::capro::IdString_t(iox::cxx::TruncateToCapacity, service.c_str()),
-            iox::capro::IdString_t(iox::cxx::TruncateToCapacity, device.c_str()),
-            iox::capro::IdString_t(iox::cxx::TruncateToCapacity, event_name.c_str())};
-}
-
 // One sample per device per tick, drained every ~10 ms by the non-RT thread. Telemetry is
 // best effort (the RT thread never waits for it): 2048 slots hold about one second of two
 // devices, so only a non-RT thread stalled that long loses samples, and they are counted.
 using TelemetryQueue = iox::concurrent::LockFreeQueue<msgs::TelemetrySample, 2048>;
-
-iox::popo::SubscriberOptions latestValueOptions() {
-    // Control data: only the newest sample matters, so a queue of one that drops the oldest.
-    iox::popo::SubscriberOptions options;
-    options.queueCapacity = 1;
-    options.historyRequest = 1;
-    options.queueFullPolicy = iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
-    return options;
-}
 
 // The iceoryx endpoints of one device. Exactly one of the two subscribers exists, matching
 // the device kind; none exist when the sim link is DDS (see dds_sim_link.hpp). The RT
@@ -311,16 +295,18 @@ int runDaemon(const DaemonOptions& options) {
         if (device.isExoskeleton()) {
             endpoints[i].constraint_sets =
                 std::make_unique<iox::popo::Subscriber<msgs::ConstraintSet>>(
-                    serviceFor(device.name, ipc::kConstraintSetEvent), latestValueOptions());
+                    ipc::deviceService(device.name, ipc::kConstraintSetEvent),
+                    ipc::latestValueSubscriberOptions());
         } else {
             endpoints[i].contact_surfaces =
                 std::make_unique<iox::popo::Subscriber<msgs::ContactSurface>>(
-                    serviceFor(device.name, ipc::kContactSurfaceEvent), latestValueOptions());
+                    ipc::deviceService(device.name, ipc::kContactSurfaceEvent),
+                    ipc::latestValueSubscriberOptions());
         }
         iox::popo::PublisherOptions publisher_options;
         publisher_options.historyCapacity = 1;
         endpoints[i].device_state = std::make_unique<iox::popo::Publisher<msgs::DeviceState>>(
-            serviceFor(device.name, ipc::kDeviceStateEvent), publisher_options);
+            ipc::deviceService(device.name, ipc::kDeviceStateEvent), publisher_options);
     }
 
     ipc::DdsParticipant participant(

@@ -12,6 +12,7 @@
 
 #include "SimStatusPubSubTypes.h"
 #include "haptic/ipc/dds_participant.hpp"
+#include "haptic/ipc/iceoryx_channels.hpp"
 #include "haptic/ipc/iceoryx_runtime.hpp"
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
@@ -24,14 +25,6 @@
 
 namespace haptic::handsim {
 namespace {
-
-iox::capro::ServiceDescription serviceFor(const std::string& device, std::string_view event) {
-    const std::string service(ipc::kIceoryxService);
-    const std::string event_name(event);
-    return {iox::capro::IdString_t(iox::cxx::TruncateToCapacity, service.c_str()),
-            iox::capro::IdString_t(iox::cxx::TruncateToCapacity, device.c_str()),
-            iox::capro::IdString_t(iox::cxx::TruncateToCapacity, event_name.c_str())};
-}
 
 std::int64_t monotonicNs() {
     return std::chrono::duration_cast<std::chrono::nanoseconds>(
@@ -108,16 +101,16 @@ int runSim(const SimOptions& options) {
         }
         if (device.isExoskeleton()) {
             links[i].constraint_sets = std::make_unique<iox::popo::Publisher<msgs::ConstraintSet>>(
-                serviceFor(device.name, ipc::kConstraintSetEvent));
+                ipc::deviceService(device.name, ipc::kConstraintSetEvent));
         } else {
             links[i].contact_surfaces =
                 std::make_unique<iox::popo::Publisher<msgs::ContactSurface>>(
-                    serviceFor(device.name, ipc::kContactSurfaceEvent));
+                    ipc::deviceService(device.name, ipc::kContactSurfaceEvent));
         }
         iox::popo::SubscriberOptions subscriber_options;
         subscriber_options.queueCapacity = 1;
         links[i].device_states = std::make_unique<iox::popo::Subscriber<msgs::DeviceState>>(
-            serviceFor(device.name, ipc::kDeviceStateEvent), subscriber_options);
+            ipc::deviceService(device.name, ipc::kDeviceStateEvent), subscriber_options);
     }
 
     ipc::DdsParticipant participant(

@@ -15,6 +15,7 @@
 #include <string>
 #include <thread>
 
+#include "haptic/ipc/iceoryx_channels.hpp"
 #include "haptic/ipc/iceoryx_runtime.hpp"
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/messages.hpp"
@@ -30,14 +31,6 @@ std::int64_t monotonicNs() {
     timespec ts{};
     ::clock_gettime(CLOCK_MONOTONIC, &ts);
     return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
-iox::capro::ServiceDescription serviceFor(const std::string& device, std::string_view event) {
-    const std::string service(ipc::kIceoryxService);
-    const std::string event_name(event);
-    return {iox::capro::IdString_t(iox::cxx::TruncateToCapacity, service.c_str()),
-            iox::capro::IdString_t(iox::cxx::TruncateToCapacity, device.c_str()),
-            iox::capro::IdString_t(iox::cxx::TruncateToCapacity, event_name.c_str())};
 }
 
 // A wall at MCP <= -0.4 rad, beyond the joint's limit: the emulated finger is always inside
@@ -146,9 +139,9 @@ int main() {
     process::installShutdownHandlers();
     ipc::initIceoryxRuntime("sim_input_injector");
     iox::popo::Publisher<msgs::ConstraintSet> constraints(
-        serviceFor("exo", ipc::kConstraintSetEvent));
+        ipc::deviceService("exo", ipc::kConstraintSetEvent));
     iox::popo::Publisher<msgs::ContactSurface> contacts(
-        serviceFor("thimble", ipc::kContactSurfaceEvent));
+        ipc::deviceService("thimble", ipc::kContactSurfaceEvent));
     while (!constraints.hasSubscribers() || !contacts.hasSubscribers()) {
         if (process::shutdownRequested()) {
             return 1;
