@@ -36,8 +36,7 @@ kinesthetic::RenderParameters exoskeletonRenderParameters(const config::Exoskele
 
 ExoskeletonChannel::ExoskeletonChannel(const config::DeviceConfig& device, can::CanBus& bus,
                                        const ChannelSettings& settings)
-    : DeviceChannel(device, bus, settings),
-      driver_(device, bus),
+    : DriverChannel(device, bus, settings),
       model_(device.exoskeleton()),
       renderer_(model_, exoskeletonRenderParameters(device.exoskeleton())),
       guard_(portGuardConfig(device, settings)),

@@ -18,8 +18,7 @@ tactile::ServoAngles retractAngles(const tactile::ThimbleKinematics& kinematics)
 
 ThimbleChannel::ThimbleChannel(const config::DeviceConfig& device, can::CanBus& bus,
                                const ChannelSettings& settings)
-    : DeviceChannel(device, bus, settings),
-      driver_(device, bus),
+    : DriverChannel(device, bus, settings),
       kinematics_(device.thimble()),
       optimiser_(kinematics_, tactile::OptimiserSettings::fromConfig(device.thimble())),
       retract_servo_rad_(retractAngles(kinematics_)),

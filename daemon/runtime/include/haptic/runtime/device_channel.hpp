@@ -105,4 +105,35 @@ class DeviceChannel {
     std::uint64_t tx_errors_{0};
 };
 
+// The driver half of a channel, the same for every device type: it owns the device's driver
+// and the command written each tick, and answers DeviceChannel's driver hooks from them.
+template <typename Driver, typename Command>
+class DriverChannel : public DeviceChannel {
+  public:
+    [[nodiscard]] const Command& command() const noexcept { return command_; }
+    [[nodiscard]] const Driver& driver() const noexcept { return driver_; }
+
+  protected:
+    DriverChannel(const config::DeviceConfig& device, can::CanBus& bus,
+                  const ChannelSettings& settings)
+        : DeviceChannel(device, bus, settings), driver_(device, bus) {}
+
+    bool driverHandleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept override {
+        return driver_.handleFrame(frame, now_ns);
+    }
+    std::uint32_t driverFaults(std::int64_t now_ns) noexcept override {
+        return driver_.faults(now_ns);
+    }
+    can::IoResult sendCommand() noexcept override { return driver_.sendCommand(command_); }
+    [[nodiscard]] const devices::LinkMonitor& link() const noexcept override {
+        return driver_.link();
+    }
+    [[nodiscard]] std::uint64_t rejectedFrames() const noexcept override {
+        return driver_.codec().rejects().total();
+    }
+
+    Driver driver_;
+    Command command_{};
+};
+
 }  // namespace haptic::runtime

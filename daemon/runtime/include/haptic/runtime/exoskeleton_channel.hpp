@@ -24,7 +24,8 @@ namespace haptic::runtime {
 [[nodiscard]] kinesthetic::RenderParameters exoskeletonRenderParameters(
     const config::ExoskeletonConfig& exo);
 
-class ExoskeletonChannel final : public DeviceChannel {
+class ExoskeletonChannel final
+    : public DriverChannel<devices::ExoskeletonDriver, protocol::ExoskeletonCommand> {
   public:
     // Throws std::invalid_argument when the device is not an exoskeleton or its parameters
     // are invalid.
@@ -38,30 +39,14 @@ class ExoskeletonChannel final : public DeviceChannel {
         return renderer_.parameters().method;
     }
     [[nodiscard]] const kinesthetic::RenderOutput& renderOutput() const noexcept { return out_; }
-    [[nodiscard]] const protocol::ExoskeletonCommand& command() const noexcept { return command_; }
-    [[nodiscard]] const devices::ExoskeletonDriver& driver() const noexcept { return driver_; }
 
   protected:
-    bool driverHandleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept override {
-        return driver_.handleFrame(frame, now_ns);
-    }
-    std::uint32_t driverFaults(std::int64_t now_ns) noexcept override {
-        return driver_.faults(now_ns);
-    }
-    can::IoResult sendCommand() noexcept override { return driver_.sendCommand(command_); }
-    [[nodiscard]] const devices::LinkMonitor& link() const noexcept override {
-        return driver_.link();
-    }
-    [[nodiscard]] std::uint64_t rejectedFrames() const noexcept override {
-        return driver_.codec().rejects().total();
-    }
     [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
 
   private:
     void followMethod(const msgs::DeviceId& method) noexcept;
     void measure() noexcept;
 
-    devices::ExoskeletonDriver driver_;
     kinesthetic::ExoskeletonDevice model_;  // before renderer_, which keeps a reference
     kinesthetic::KinestheticRenderer renderer_;
     kinesthetic::ActuatorPortGuard guard_;
@@ -73,7 +58,6 @@ class ExoskeletonChannel final : public DeviceChannel {
     std::uint64_t encoder_updates_{0};
     std::int64_t encoder_time_ns_{0};
     kinesthetic::RenderOutput out_;
-    protocol::ExoskeletonCommand command_{};
 };
 
 }  // namespace haptic::runtime

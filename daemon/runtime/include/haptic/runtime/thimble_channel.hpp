@@ -24,7 +24,8 @@
 
 namespace haptic::runtime {
 
-class ThimbleChannel final : public DeviceChannel {
+class ThimbleChannel final
+    : public DriverChannel<devices::ThimbleDriver, protocol::ThimbleCommand> {
   public:
     // Throws std::invalid_argument when the device is not a thimble.
     ThimbleChannel(const config::DeviceConfig& device, can::CanBus& bus,
@@ -36,31 +37,15 @@ class ThimbleChannel final : public DeviceChannel {
     [[nodiscard]] const tactile::ServoAngles& retractServoAngles() const noexcept {
         return retract_servo_rad_;
     }
-    [[nodiscard]] const protocol::ThimbleCommand& command() const noexcept { return command_; }
     [[nodiscard]] const tactile::SolveReport& lastSolve() const noexcept { return solved_.report; }
-    [[nodiscard]] const devices::ThimbleDriver& driver() const noexcept { return driver_; }
 
   protected:
-    bool driverHandleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept override {
-        return driver_.handleFrame(frame, now_ns);
-    }
-    std::uint32_t driverFaults(std::int64_t now_ns) noexcept override {
-        return driver_.faults(now_ns);
-    }
-    can::IoResult sendCommand() noexcept override { return driver_.sendCommand(command_); }
-    [[nodiscard]] const devices::LinkMonitor& link() const noexcept override {
-        return driver_.link();
-    }
-    [[nodiscard]] std::uint64_t rejectedFrames() const noexcept override {
-        return driver_.codec().rejects().total();
-    }
     [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
 
   private:
     void measure() noexcept;
     [[nodiscard]] tactile::ServoAngles blend(double gain) const noexcept;
 
-    devices::ThimbleDriver driver_;
     tactile::ThimbleKinematics kinematics_;
     tactile::ContactSurfaceOptimiser optimiser_;
     tactile::ServoAngles retract_servo_rad_{};
@@ -70,7 +55,6 @@ class ThimbleChannel final : public DeviceChannel {
     std::uint64_t state_updates_{0};
     tactile::PlatformDofs measured_dofs_{};
     tactile::PlatformPose measured_pose_{};
-    protocol::ThimbleCommand command_{};
 };
 
 }  // namespace haptic::runtime
