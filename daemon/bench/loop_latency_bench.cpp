@@ -54,7 +54,10 @@ struct BenchOptions {
 
 struct DaemonLoopResult {
     LatencySummary wakeup;
-    LatencySummary compute;
+    LatencySummary compute;  // the tick's work: read + render + write
+    LatencySummary read;
+    LatencySummary render;
+    LatencySummary write;
     std::uint64_t first_tick{0};
     std::uint64_t last_tick{0};
     std::string error;
@@ -125,8 +128,12 @@ DaemonLoopResult runDaemonLoop(const BenchOptions& options, const config::Daemon
     const auto warmup = static_cast<std::uint64_t>(cfg.loop.rate_hz);
     std::vector<double> wakeup_us;
     std::vector<double> compute_us;
-    wakeup_us.reserve(wanted);
-    compute_us.reserve(wanted);
+    std::vector<double> read_us;
+    std::vector<double> render_us;
+    std::vector<double> write_us;
+    for (auto* series : {&wakeup_us, &compute_us, &read_us, &render_us, &write_us}) {
+        series->reserve(wanted);
+    }
     idl::HapticTelemetry batch;
     const auto deadline =
         std::chrono::steady_clock::now() + std::chrono::duration<double>(options.duration_s + 15.0);
@@ -146,6 +153,9 @@ DaemonLoopResult runDaemonLoop(const BenchOptions& options, const config::Daemon
             result.last_tick = sample.tick();
             wakeup_us.push_back(sample.wakeup_latency_us());
             compute_us.push_back(sample.compute_us());
+            read_us.push_back(sample.read_us());
+            write_us.push_back(sample.write_us());
+            render_us.push_back(sample.compute_us() - sample.read_us() - sample.write_us());
         }
     }
     if (wakeup_us.size() < wanted) {
@@ -155,6 +165,9 @@ DaemonLoopResult runDaemonLoop(const BenchOptions& options, const config::Daemon
     daemon.terminate();
     result.wakeup = summarize(wakeup_us);
     result.compute = summarize(compute_us);
+    result.read = summarize(read_us);
+    result.render = summarize(render_us);
+    result.write = summarize(write_us);
     return result;
 }
 
@@ -282,6 +295,9 @@ int runBenchmark(const BenchOptions& options) {
               " | " + ratio(loop.wakeup.p999, cyclic.p999) + " | " +
               ratio(loop.wakeup.max, cyclic.max) + " | |\n";
     report += row("hapticd tick compute (read + compute + write; target p99 ≤ 100)", loop.compute);
+    report += row("… of which read (CAN read, sim inputs, commands)", loop.read);
+    report += row("… of which render (core, strategies, optimiser, safety)", loop.render);
+    report += row("… of which write (CAN write, DeviceState hand-off)", loop.write);
     report += row("sim → daemon, iceoryx, stamp → taken by the 1 kHz tick", iceoryx.tick);
     report += row("sim → daemon, DDS, stamp → taken by the 1 kHz tick", dds.tick);
     report += row("sim → daemon, iceoryx, stamp → delivered (exo, event-driven)", iceoryx.delivery);

@@ -386,6 +386,8 @@ idl::HapticTelemetry toIdl(const HapticTelemetry& in) {
         item.ghost_force_n(s.ghost_force_n);
         item.energy_observer_j(s.energy_observer_j);
         item.compute_us(s.compute_us);
+        item.read_us(s.read_us);
+        item.write_us(s.write_us);
         item.wakeup_latency_us(s.wakeup_latency_us);
         out.samples().push_back(item);
     }
@@ -410,6 +412,8 @@ ConversionResult fromIdl(const idl::HapticTelemetry& in, HapticTelemetry& out) {
         item.ghost_force_n = s.ghost_force_n();
         item.energy_observer_j = s.energy_observer_j();
         item.compute_us = s.compute_us();
+        item.read_us = s.read_us();
+        item.write_us = s.write_us();
         item.wakeup_latency_us = s.wakeup_latency_us();
         out.samples.push_back(item);
     }

@@ -72,11 +72,13 @@ TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
     sample.actuator_force_cmd = {1.5, -0.25, 0.0, 2.0};
     sample.compute_us = 7.3;
     sample.wakeup_latency_us = 55.5;
+    sample.read_us = 3.25;
+    sample.write_us = 2.5;
     EXPECT_EQ(telemetryCsvHeader(),
-              "tick,time_s,device,force_cmd_0_n,force_cmd_1_n,force_cmd_2_n,force_cmd_3_n,"
-              "compute_us,wakeup_latency_us\n");
+              "tick,time_s,device,command_0,command_1,command_2,command_3,"
+              "compute_us,wakeup_latency_us,read_us,write_us\n");
     EXPECT_EQ(telemetryCsvRow(sample, 1'000'000'000),
-              "1234,2.500000,1,1.5000,-0.2500,0.0000,2.0000,7.30,55.50\n");
+              "1234,2.500000,1,1.5000,-0.2500,0.0000,2.0000,7.30,55.50,3.25,2.50\n");
 }
 
 TEST(TelemetryCsv, PlotScriptQuotesPathsForGnuplot) {

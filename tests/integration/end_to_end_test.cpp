@@ -238,7 +238,7 @@ TEST_F(RoudiTest, EstopAndClearFromHapticctlDriveTheDaemonStateMachine) {
     std::ifstream rows(csv);
     std::string line;
     std::getline(rows, line);
-    EXPECT_THAT(line, HasSubstr("tick,time_s,device,force_cmd_0_n"));
+    EXPECT_THAT(line, HasSubstr("tick,time_s,device,command_0"));
     std::map<int, std::vector<unsigned long>> ticks_by_device;
     while (std::getline(rows, line)) {
         const auto first = line.find(',');

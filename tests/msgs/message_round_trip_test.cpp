@@ -207,6 +207,8 @@ class Filler {
         fill(s.ghost_force_n);
         fill(s.energy_observer_j);
         fill(s.compute_us);
+        fill(s.read_us);
+        fill(s.write_us);
         fill(s.wakeup_latency_us);
     }
     void fill(HapticTelemetry& m) {

@@ -159,6 +159,8 @@ void DaemonCore::fillTelemetry(std::size_t device, std::uint64_t tick, std::int6
     out.ghost_force_n = report.ghost_force_n;
     out.energy_observer_j = report.energy_observer_j;
     out.compute_us = timing.read_us + timing.compute_us + timing.write_us;
+    out.read_us = timing.read_us;
+    out.write_us = timing.write_us;
     out.wakeup_latency_us = timing.wakeup_latency_us;
 }
 

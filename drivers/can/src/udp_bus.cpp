@@ -3,6 +3,7 @@
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
 #include <array>
@@ -109,35 +110,76 @@ bool UdpBus::decode(const std::uint8_t* datagram, std::size_t size, CanFrame& fr
     return true;
 }
 
-IoResult UdpBus::read(CanFrame& frame) noexcept {
-    std::array<std::uint8_t, kHeaderSize + kFdMaxLength + 1> buffer{};
-    // Bounded: at most a handful of malformed datagrams are skipped per call.
-    for (int attempt = 0; attempt < 16; ++attempt) {
-        const ssize_t received = ::recv(socket_, buffer.data(), buffer.size(), 0);
+IoResult UdpBus::receiveBatch() noexcept {
+    // One spare byte per buffer so that an oversized datagram shows up as a wrong size.
+    constexpr std::size_t kBufferSize = kHeaderSize + kFdMaxLength + 1;
+    std::array<std::array<std::uint8_t, kBufferSize>, kReceiveBatch> buffers;
+    std::array<iovec, kReceiveBatch> vectors{};
+    std::array<mmsghdr, kReceiveBatch> messages{};
+    for (std::size_t i = 0; i < kReceiveBatch; ++i) {
+        vectors[i] = {buffers[i].data(), buffers[i].size()};
+        messages[i].msg_hdr.msg_iov = &vectors[i];
+        messages[i].msg_hdr.msg_iovlen = 1;
+    }
+    pending_count_ = 0;
+    pending_next_ = 0;
+    // Bounded: a signal interrupts at most a couple of attempts.
+    for (int attempt = 0; attempt < 4; ++attempt) {
+        const int received =
+            ::recvmmsg(socket_, messages.data(), kReceiveBatch, MSG_DONTWAIT, nullptr);
         if (received < 0) {
-            if (errno == EAGAIN || errno == EWOULDBLOCK) {
-                return IoResult::kWouldBlock;
-            }
             if (errno == EINTR) {
                 continue;
+            }
+            if (errno == EAGAIN || errno == EWOULDBLOCK) {
+                return IoResult::kWouldBlock;
             }
             ++counters_.io_errors;
             return IoResult::kError;
         }
-        if (!decode(buffer.data(), static_cast<std::size_t>(received), frame)) {
-            ++counters_.rx_dropped;
-            continue;
+        const std::int64_t now_ns = monotonicNowNs();
+        last_batch_was_short_ = static_cast<std::size_t>(received) < kReceiveBatch;
+        for (int i = 0; i < received; ++i) {
+            CanFrame& frame = pending_[pending_count_];
+            if (!decode(buffers[i].data(), messages[i].msg_len, frame)) {
+                ++counters_.rx_dropped;
+                continue;
+            }
+            frame.receive_time_ns = now_ns;
+            ++pending_count_;
         }
-        frame.receive_time_ns = monotonicNowNs();
-        if (frame.isError()) {
-            ++counters_.rx_error_frames;
-            state_.onErrorFrame(frame, frame.receive_time_ns);
-        } else {
-            ++counters_.rx_frames;
+        if (pending_count_ > 0) {
+            return IoResult::kOk;
         }
-        return IoResult::kOk;
+        // Only malformed datagrams: look once more, they may have hidden good ones.
+        if (last_batch_was_short_) {
+            return IoResult::kWouldBlock;
+        }
     }
-    return IoResult::kWouldBlock;
+    return pending_count_ > 0 ? IoResult::kOk : IoResult::kWouldBlock;
+}
+
+IoResult UdpBus::read(CanFrame& frame) noexcept {
+    if (pending_next_ == pending_count_) {
+        if (pending_count_ > 0 && last_batch_was_short_) {
+            // The batch just handed out emptied the socket; see the header.
+            pending_count_ = 0;
+            pending_next_ = 0;
+            return IoResult::kWouldBlock;
+        }
+        const IoResult result = receiveBatch();
+        if (result != IoResult::kOk) {
+            return result;
+        }
+    }
+    frame = pending_[pending_next_++];
+    if (frame.isError()) {
+        ++counters_.rx_error_frames;
+        state_.onErrorFrame(frame, frame.receive_time_ns);
+    } else {
+        ++counters_.rx_frames;
+    }
+    return IoResult::kOk;
 }
 
 IoResult UdpBus::write(const CanFrame& frame) noexcept {
@@ -152,22 +194,43 @@ IoResult UdpBus::write(const CanFrame& frame) noexcept {
         ++counters_.tx_refused;
         return IoResult::kBusOff;
     }
-    bool backpressure = false;
-    bool failed = false;
+    // The same datagram to every other port of the block, in one system call.
+    iovec vector{buffer.data(), size};
+    std::array<sockaddr_in, kMaxSlots> addresses{};
+    std::array<mmsghdr, kMaxSlots> messages{};
+    unsigned int count = 0;
     for (std::uint16_t slot = 0; slot < config_.slots; ++slot) {
         if (slot == slot_) {
             continue;
         }
-        const sockaddr_in address = loopbackAddress(config_.base_port + slot);
-        const ssize_t sent = ::sendto(socket_, buffer.data(), size, 0,
-                                      reinterpret_cast<const sockaddr*>(&address), sizeof(address));
-        if (sent < 0) {
-            if (errno == EAGAIN || errno == EWOULDBLOCK || errno == ENOBUFS) {
-                backpressure = true;
-            } else if (errno != ECONNREFUSED) {
-                failed = true;
-            }
+        addresses[count] = loopbackAddress(config_.base_port + slot);
+        messages[count].msg_hdr.msg_name = &addresses[count];
+        messages[count].msg_hdr.msg_namelen = sizeof(sockaddr_in);
+        messages[count].msg_hdr.msg_iov = &vector;
+        messages[count].msg_hdr.msg_iovlen = 1;
+        ++count;
+    }
+    bool backpressure = false;
+    bool failed = false;
+    // sendmmsg() stops at the first datagram that fails; note why and go on after it.
+    // Bounded: every pass but a few interrupted ones advances by at least one datagram.
+    unsigned int next = 0;
+    int interruptions = 0;
+    while (next < count) {
+        const int sent = ::sendmmsg(socket_, messages.data() + next, count - next, 0);
+        if (sent > 0) {
+            next += static_cast<unsigned int>(sent);
+            continue;
         }
+        if (sent < 0 && errno == EINTR && ++interruptions <= 4) {
+            continue;
+        }
+        if (sent < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == ENOBUFS)) {
+            backpressure = true;
+        } else if (sent == 0 || errno != ECONNREFUSED) {
+            failed = true;
+        }
+        ++next;
     }
     if (backpressure) {
         ++counters_.tx_backpressure;

@@ -190,7 +190,9 @@ struct TelemetrySample {
     std::array<double, kMaxJointDofs> proxy_position_rad{};
     std::array<double, 3> ghost_force_n{};
     double energy_observer_j{0.0};
-    double compute_us{0.0};
+    double compute_us{0.0};  // the tick's work: read + render + write
+    double read_us{0.0};     // of which CAN read, sim inputs, commands
+    double write_us{0.0};    // of which CAN write, DeviceState hand-off
     double wakeup_latency_us{0.0};
     friend bool operator==(const TelemetrySample&, const TelemetrySample&) = default;
 };
