@@ -10,6 +10,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <vector>
+
 #include "haptic/can/bus_state.hpp"
 #include "haptic/can/loopback_bus.hpp"
 #include "haptic/can/socketcan_bus.hpp"
@@ -205,6 +207,37 @@ TEST(UdpBus, EveryPartySeesEveryOtherPartysFrames) {
     EXPECT_EQ(got.data[63], 63);
     ASSERT_TRUE(readWithin(b, got));
     EXPECT_EQ(a.read(got), IoResult::kWouldBlock);  // its own frame never comes back
+}
+
+TEST(UdpBus, ADrainReadsMoreFramesThanOneBatchInOrderAndThenReportsEmpty) {
+    const UdpBusConfig config = testBlock(2);
+    UdpBus reader(config), writer(config);
+    constexpr int kFrames = static_cast<int>(UdpBus::kReceiveBatch) * 2 + 5;
+    for (int i = 0; i < kFrames; ++i) {
+        ASSERT_EQ(writer.write(frameWith(0x100 + i, 8, static_cast<std::uint8_t>(i))),
+                  IoResult::kOk);
+    }
+    std::vector<std::uint32_t> ids;
+    CanFrame got;
+    for (int round = 0; round < 200 && static_cast<int>(ids.size()) < kFrames; ++round) {
+        while (reader.read(got) == IoResult::kOk) {  // one drain, as the drivers do per tick
+            ids.push_back(got.id);
+        }
+        pollfd fd{reader.pollFd(), POLLIN, 0};
+        ::poll(&fd, 1, 5);
+    }
+    ASSERT_EQ(static_cast<int>(ids.size()), kFrames);
+    for (int i = 0; i < kFrames; ++i) {
+        EXPECT_EQ(ids[i],
+                  static_cast<std::uint32_t>(0x100 + i));  // loopback keeps one sender's order
+    }
+    EXPECT_EQ(reader.counters().rx_frames, static_cast<std::uint64_t>(kFrames));
+    EXPECT_EQ(reader.read(got), IoResult::kWouldBlock);
+    EXPECT_EQ(reader.read(got), IoResult::kWouldBlock);
+    // A frame sent after the bus reported empty is read by the next drain.
+    ASSERT_EQ(writer.write(frameWith(0x7FF, 8, 1)), IoResult::kOk);
+    ASSERT_TRUE(readWithin(reader, got));
+    EXPECT_EQ(got.id, 0x7FFU);
 }
 
 TEST(UdpBus, ErrorFramesFromAPeerDriveTheBusState) {
