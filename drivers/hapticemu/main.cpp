@@ -81,9 +81,15 @@ int main(int argc, char** argv) {
     app.add_option("--bus", bus_kind, "udp or socketcan")
         ->check(CLI::IsMember({"udp", "socketcan"}));
     app.add_option("--interface", interface, "SocketCAN interface (default: the device file's)");
-    app.add_option("--udp-port", udp_port, "first UDP port of the bus's port block")
-        ->check(CLI::Range(1, 65535));
-    app.add_option("--udp-slots", udp_slots, "parties on the UDP bus")->check(CLI::Range(2, 32));
+    auto* udp_port_option =
+        app.add_option("--udp-port", udp_port,
+                       "first UDP port of the bus's port block (default: the device file's "
+                       "can.udp_port)")
+            ->check(CLI::Range(1, 65535));
+    auto* udp_slots_option =
+        app.add_option("--udp-slots", udp_slots,
+                       "parties on the UDP bus (default: the device file's can.udp_slots)")
+            ->check(CLI::Range(2, 32));
     app.add_option("--mode", mode,
                    "stream (clocked, like the device) or lockstep (one tick per "
                    "command, for tests)")
@@ -95,6 +101,14 @@ int main(int argc, char** argv) {
     try {
         const auto device = haptic::config::loadDeviceConfig(device_path);
         haptic::process::setupLogging("hapticemu", log_level);
+        // The emulator joins the bus the device file describes, as hapticd does, unless told
+        // otherwise.
+        if (udp_port_option->count() == 0) {
+            udp_port = device.can.udp_port;
+        }
+        if (udp_slots_option->count() == 0) {
+            udp_slots = device.can.udp_slots;
+        }
         if (interface.empty()) {
             interface = device.can.interface;
         }

@@ -112,8 +112,8 @@ class DeviceSafetyTest : public ::testing::Test {
             ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
             std::this_thread::sleep_for(20ms);
         }
-        exo_emu_ = startEmulator("devices/exoskeleton.yaml", config_.exo_port);
-        thimble_emu_ = startEmulator("devices/thimble.yaml", config_.thimble_port);
+        exo_emu_ = startEmulator("devices/exoskeleton.yaml");
+        thimble_emu_ = startEmulator("devices/thimble.yaml");
         daemon_ = std::make_unique<ChildProcess>(
             std::vector<std::string>{HAPTICD_PATH, "-c", (config_.dir / "daemon.yaml").string(),
                                      "--realtime", "ignore", "--dds-domain", domain()},
@@ -152,11 +152,10 @@ class DeviceSafetyTest : public ::testing::Test {
         }
     }
 
-    std::unique_ptr<EmulatorProcess> startEmulator(const std::string& device, int port) {
-        auto emulator = std::make_unique<EmulatorProcess>(std::vector<std::string>{
-            HAPTICEMU_PATH, "-d", (config_.dir / device).string(), "--bus", "udp", "--udp-port",
-            std::to_string(port), "--udp-slots", "8"});
-        return emulator;
+    // The emulator takes the port block from the device file, as hapticd does.
+    std::unique_ptr<EmulatorProcess> startEmulator(const std::string& device) {
+        return std::make_unique<EmulatorProcess>(std::vector<std::string>{
+            HAPTICEMU_PATH, "-d", (config_.dir / device).string(), "--bus", "udp"});
     }
 
     void startSim() {

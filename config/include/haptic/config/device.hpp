@@ -64,7 +64,7 @@ struct EnumTraits<CanTransport> {
 struct CanConfig {
     std::string interface;  // SocketCAN interface name (1-15 chars), e.g. "can0"
     // Optional keys transport (default socketcan), udp_port and udp_slots (only with
-    // transport: udp; defaults 47000 and 8, the block hapticemu uses by default).
+    // transport: udp; defaults 47000 and 8; hapticemu -d <file> joins the same block).
     CanTransport transport{CanTransport::kSocketCan};
     std::uint16_t udp_port{47000};  // first port of the UDP bus's port block
     std::uint16_t udp_slots{8};     // parties on the UDP bus (2..32)
