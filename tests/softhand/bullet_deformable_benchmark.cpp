@@ -46,7 +46,8 @@ struct Row {
     double cpu_mean_us{0.0};
     TraceError error{};
     bool finite{true};
-    int steps{0};  // run until it diverged, or options.steps
+    int steps{0};               // run until it diverged, or options.steps
+    double distortion_mm{0.0};  // largest node distance from the bone's rigid motion
 };
 
 double threadCpuUs() {
@@ -57,9 +58,10 @@ double threadCpuUs() {
 
 // Steps `scene` (setInput(step) then step()), timing the step call; the first cycle's samples
 // are kept for the error. `finite` ends the run early if the state blew up.
-template <typename SetInput, typename Step, typename Get, typename Finite>
+template <typename SetInput, typename Step, typename Get, typename Finite, typename Distortion>
 Row measure(const Options& options, const std::vector<Sample>& reference, SetInput set_input,
-            Step step, Get get, Finite finite, const std::string& trace_name) {
+            Step step, Get get, Finite finite, Distortion distortion,
+            const std::string& trace_name) {
     Row row;
     std::vector<double> step_us;
     std::vector<Sample> trace;
@@ -75,6 +77,7 @@ Row measure(const Options& options, const std::vector<Sample>& reference, SetInp
         if (s < kCycleSteps) {
             trace.push_back(get());
         }
+        row.distortion_mm = std::max(row.distortion_mm, 1e3 * distortion());
         if (!finite()) {
             row.finite = false;
             row.steps = s + 1;
@@ -109,6 +112,17 @@ Row runOurs(const Options& options, const std::vector<Sample>& reference, int le
     Row row = measure(
         options, reference, [&](int s) { scene.setInput(s); }, [&] { (void)scene.step(); },
         [&] { return scene.sample(); }, [] { return true; },
+        [&] {
+            const Simulation& sim = scene.simulation();
+            const int bone = scene.model().bones.front().body;
+            const Vec3 shift = sim.bodyPosition(bone) - scene.model().bones.front().rest_position_m;
+            double worst = 0.0;
+            for (int i = 0; i < sim.nodeCount(); ++i) {
+                worst =
+                    std::max(worst, (sim.nodePosition(i) - sim.nodeRestPosition(i) - shift).norm());
+            }
+            return worst;
+        },
         "softhand_l" + std::to_string(level) + "_cap" + std::to_string(cap));
     row.solver = "soft hand (PCG cap)";
     row.level = level;
@@ -135,6 +149,7 @@ Row runBullet(const Options& options, const std::vector<Sample>& reference, int 
                                     : reference[static_cast<std::size_t>(s % kCycleSteps)].tip_m);
         },
         [&] { scene.step(kDt); }, [&] { return scene.sample(); }, [&] { return scene.finite(); },
+        [&] { return scene.maxDistortion(); },
         std::string(tracked ? "bullet_tracked" : "bullet_kinematic") +
             (implicit ? "" : "_explicit") + "_l" + std::to_string(level) + "_cap" +
             std::to_string(cap));
@@ -148,10 +163,11 @@ Row runBullet(const Options& options, const std::vector<Sample>& reference, int 
 }
 
 void print(const Row& r) {
-    std::printf("| %s | %d | %d | %d / %d | %.0f | %.0f | %.0f | %.3g | %.3g | %.3g | %s |\n",
-                r.solver.c_str(), r.level, r.cap, r.nodes, r.tets, r.p50_us, r.p99_us,
-                r.cpu_mean_us, r.error.press_err, r.error.force_err, r.error.tip_err_mm,
-                r.finite ? "ran" : ("diverged at step " + std::to_string(r.steps)).c_str());
+    std::printf(
+        "| %s | %d | %d | %d / %d | %.0f | %.0f | %.0f | %.3g | %.3g | %.3g | %.3g | %s |\n",
+        r.solver.c_str(), r.level, r.cap, r.nodes, r.tets, r.p50_us, r.p99_us, r.cpu_mean_us,
+        r.error.press_err, r.error.force_err, r.error.tip_err_mm, r.distortion_mm,
+        r.finite ? "ran" : ("diverged at step " + std::to_string(r.steps)).c_str());
     std::fflush(stdout);
 }
 
@@ -168,7 +184,8 @@ int run(const Options& options) {
                              ->table_force_n));
     std::printf(
         "| solver | level | cap | nodes / tets | p50 (us) | p99 (us) | mean CPU (us) | press err "
-        "| force err | tip err (mm) | state |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+        "| force err | tip err (mm) | max distortion (mm) | state "
+        "|\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const char c : options.levels) {
         const int level = c - '0';
         if (options.ours) {

@@ -60,6 +60,9 @@ struct BulletFingertip::World {
     std::unique_ptr<btSoftBody> tissue;
     std::unique_ptr<btDeformableGravityForce> gravity;
     std::unique_ptr<btDeformableLinearElasticityForce> elasticity;
+    std::vector<btVector3> previous_velocity;
+    Vec3 bone_rest{Vec3::Zero()};
+    std::vector<Vec3> rest;
     BoneDrive drive{BoneDrive::kTracked};
     Vec3 target{Vec3::Zero()};
     double tracking_linear{0.0};
@@ -83,6 +86,8 @@ BulletFingertip::BulletFingertip(const FingertipModel& model, const SolverSettin
     w.tracking_linear = model.tracking_linear_n_per_m;
     w.tracking_angular = model.tracking_angular_nm_per_rad;
     w.target = model.bone_position_m;
+    w.bone_rest = model.bone_position_m;
+    w.rest = model.mesh.nodes_m;
     w.deformable_solver.setIterationCap(settings.krylov_iterations);
     w.deformable_solver.setNewtonIterations(settings.newton_iterations);
     w.deformable_solver.setImplicit(settings.implicit);
@@ -228,12 +233,53 @@ void BulletFingertip::step(double dt_s) {
         w.bone->applyTorque(static_cast<btScalar>(-w.tracking_angular) * q.getAngle() *
                             q.getAxis());
     }
+    w.previous_velocity.resize(static_cast<std::size_t>(w.tissue->m_nodes.size()));
+    for (int i = 0; i < w.tissue->m_nodes.size(); ++i) {
+        w.previous_velocity[static_cast<std::size_t>(i)] = w.tissue->m_nodes[i].m_v;
+    }
+    dt_s_ = dt_s;
     w.world->stepSimulation(static_cast<btScalar>(dt_s), 0);
     table_force_z_ = static_cast<double>(kTableMassKg * w.table->getLinearVelocity().z()) / dt_s;
     w.table->setLinearVelocity(btVector3(0, 0, 0));
     w.table->setAngularVelocity(btVector3(0, 0, 0));
     w.table->setWorldTransform(w.table_pose);
     w.table->setInterpolationWorldTransform(w.table_pose);
+}
+
+double BulletFingertip::transmittedForceZ() {
+    World& w = *world_;
+    btSoftBody& psb = *w.tissue;
+    if (dt_s_ <= 0.0) {
+        return 0.0;
+    }
+    psb.updateDeformation();  // elastic state at the end of the step (Bullet's is at m_q)
+    btAlignedObjectArray<btVector3> force;
+    force.resize(psb.m_nodes.size(), btVector3(0, 0, 0));
+    w.elasticity->addScaledForces(1.0, force);  // elastic + Rayleigh damping
+    const btVector3 gravity = w.world->getWorldInfo().m_gravity;
+    double from_table = 0.0;
+    for (int i = 0; i < psb.m_nodes.size(); ++i) {
+        const btSoftBody::Node& n = psb.m_nodes[i];
+        if (n.m_battach != 0 || n.m_im <= 0) {
+            continue;
+        }
+        const double mass = 1.0 / static_cast<double>(n.m_im);
+        const double dv = static_cast<double>(n.m_v.z()) -
+                          static_cast<double>(w.previous_velocity[static_cast<std::size_t>(i)].z());
+        from_table += mass * dv / dt_s_ - static_cast<double>(force[n.index].z()) -
+                      mass * static_cast<double>(gravity.z());
+    }
+    return -from_table;
+}
+
+double BulletFingertip::maxDistortion() const {
+    const Vec3 shift = bonePosition() - world_->bone_rest;
+    double worst = 0.0;
+    for (int i = 0; i < world_->tissue->m_nodes.size(); ++i) {
+        worst = std::max(
+            worst, (nodePosition(i) - world_->rest[static_cast<std::size_t>(i)] - shift).norm());
+    }
+    return worst;
 }
 
 Vec3 BulletFingertip::bonePosition() const {
@@ -275,20 +321,11 @@ Vec3 BulletFingertip::nodePosition(int node) const {
 }
 
 bool BulletFingertip::finite() const {
-    // A node 5 cm from the bone has left a 2 cm fingertip: the state has blown up, even
-    // while still finite.
-    constexpr double kEscapeM = 0.05;
-    const Vec3 bone = bonePosition();
-    if (!std::isfinite(table_force_z_) || !bone.allFinite() || bone.norm() > kEscapeM) {
-        return false;
-    }
-    for (int i = 0; i < world_->tissue->m_nodes.size(); ++i) {
-        const Vec3 x = nodePosition(i);
-        if (!x.allFinite() || (x - bone).norm() > kEscapeM) {
-            return false;
-        }
-    }
-    return true;
+    // A node 1 cm from where the bone's rigid motion would put it: the 16 mm pad has
+    // collapsed or blown up, finite or not (the soft hand's rows stay under 6 mm).
+    constexpr double kDistortionLimitM = 0.01;
+    return std::isfinite(table_force_z_) && bonePosition().allFinite() &&
+           maxDistortion() < kDistortionLimitM;
 }
 
 }  // namespace haptic::softhand::bench

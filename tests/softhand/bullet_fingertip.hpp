@@ -47,21 +47,29 @@ class BulletFingertip {
     // Force the tissue exerted on the table over the last step (z, negative = pushing down),
     // from the contact impulses Bullet applied to the table body: m * dv / dt.
     [[nodiscard]] double tableForceZ() const { return table_force_z_; }
+    // The same force from the momentum balance of the tissue nodes not held by the bone:
+    // -sum(m dv/dt - f_elastic - f_damping - m g) at the end of the last step (the table is
+    // the only other thing touching them). Not part of step()'s cost.
+    [[nodiscard]] double transmittedForceZ();
     [[nodiscard]] Vec3 bonePosition() const;
-    [[nodiscard]] Sample sample() const { return {tableForceZ(), bonePosition()}; }
+    // The table force is the momentum-balance one (see BULLET_COMPARISON.md for why).
+    [[nodiscard]] Sample sample() { return {transmittedForceZ(), bonePosition()}; }
+    // Largest distance of a node from where the bone's rigid motion would put it (m).
+    [[nodiscard]] double maxDistortion() const;
     [[nodiscard]] int nodeCount() const;
     [[nodiscard]] int tetCount() const;
     [[nodiscard]] double tissueVolume() const;  // sum of Bullet's tetra rest volumes
     [[nodiscard]] double tissueMass() const;
     [[nodiscard]] int anchorCount() const;
     [[nodiscard]] Vec3 nodePosition(int node) const;
-    // False once any coordinate is non-finite or the tissue has flown off the bone.
+    // False once anything is non-finite or a node is 1 cm off the bone's rigid motion.
     [[nodiscard]] bool finite() const;
 
   private:
     struct World;
     std::unique_ptr<World> world_;
     double table_force_z_{0.0};
+    double dt_s_{0.0};
 };
 
 }  // namespace haptic::softhand::bench
