@@ -48,6 +48,7 @@ struct Row {
     bool finite{true};
     int steps{0};               // run until it diverged, or options.steps
     double distortion_mm{0.0};  // largest node distance from the bone's rigid motion
+    int compared{0};            // samples of the first cycle before any divergence
 };
 
 double threadCpuUs() {
@@ -81,6 +82,9 @@ Row measure(const Options& options, const std::vector<Sample>& reference, SetInp
         if (!finite()) {
             row.finite = false;
             row.steps = s + 1;
+            if (!trace.empty() && static_cast<int>(trace.size()) == s + 1) {
+                trace.pop_back();  // the diverged sample itself
+            }
             break;
         }
     }
@@ -103,7 +107,10 @@ Row measure(const Options& options, const std::vector<Sample>& reference, SetInp
     row.p50_us = at(0.5);
     row.p99_us = at(0.99);
     row.cpu_mean_us = cpu_us / static_cast<double>(step_us.size());
-    row.error = traceError(trace, reference);
+    if (!trace.empty()) {
+        row.error = traceError(trace, reference);
+    }
+    row.compared = static_cast<int>(trace.size());
     return row;
 }
 
@@ -162,12 +169,26 @@ Row runBullet(const Options& options, const std::vector<Sample>& reference, int 
     return row;
 }
 
+std::string number(double value, bool valid) {
+    if (!valid) {
+        return "-";
+    }
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", value);
+    return text;
+}
+
+// Errors only over what ran: press err needs the whole press (kPressSteps), force and tip
+// err the whole cycle.
 void print(const Row& r) {
-    std::printf(
-        "| %s | %d | %d | %d / %d | %.0f | %.0f | %.0f | %.3g | %.3g | %.3g | %.3g | %s |\n",
-        r.solver.c_str(), r.level, r.cap, r.nodes, r.tets, r.p50_us, r.p99_us, r.cpu_mean_us,
-        r.error.press_err, r.error.force_err, r.error.tip_err_mm, r.distortion_mm,
-        r.finite ? "ran" : ("diverged at step " + std::to_string(r.steps)).c_str());
+    const bool press = r.compared >= kPressSteps;
+    const bool cycle = r.compared >= kCycleSteps;
+    std::printf("| %s | %d | %d | %d / %d | %.0f | %.0f | %.0f | %s | %s | %s | %.3g | %s |\n",
+                r.solver.c_str(), r.level, r.cap, r.nodes, r.tets, r.p50_us, r.p99_us,
+                r.cpu_mean_us, number(r.error.press_err, press).c_str(),
+                number(r.error.force_err, cycle).c_str(), number(r.error.tip_err_mm, cycle).c_str(),
+                r.distortion_mm,
+                r.finite ? "ran" : ("diverged at step " + std::to_string(r.steps)).c_str());
     std::fflush(stdout);
 }
 
