@@ -21,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "fingertip_press_scene.hpp"
 #include "haptic/config/scene.hpp"
 #include "haptic/softhand/elastic_tracking.hpp"
 #include "haptic/softhand/hand_builder.hpp"
@@ -29,65 +30,16 @@
 namespace haptic::softhand {
 namespace {
 
-constexpr double kDt = 0.005;
-constexpr int kCycleSteps = 200;  // one scripted cycle: 1 s
-constexpr int kPressSteps = 40;   // the first 0.2 s: pressing in, before any sliding
-constexpr int kPressReferenceLevel = 4;
+// The fingertip press scene, its constants and helpers are shared with the Bullet comparison.
+using bench::FingertipPress;
+using bench::handConfig;
+using bench::kCycleSteps;
+using bench::kDt;
+using bench::kPressReferenceLevel;
+using bench::kPressSteps;
+using bench::Sample;
+using bench::solverSettings;
 constexpr int kFlexReferenceLevel = 3;
-
-config::HandConfig handConfig(config::HandModel model, int resolution) {
-    config::HandConfig hand;
-    hand.model = model;
-    hand.finger = config::Finger::kIndex;
-    hand.resolution = resolution;
-    hand.anthropometry = {0.19, 0.085, 0.016};
-    return hand;
-}
-
-SolverSettings solverSettings(int pcg_cap, double pcg_tolerance) {
-    SolverSettings settings;
-    settings.pcg_max_iterations = pcg_cap;
-    settings.pcg_relative_tolerance = pcg_tolerance;
-    settings.contact_stiffness_n_per_m = 3000.0;
-    return settings;
-}
-
-struct Sample {
-    double table_force_n;
-    Vec3 tip_m;
-};
-
-// Fingertip pressing 4 mm into a table, sliding 1 cm and lifting, once per second.
-class FingertipPress {
-  public:
-    FingertipPress(int level, int pcg_cap, double pcg_tolerance)
-        : model_(buildHand(handConfig(config::HandModel::kFingertip, level),
-                           solverSettings(pcg_cap, pcg_tolerance))) {
-        table_ = model_.simulation.addCollider(
-            {HalfSpace{}, Vec3(0.0, 0.0, -0.009), Mat3::Identity(), 0.6});
-        bone_ = model_.bones.front().body;
-        start_ = model_.simulation.bodyPosition(bone_);
-    }
-    void setInput(int step) {
-        const double t = (step % kCycleSteps) * kDt;
-        const double press = t < 0.2 ? t / 0.2 : (t < 0.8 ? 1.0 : (1.0 - t) / 0.2);
-        const double slide = t < 0.2 ? 0.0 : std::min(1.0, (t - 0.2) / 0.6);
-        model_.simulation.setTrackingTarget(bone_, start_ + Vec3(0.01 * slide, 0.0, -0.005 * press),
-                                            Mat3::Identity());
-    }
-    StepReport step() { return model_.simulation.step(kDt); }
-    [[nodiscard]] Sample sample() const {
-        return {model_.simulation.forceOnCollider(table_).z(),
-                model_.simulation.bodyPosition(bone_)};
-    }
-    [[nodiscard]] const Simulation& simulation() const { return model_.simulation; }
-
-  private:
-    HandModel model_;
-    int table_{0};
-    int bone_{0};
-    Vec3 start_;
-};
 
 // One finger flexing all three joints by up to 0.8 rad and back, 1 s period; the fingertip
 // meets the table at the end of the flexion.
