@@ -63,7 +63,8 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
             fmt::arg("d", device), fmt::arg("csv", csv));
     }
     script += fmt::format(
-        "set ylabel 'loop timing [us]'\n"
+        "set ylabel 'loop timing [us, log scale]'\n"
+        "set logscale y\n"
         "plot {csv} every ::1 using ($3==0 ? $2 : 1/0):8 with points pt 7 ps 0.3 title 'tick "
         "work (read+compute+write)', "
         "{csv} every ::1 using ($3==0 ? $2 : 1/0):10 with points pt 7 ps 0.3 title 'read', "
