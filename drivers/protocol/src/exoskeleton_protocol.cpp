@@ -81,87 +81,58 @@ bool ExoskeletonCodec::encodeEncoders(const ExoskeletonEncoders& encoders,
 
 ExoskeletonMessage ExoskeletonCodec::decode(const can::CanFrame& frame) noexcept {
     using Type = ExoskeletonMessage::Type;
-    ExoskeletonMessage message;
-    FrameRole role{};
-    if (frame.isError() || frame.isExtended() || !roleOf(frame.id, role)) {
-        return message;
-    }
-    message.type = Type::kRejected;
-    RejectReason reason = RejectReason::kOutOfRange;
-    if (!admit(frame, role, reason)) {
-        message.reason = reason;
-        return message;
-    }
-    reason = RejectReason::kOutOfRange;
-    message.counter = frameCounter(frame);
-    const std::uint8_t kind = frameKind(frame);
-    bool ok = false;
-    switch (role) {
-        case FrameRole::kCommand: {
+    return decodeFrame<ExoskeletonMessage>(frame, [&](FrameRole role, std::uint8_t kind,
+                                                      ExoskeletonMessage& message,
+                                                      RejectReason& reason) {
+        if (role == FrameRole::kCommand) {
             if (kind != 0) {
                 reason = RejectReason::kUnknownKind;
-                break;
+                return false;
             }
             if ((frame.data[4] & ~1U) != 0 || frame.data[5] != 0 || frame.data[6] != 0 ||
                 frame.data[7] != 0) {
                 reason = RejectReason::kReservedNotZero;
-                break;
+                return false;
             }
             message.command.force_n = getI16(frame, 2) * kForceScaleN;
             message.command.enable = (frame.data[4] & 1U) != 0;
-            // Half a quantisation step of slack: the sender rounded a value inside the limit.
-            ok = message.command.force_n >= -max_force_n_ - kForceScaleN &&
-                 message.command.force_n <= max_force_n_ + kForceScaleN;
             message.type = Type::kCommand;
-            break;
+            // Half a quantisation step of slack: the sender rounded a value inside the limit.
+            return message.command.force_n >= -max_force_n_ - kForceScaleN &&
+                   message.command.force_n <= max_force_n_ + kForceScaleN;
         }
-        case FrameRole::kState: {
-            if (kind == kKindActuator) {
-                if ((frame.data[6] & ~kExoStatusMask) != 0 || (frame.data[7] & 0xF0) != 0) {
-                    reason = RejectReason::kReservedNotZero;
-                    break;
-                }
-                const double force_limit = max_force_n_ * (1.0 + kForceMarginFraction);
-                message.actuator.stroke_m = getU16(frame, 2) * kStrokeScaleM;
-                message.actuator.force_n = getI16(frame, 4) * kForceScaleN;
-                message.actuator.status = frame.data[6];
-                message.actuator.command_echo = frame.data[7];
-                ok = message.actuator.stroke_m >= stroke_min_m_ - kStrokeMarginM - kStrokeScaleM &&
-                     message.actuator.stroke_m <= stroke_max_m_ + kStrokeMarginM + kStrokeScaleM &&
-                     message.actuator.force_n >= -force_limit - kForceScaleN &&
-                     message.actuator.force_n <= force_limit + kForceScaleN;
-                message.type = Type::kActuatorState;
-            } else if (kind == kKindEncoders) {
-                ok = true;
-                for (std::size_t joint = 0; joint < 3; ++joint) {
-                    const double angle =
-                        getI16(frame, 2 + 2 * static_cast<int>(joint)) * kAngleScaleRad;
-                    message.encoders.joint_rad[joint] = angle;
-                    ok = ok &&
-                         angle >= joint_limits_rad_[joint].min - kAngleMarginRad - kAngleScaleRad &&
-                         angle <= joint_limits_rad_[joint].max + kAngleMarginRad + kAngleScaleRad;
-                }
-                message.type = Type::kEncoders;
-            } else {
-                reason = RejectReason::kUnknownKind;
+        if (kind == kKindActuator) {
+            if ((frame.data[6] & ~kExoStatusMask) != 0 || (frame.data[7] & 0xF0) != 0) {
+                reason = RejectReason::kReservedNotZero;
+                return false;
             }
-            break;
+            const double force_limit = max_force_n_ * (1.0 + kForceMarginFraction);
+            message.actuator.stroke_m = getU16(frame, 2) * kStrokeScaleM;
+            message.actuator.force_n = getI16(frame, 4) * kForceScaleN;
+            message.actuator.status = frame.data[6];
+            message.actuator.command_echo = frame.data[7];
+            message.type = Type::kActuatorState;
+            return message.actuator.stroke_m >= stroke_min_m_ - kStrokeMarginM - kStrokeScaleM &&
+                   message.actuator.stroke_m <= stroke_max_m_ + kStrokeMarginM + kStrokeScaleM &&
+                   message.actuator.force_n >= -force_limit - kForceScaleN &&
+                   message.actuator.force_n <= force_limit + kForceScaleN;
         }
-        case FrameRole::kHeartbeat:
-            ok = decodeHeartbeatPayload(frame, message.heartbeat, reason);
-            message.type = Type::kHeartbeat;
-            break;
-        case FrameRole::kFault:
-            ok = decodeFaultPayload(frame, message.fault, reason);
-            message.type = Type::kFault;
-            break;
-    }
-    if (!ok) {
-        reject(reason);
-        message.type = Type::kRejected;
-        message.reason = reason;
-    }
-    return message;
+        if (kind == kKindEncoders) {
+            bool ok = true;
+            for (std::size_t joint = 0; joint < 3; ++joint) {
+                const double angle =
+                    getI16(frame, 2 + 2 * static_cast<int>(joint)) * kAngleScaleRad;
+                message.encoders.joint_rad[joint] = angle;
+                ok = ok &&
+                     angle >= joint_limits_rad_[joint].min - kAngleMarginRad - kAngleScaleRad &&
+                     angle <= joint_limits_rad_[joint].max + kAngleMarginRad + kAngleScaleRad;
+            }
+            message.type = Type::kEncoders;
+            return ok;
+        }
+        reason = RejectReason::kUnknownKind;
+        return false;
+    });
 }
 
 }  // namespace haptic::protocol

@@ -53,53 +53,19 @@ bool ThimbleCodec::encodeState(const ThimbleState& state, can::CanFrame& frame) 
 
 ThimbleMessage ThimbleCodec::decode(const can::CanFrame& frame) noexcept {
     using Type = ThimbleMessage::Type;
-    ThimbleMessage message;
-    FrameRole role{};
-    if (frame.isError() || frame.isExtended() || !roleOf(frame.id, role)) {
-        return message;
-    }
-    message.type = Type::kRejected;
-    RejectReason reason = RejectReason::kOutOfRange;
-    if (!admit(frame, role, reason)) {
-        message.reason = reason;
-        return message;
-    }
-    reason = RejectReason::kOutOfRange;
-    message.counter = frameCounter(frame);
-    const std::uint8_t kind = frameKind(frame);
-    bool ok = false;
-    switch (role) {
-        case FrameRole::kCommand:
-            if (kind != 0) {
-                reason = RejectReason::kUnknownKind;
-                break;
-            }
-            ok = decodeAngles(frame, 0.0, message.command.servo_target_rad);
+    return decodeFrame<ThimbleMessage>(frame, [&](FrameRole role, std::uint8_t kind,
+                                                  ThimbleMessage& message, RejectReason& reason) {
+        if (kind != 0) {
+            reason = RejectReason::kUnknownKind;
+            return false;
+        }
+        if (role == FrameRole::kCommand) {
             message.type = Type::kCommand;
-            break;
-        case FrameRole::kState:
-            if (kind != 0) {
-                reason = RejectReason::kUnknownKind;
-                break;
-            }
-            ok = decodeAngles(frame, kAngleMarginRad, message.state.servo_angle_rad);
-            message.type = Type::kState;
-            break;
-        case FrameRole::kHeartbeat:
-            ok = decodeHeartbeatPayload(frame, message.heartbeat, reason);
-            message.type = Type::kHeartbeat;
-            break;
-        case FrameRole::kFault:
-            ok = decodeFaultPayload(frame, message.fault, reason);
-            message.type = Type::kFault;
-            break;
-    }
-    if (!ok) {
-        reject(reason);
-        message.type = Type::kRejected;
-        message.reason = reason;
-    }
-    return message;
+            return decodeAngles(frame, 0.0, message.command.servo_target_rad);
+        }
+        message.type = Type::kState;
+        return decodeAngles(frame, kAngleMarginRad, message.state.servo_angle_rad);
+    });
 }
 
 }  // namespace haptic::protocol

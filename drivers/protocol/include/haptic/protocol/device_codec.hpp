@@ -52,6 +52,51 @@ class DeviceCodecBase {
     void reject(RejectReason reason) noexcept { rejects_.count(reason); }
     void countEncodeReject() noexcept { ++encode_rejects_; }
 
+    // What every device's decode() does around its own payloads: a frame that is not ours
+    // stays kNotForThisDevice; admit() (structure, CRC, sequence); heartbeat and fault
+    // payloads (one layout for all devices); then `decode_payload(role, kind, message,
+    // reason)` for command and state frames, which sets message.type and returns whether the
+    // values are acceptable. A failed payload is counted and the message marked kRejected.
+    template <typename Message, typename PayloadDecoder>
+    [[nodiscard]] Message decodeFrame(const can::CanFrame& frame,
+                                      PayloadDecoder&& decode_payload) noexcept {
+        using Type = typename Message::Type;
+        Message message;
+        FrameRole role{};
+        if (frame.isError() || frame.isExtended() || !roleOf(frame.id, role)) {
+            return message;
+        }
+        message.type = Type::kRejected;
+        RejectReason reason = RejectReason::kOutOfRange;
+        if (!admit(frame, role, reason)) {
+            message.reason = reason;
+            return message;
+        }
+        reason = RejectReason::kOutOfRange;
+        message.counter = frameCounter(frame);
+        bool ok = false;
+        switch (role) {
+            case FrameRole::kCommand:
+            case FrameRole::kState:
+                ok = decode_payload(role, frameKind(frame), message, reason);
+                break;
+            case FrameRole::kHeartbeat:
+                ok = decodeHeartbeatPayload(frame, message.heartbeat, reason);
+                message.type = Type::kHeartbeat;
+                break;
+            case FrameRole::kFault:
+                ok = decodeFaultPayload(frame, message.fault, reason);
+                message.type = Type::kFault;
+                break;
+        }
+        if (!ok) {
+            reject(reason);
+            message.type = Type::kRejected;
+            message.reason = reason;
+        }
+        return message;
+    }
+
   private:
     std::array<std::uint32_t, 4> ids_{};
     std::array<std::uint8_t, 4> tx_counters_{};
