@@ -33,6 +33,16 @@ HandConfig readHand(MapReader map) {
     // so a `finger` there is reported as an unknown key rather than silently ignored.
     if (out.model != HandModel::kHand) {
         out.finger = map.required("finger", spec::Enum<Finger>{});
+    } else if (auto field = map.take("fingers")) {
+        const ListReader list = field->list(1, 5, "a finger name");
+        for (std::size_t i = 0; i < list.size(); ++i) {
+            const Field item = list.at(i);
+            const Finger finger = item.as(spec::Enum<Finger>{});
+            if (std::find(out.fingers.begin(), out.fingers.end(), finger) != out.fingers.end()) {
+                item.fail("each finger at most once");
+            }
+            out.fingers.push_back(finger);
+        }
     }
     out.resolution = map.optional("resolution", 2, spec::Integer<int>::closed(1, 8));
     MapReader anthropometry = map.requiredMap("anthropometry");
@@ -139,8 +149,10 @@ std::map<std::string, DeviceBinding, std::less<>> readBindings(MapReader map,
         MapReader binding = value.map();
         auto [finger, finger_field] = binding.requiredWithField("finger", spec::Enum<Finger>{});
         if (!hand.simulates(finger)) {
-            finger_field.fail("the simulated finger '" + std::string(toString(*hand.finger)) +
-                              "' (hand.model is " + std::string(toString(hand.model)) + ")");
+            finger_field.fail(
+                hand.finger ? "the simulated finger '" + std::string(toString(*hand.finger)) +
+                                  "' (hand.model is " + std::string(toString(hand.model)) + ")"
+                            : std::string("one of the hand's fingers (hand.fingers)"));
         }
         binding.finish();
         out.emplace(name, DeviceBinding{finger});

@@ -3,6 +3,7 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <variant>
 
 #include "HandPosePubSubTypes.h"
 #include "haptic/msgs/conversions.hpp"
@@ -13,14 +14,19 @@ namespace {
 class ScriptedSource final : public TrackingSource {
   public:
     ScriptedSource(const config::SceneConfig& scene, const softhand::SceneSimulation& sim)
-        : script_(sim.trackedHand(), scene.hand, target(scene), scene.tracking.loop),
-          name_(scene.tracking.target_object) {}
-    [[nodiscard]] softhand::HandPoseInput initialPose() const override { return script_.at(0.0); }
+        : script_(makeScript(scene, sim)), name_(scene.tracking.target_object) {}
+    [[nodiscard]] softhand::HandPoseInput initialPose() const override {
+        return std::visit([](const auto& script) { return script.at(0.0); }, script_);
+    }
     std::optional<softhand::HandPoseInput> poll(double t_s, std::string&) override {
-        return script_.at(t_s);
+        return std::visit([t_s](const auto& script) { return script.at(t_s); }, script_);
     }
     [[nodiscard]] std::string describe() const override {
-        return "scripted press_slide_edge on '" + name_ + "'";
+        return "scripted " +
+               std::string(config::toString(script_.index() == 0
+                                                ? config::TrackingScript::kPressSlideEdge
+                                                : config::TrackingScript::kGraspLiftPlacePush)) +
+               " on '" + name_ + "'";
     }
 
   private:
@@ -32,7 +38,18 @@ class ScriptedSource final : public TrackingSource {
         }
         return *object;
     }
-    softhand::PressSlideEdgeScript script_;
+    using Script = std::variant<softhand::PressSlideEdgeScript, softhand::GraspLiftPlacePushScript>;
+    static Script makeScript(const config::SceneConfig& scene,
+                             const softhand::SceneSimulation& sim) {
+        const auto& tracking = scene.tracking;
+        if (tracking.script == config::TrackingScript::kGraspLiftPlacePush) {
+            return Script(std::in_place_index<1>, sim.trackedHand(), scene.hand, target(scene),
+                          tracking.loop);
+        }
+        return Script(std::in_place_index<0>, sim.trackedHand(), scene.hand, target(scene),
+                      tracking.loop);
+    }
+    Script script_;
     std::string name_;
 };
 

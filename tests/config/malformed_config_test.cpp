@@ -156,7 +156,7 @@ TEST(ConfigUnknownKeys, WholeHandModelTakesNoFinger) {
     const auto file = kDataDir / "scenes/finger_on_hand_model.yaml";
     expectError(sceneError("finger_on_hand_model.yaml"),
                 {file.string(), lineOf(file, "finger: index"), 3, "hand.finger",
-                 "unknown key 'hand.finger' (allowed: model, resolution, anthropometry)"});
+                 "unknown key 'hand.finger' (allowed: model, fingers, resolution, anthropometry)"});
 }
 
 // --- wrong types -----------------------------------------------------------------------------
@@ -427,6 +427,20 @@ TEST(ConfigReferences, BindingToAFingerThatIsNotSimulated) {
                 {file.string(), lineOf(file, "finger: middle"), 21, "devices.thimble.finger",
                  "expected the simulated finger 'index' (hand.model is finger), got the string "
                  "'middle'"});
+}
+
+TEST(ConfigReferences, BindingToAFingerTheHandModelLeavesOut) {
+    const auto file = kDataDir / "scenes/binding_to_missing_hand_finger.yaml";
+    expectError(sceneError("binding_to_missing_hand_finger.yaml"),
+                {file.string(), lineOf(file, "finger: middle"), 21, "devices.thimble.finger",
+                 "expected one of the hand's fingers (hand.fingers), got the string 'middle'"});
+}
+
+TEST(ConfigReferences, HandFingerListedTwice) {
+    const auto file = kDataDir / "scenes/duplicate_hand_finger.yaml";
+    expectError(sceneError("duplicate_hand_finger.yaml"),
+                {file.string(), lineOf(file, "fingers:"), 27, "hand.fingers[2]",
+                 "expected each finger at most once, got the string 'thumb'"});
 }
 
 TEST(ConfigReferences, SimMissingScene) {

@@ -202,6 +202,19 @@ TEST(ShippedConfig, ThimbleOnlyScene) {
     EXPECT_EQ(cfg.objects[0].pose.rpy_rad, (Vec3{0.0, 0.0, 0.0}));  // rpy_deg defaults to zero
 }
 
+TEST(ShippedConfig, GraspScene) {
+    const SceneConfig cfg = loadSceneConfig(kConfigDir / "scenes/grasp_box.yaml");
+    EXPECT_EQ(cfg.hand.model, HandModel::kHand);
+    EXPECT_EQ(cfg.hand.fingers, (std::vector<Finger>{Finger::kThumb, Finger::kIndex}));
+    EXPECT_TRUE(cfg.hand.simulates(Finger::kIndex));
+    EXPECT_FALSE(cfg.hand.simulates(Finger::kMiddle));
+    EXPECT_EQ(cfg.tracking.script, TrackingScript::kGraspLiftPlacePush);
+    EXPECT_FALSE(cfg.tracking.loop);
+    ASSERT_EQ(cfg.objects.size(), 3U);
+    EXPECT_GT(cfg.objects[1].mass_kg, 0.0);  // both boxes are dynamic (Bullet moves them)
+    EXPECT_GT(cfg.objects[2].mass_kg, 0.0);
+}
+
 TEST(ShippedConfig, RoudiHasAPoolForTheLargestMessage) {
     // msgs kMaxShmPayloadBytes: the largest iceoryx twin. Checked here by value so this test
     // does not depend on the msgs library.

@@ -68,6 +68,11 @@ BulletCoupling::BulletCoupling(const std::vector<config::SceneObject>& objects, 
                                EngineCouplingSettings settings)
     : settings_(settings), engine_(std::make_unique<Engine>()) {
     engine_->world.setGravity(toBt(settings_.gravity_m_per_s2));
+    engine_->world.setInternalTickCallback(
+        [](btDynamicsWorld* world, btScalar) {
+            static_cast<BulletCoupling*>(world->getWorldUserInfo())->applySpringWrenches();
+        },
+        this, true);
     for (const auto& object : objects) {
         struct ShapeVisitor {
             std::unique_ptr<btCollisionShape> operator()(const config::PlaneShape&) const {
@@ -131,6 +136,8 @@ BulletCoupling::BulletCoupling(const std::vector<config::SceneObject>& objects, 
             sim.setTrackingStiffness(entry.duplicate, settings_.linear_stiffness_n_per_m,
                                      settings_.angular_stiffness_nm_per_rad);
             collider.body = entry.duplicate;
+            entry.duplicate_position = position;
+            entry.duplicate_rotation = rotation;
         }
         entry.collider = sim.addCollider(collider);
         engine_->shapes.push_back(std::move(shape));
@@ -142,7 +149,7 @@ BulletCoupling::BulletCoupling(const std::vector<config::SceneObject>& objects, 
 
 BulletCoupling::~BulletCoupling() = default;
 
-void BulletCoupling::exchange(Simulation& sim, double dt_s) {
+void BulletCoupling::applySpringWrenches() {
     for (const auto& object : objects_) {
         if (object.duplicate < 0) {
             continue;
@@ -151,15 +158,33 @@ void BulletCoupling::exchange(Simulation& sim, double dt_s) {
         const Vec3 engine_c = fromBt(body.getCenterOfMassPosition());
         const Mat3 engine_r = fromBt(body.getWorldTransform().getBasis());
         // The spring pulls the duplicate towards the engine body; the engine body gets the
-        // opposite wrench, so the hand's push reaches Bullet.
+        // opposite wrench, so the hand's push reaches Bullet. Bullet accumulates forces over
+        // its substeps and adds gravity once per stepSimulation, so each substep starts over
+        // from gravity alone.
         const Vec3 force =
-            settings_.linear_stiffness_n_per_m * (sim.bodyPosition(object.duplicate) - engine_c);
+            settings_.linear_stiffness_n_per_m * (object.duplicate_position - engine_c);
         const Vec3 torque = settings_.angular_stiffness_nm_per_rad *
-                            logMap(sim.bodyRotation(object.duplicate) * engine_r.transpose());
+                            logMap(object.duplicate_rotation * engine_r.transpose());
+        body.clearForces();
+        body.applyGravity();
         body.applyCentralForce(toBt(force));
         body.applyTorque(toBt(torque));
     }
+}
+
+void BulletCoupling::exchange(Simulation& sim, double dt_s) {
+    // The duplicates' poses after the hand step hold for the engine step. The spring on the
+    // engine side is explicit, so it is re-evaluated at every engine substep (pre-tick
+    // callback) from the body's current pose: stable while k/m (dt/substeps)^2 < 4, not
+    // k/m dt^2 < 4 (a 30 g box at 60 Hz is beyond the latter).
+    for (auto& object : objects_) {
+        if (object.duplicate >= 0) {
+            object.duplicate_position = sim.bodyPosition(object.duplicate);
+            object.duplicate_rotation = sim.bodyRotation(object.duplicate);
+        }
+    }
     const double engine_dt = dt_s / settings_.engine_substeps;
+    last_engine_dt_s_ = engine_dt;
     engine_->world.stepSimulation(scalar(dt_s), settings_.engine_substeps, scalar(engine_dt));
     for (const auto& object : objects_) {
         if (object.duplicate >= 0) {
@@ -176,6 +201,27 @@ Vec3 BulletCoupling::enginePosition(int object) const {
 
 Mat3 BulletCoupling::engineRotation(int object) const {
     return fromBt(engine_->bodies[objects_[object].engine_index]->getWorldTransform().getBasis());
+}
+
+double BulletCoupling::engineContactForce(int object_a, int object_b) const {
+    if (last_engine_dt_s_ <= 0.0) {
+        return 0.0;
+    }
+    const btCollisionObject* a = engine_->bodies[objects_[object_a].engine_index].get();
+    const btCollisionObject* b = engine_->bodies[objects_[object_b].engine_index].get();
+    btDispatcher& dispatcher = *engine_->world.getDispatcher();
+    double impulse = 0.0;
+    for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
+        const btPersistentManifold& manifold = *dispatcher.getManifoldByIndexInternal(m);
+        if (!((manifold.getBody0() == a && manifold.getBody1() == b) ||
+              (manifold.getBody0() == b && manifold.getBody1() == a))) {
+            continue;
+        }
+        for (int p = 0; p < manifold.getNumContacts(); ++p) {
+            impulse += manifold.getContactPoint(p).getAppliedImpulse();
+        }
+    }
+    return impulse / last_engine_dt_s_;
 }
 
 }  // namespace haptic::softhand

@@ -232,7 +232,13 @@ HandModel buildHand(const config::HandConfig& hand, const SolverSettings& settin
     if (hand.model == config::HandModel::kFinger) {
         fingers.push_back(hand.finger.value_or(Finger::kIndex));
     } else {
-        fingers = {Finger::kThumb, Finger::kIndex, Finger::kMiddle, Finger::kRing, Finger::kLittle};
+        // Always in thumb..little order, whatever order the scene lists them in.
+        for (Finger f :
+             {Finger::kThumb, Finger::kIndex, Finger::kMiddle, Finger::kRing, Finger::kLittle}) {
+            if (hand.simulates(f)) {
+                fingers.push_back(f);
+            }
+        }
     }
     for (Finger f : fingers) {
         const double y = fingerOffset(f) * a.hand_breadth_m;

@@ -95,9 +95,15 @@ const TactileOutput* SceneSimulation::tactile(std::size_t device) const {
 }
 
 std::string SceneSimulation::modelName() const {
-    const std::string finger(config::toString(hand_.finger.value_or(config::Finger::kIndex)));
-    return "softhand_" + std::string(config::toString(hand_.model)) +
-           (hand_.model == config::HandModel::kHand ? "" : "_" + finger) + "_res" +
+    std::string fingers;
+    if (hand_.model != config::HandModel::kHand) {
+        fingers =
+            "_" + std::string(config::toString(hand_.finger.value_or(config::Finger::kIndex)));
+    }
+    for (const config::Finger finger : hand_.fingers) {  // a hand with some fingers only
+        fingers += "_" + std::string(config::toString(finger));
+    }
+    return "softhand_" + std::string(config::toString(hand_.model)) + fingers + "_res" +
            std::to_string(hand_.resolution);
 }
 

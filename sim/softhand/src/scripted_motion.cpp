@@ -123,4 +123,128 @@ HandPoseInput PressSlideEdgeScript::at(double t_s) const {
     return input;
 }
 
+// ---- grasp_lift_place_push ------------------------------------------------------------
+
+namespace {
+
+// A lateral (key) pinch: the box is held between the thumb pad and the radial (-y) side of
+// the index's proximal phalanx. The model's index has no abduction, so its pad cannot face
+// the thumb; its side faces -y at any flexion, and the thumb pad turns to face +y as the
+// thumb flexes (pad normal within ~20 degrees of +y over closures 0.3-0.5, scratch search
+// over the builder's hand). The index is held nearly straight, tipped down 0.2 rad, so
+// that its tip stays above the table; the thumb's three joints close together.
+constexpr std::array<double, 3> kIndexHook{0.2, 0.0, 0.0};
+constexpr std::array<double, 3> kThumbPerClosure{0.4, 0.4, 0.4};
+constexpr double kPadAlongDistal = 0.2;  // of the distal length, from its centre to the tip
+
+// The time within the script's period.
+double scriptTime(double t_s, bool loop, double period) {
+    return loop ? std::fmod(std::max(t_s, 0.0), period) : std::clamp(t_s, 0.0, period);
+}
+
+double ramp(double t, double start, double end) {
+    return smooth((t - start) / (end - start));
+}
+
+}  // namespace
+
+GraspLiftPlacePushScript::GraspLiftPlacePushScript(const TrackedHand& hand,
+                                                   const config::HandConfig& config,
+                                                   const config::SceneObject& target, bool loop)
+    : hand_(hand), loop_(loop) {
+    const auto* box = std::get_if<config::BoxShape>(&target.shape);
+    if (box == nullptr) {
+        throw std::invalid_argument("grasp_lift_place_push: target_object '" + target.name +
+                                    "' must be a box");
+    }
+    (void)hand_.referenceDistal(config::Finger::kThumb);  // throws when not simulated
+    (void)hand_.referenceDistal(config::Finger::kIndex);
+    start_ = Vec3(target.pose.position_m[0], target.pose.position_m[1], target.pose.position_m[2]);
+    // The pinch goes across the box's world y extent (a yawed box: its footprint's).
+    const Mat3 rotation = rotationFromRpy(target.pose.rpy_rad);
+    const Vec3 half(box->half_extents_m[0], box->half_extents_m[1], box->half_extents_m[2]);
+    half_width_m_ = rotation.row(1).cwiseAbs().dot(half);
+    const double diameter = config.anthropometry.fingertip_diameter_m;
+    // Tissue radii as hand_builder.cpp makes them: the thumb 1.15x, the proximal 1.08x.
+    thumb_pad_radius_m_ = 0.5 * diameter * 1.15;
+    index_side_radius_m_ = 0.5 * diameter * 1.08;
+    thumb_pad_offset_m_ = kPadAlongDistal * phalanxLengths(config::Finger::kThumb,
+                                                           config.anthropometry.hand_length_m)[2];
+    open_ = closureForGap(kOpenGap);
+    closed_ = closureForGap(-kSqueeze);
+}
+
+std::array<double, kHandPoseAngles> GraspLiftPlacePushScript::posture(double closure) const {
+    std::array<double, kHandPoseAngles> flexion{};  // middle, ring, little straight
+    for (std::size_t s = 0; s < 3; ++s) {
+        flexion[s] = closure * kThumbPerClosure[s];
+        flexion[3 + s] = kIndexHook[s];
+    }
+    return flexion;
+}
+
+Vec3 GraspLiftPlacePushScript::boxInWrist(double closure, double* thumb_surface_y) const {
+    HandPoseInput input;
+    input.flexion_rad = posture(closure);
+    std::vector<BonePose> poses;
+    hand_.referencePoses(input, poses);
+    const BonePose& thumb =
+        poses[static_cast<std::size_t>(hand_.referenceDistal(config::Finger::kThumb))];
+    const BonePose& index_proximal =
+        poses[static_cast<std::size_t>(hand_.referencePhalanx(config::Finger::kIndex, 0))];
+    const Vec3 pad = thumb.position_m + thumb.rotation * Vec3(thumb_pad_offset_m_, 0.0, 0.0);
+    const Vec3 pad_normal = -(thumb.rotation * Vec3::UnitZ());
+    if (thumb_surface_y != nullptr) {
+        *thumb_surface_y = (pad + thumb_pad_radius_m_ * pad_normal).y();
+    }
+    const double index_face_y = index_proximal.position_m.y() - index_side_radius_m_;
+    return {pad.x(), index_face_y - half_width_m_, pad.z()};
+}
+
+double GraspLiftPlacePushScript::closureForGap(double gap_m) const {
+    // Gap between the thumb pad and the box's -y face with the +y face on the index's side.
+    // The pad moves towards +y as the thumb closes (closure 0 = straight thumb), so bisect.
+    const auto gap = [&](double c) {
+        double surface_y = 0.0;
+        const Vec3 box = boxInWrist(c, &surface_y);
+        return (box.y() - half_width_m_) - surface_y;
+    };
+    double lo = 0.0;
+    double hi = 1.2;
+    if (gap(lo) < gap_m || gap(hi) > gap_m) {
+        throw std::invalid_argument("grasp_lift_place_push: the box (" +
+                                    std::to_string(2.0 * half_width_m_) +
+                                    " m across y) does not fit between thumb and index");
+    }
+    for (int i = 0; i < 40; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (gap(mid) > gap_m ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+double GraspLiftPlacePushScript::closure(double t_s) const {
+    const double t = scriptTime(t_s, loop_, kPeriod);
+    return open_ + (closed_ - open_) * (ramp(t, 0.0, kCloseEnd) - ramp(t, kPushEnd, kOpenEnd));
+}
+
+Vec3 GraspLiftPlacePushScript::boxTarget(double t_s) const {
+    const double t = scriptTime(t_s, loop_, kPeriod);
+    const double up =
+        kLiftHeight * (ramp(t, kLiftStart, kLiftEnd) - ramp(t, kPlaceStart, kPlaceEnd));
+    const double withdraw = kLiftHeight * ramp(t, kOpenEnd, kPeriod);
+    return start_ + Vec3(kPushDistance * ramp(t, kPushStart, kPushEnd), 0.0, up + withdraw);
+}
+
+HandPoseInput GraspLiftPlacePushScript::at(double t_s) const {
+    // Palm down, fingers along +x, the pinch across y: the wrist keeps the world's axes and
+    // carries the pinched box's centre along boxTarget.
+    HandPoseInput input;
+    const double c = closure(t_s);
+    input.flexion_rad = posture(c);
+    input.wrist.rotation = Mat3::Identity();
+    input.wrist.position_m = boxTarget(t_s) - boxInWrist(c, nullptr);
+    return input;
+}
+
 }  // namespace haptic::softhand

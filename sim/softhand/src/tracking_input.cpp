@@ -57,6 +57,18 @@ std::optional<std::string> fromMessage(const msgs::HandPose& message, HandPoseIn
     return std::nullopt;
 }
 
+msgs::HandPose toMessage(const HandPoseInput& pose) {
+    msgs::HandPose message;
+    const Vec3& p = pose.wrist.position_m;
+    message.wrist_position_m = {p.x(), p.y(), p.z()};
+    const Eigen::Quaterniond q(pose.wrist.rotation);
+    message.wrist_orientation_wxyz = {q.w(), q.x(), q.y(), q.z()};
+    for (double angle : pose.flexion_rad) {
+        message.joint_angles_rad.push_back(angle);
+    }
+    return message;
+}
+
 TrackedHand::TrackedHand(const HandModel& model, const config::HandConfig& hand)
     : reference_kinematics_(referenceKinematics(model, hand)),
       fingertip_(hand.model == config::HandModel::kFingertip) {
@@ -83,13 +95,13 @@ TrackedHand::TrackedHand(const HandModel& model, const config::HandConfig& hand)
     }
 }
 
-int TrackedHand::referenceDistal(config::Finger finger) const {
+int TrackedHand::referencePhalanx(config::Finger finger, int phalanx) const {
     const auto chain = reference_kinematics_.chain(finger);
     if (!chain) {
         throw std::invalid_argument("TrackedHand: the model does not simulate the " +
                                     std::string(config::toString(finger)) + " finger");
     }
-    return chain->bones[2];
+    return chain->bones.at(static_cast<std::size_t>(phalanx));
 }
 
 void TrackedHand::referencePoses(const HandPoseInput& input, std::vector<BonePose>& poses) const {

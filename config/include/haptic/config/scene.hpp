@@ -3,6 +3,7 @@
 // One YAML file per scene (config/scenes/*.yaml): what handsim simulates, how the hand is
 // driven, and which simulated finger each device is attached to. World frame: z up, metres.
 
+#include <algorithm>
 #include <array>
 #include <filesystem>
 #include <functional>
@@ -51,16 +52,23 @@ struct Anthropometry {
     double fingertip_diameter_m{0.0};  // of the simulated finger(s), at the distal phalanx
 };
 
-// YAML: hand: {model, finger (fingertip and finger models only), resolution, anthropometry}
+// YAML: hand: {model, finger (fingertip and finger models only), fingers (hand model only),
+//              resolution, anthropometry}
 struct HandConfig {
     HandModel model{HandModel::kFinger};
     std::optional<Finger> finger;  // the simulated finger; nullopt for the whole hand
-    int resolution{2};             // mesh refinement level, 1 (coarse) .. 8 (fine)
+    // The hand model's fingers on its palm; empty = all five. A pinch needs only thumb and
+    // index, at less than half the cost of the whole hand.
+    std::vector<Finger> fingers;
+    int resolution{2};  // mesh refinement level, 1 (coarse) .. 8 (fine)
     Anthropometry anthropometry;
 
     // Whether a device bound to `f` has a simulated finger to attach to.
     [[nodiscard]] bool simulates(Finger f) const noexcept {
-        return model == HandModel::kHand || finger == f;
+        if (model == HandModel::kHand) {
+            return fingers.empty() || std::find(fingers.begin(), fingers.end(), f) != fingers.end();
+        }
+        return finger == f;
     }
 };
 
@@ -125,13 +133,15 @@ struct EnumTraits<TrackingSource> {
 
 // Built-in motions for demos and tests without a tracker.
 enum class TrackingScript {
-    kPressSlideEdge,  // press on the target's top face, slide across it and over an edge
+    kPressSlideEdge,      // press on the target's top face, slide across it and over an edge
+    kGraspLiftPlacePush,  // pinch the target box, lift it, set it down, push it along +x
 };
 
 template <>
 struct EnumTraits<TrackingScript> {
-    static constexpr std::array<EnumEntry<TrackingScript>, 1> kEntries{{
+    static constexpr std::array<EnumEntry<TrackingScript>, 2> kEntries{{
         {"press_slide_edge", TrackingScript::kPressSlideEdge},
+        {"grasp_lift_place_push", TrackingScript::kGraspLiftPlacePush},
     }};
 };
 

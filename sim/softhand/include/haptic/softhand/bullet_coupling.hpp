@@ -40,17 +40,24 @@ class BulletCoupling {
     [[nodiscard]] int duplicateOf(int object) const { return objects_[object].duplicate; }
     [[nodiscard]] Vec3 enginePosition(int object) const;
     [[nodiscard]] Mat3 engineRotation(int object) const;
+    // Normal force (N) between two objects in Bullet's last substep, from its contact
+    // manifolds; 0 when they do not touch.
+    [[nodiscard]] double engineContactForce(int object_a, int object_b) const;
 
   private:
     struct Object {
         int collider{-1};
         int duplicate{-1};  // -1 for static objects
         int engine_index{-1};
+        Vec3 duplicate_position{Vec3::Zero()};  // at the last exchange
+        Mat3 duplicate_rotation{Mat3::Identity()};
     };
+    void applySpringWrenches();
     struct Engine;
     EngineCouplingSettings settings_;
     std::unique_ptr<Engine> engine_;
     std::vector<Object> objects_;
+    double last_engine_dt_s_{0.0};
 };
 
 // R = Rz(yaw) Ry(pitch) Rx(roll), the scene files' convention.

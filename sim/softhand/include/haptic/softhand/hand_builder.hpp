@@ -8,7 +8,7 @@
 // Frame at build time: the palm's centre at the origin, fingers along +x, palm facing -z,
 // flexion = positive rotation about +y (curls the tip towards -z). Only what the scene needs
 // is built: a fingertip (distal phalanx + pad), one finger (3 phalanges on a kinematic
-// palm), or the whole hand.
+// palm), or the hand (palm and the scene's `fingers`, all five by default).
 
 #include <optional>
 #include <string>

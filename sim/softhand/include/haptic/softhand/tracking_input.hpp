@@ -34,6 +34,10 @@ struct HandPoseInput {
 [[nodiscard]] std::optional<std::string> fromMessage(const msgs::HandPose& message,
                                                      HandPoseInput& out);
 
+// The message for a pose (header and confidence left to the caller): what a tracker or a
+// test publishes on the HandPose topic.
+[[nodiscard]] msgs::HandPose toMessage(const HandPoseInput& pose);
+
 // Maps hand poses to the tracked poses of a model's bones (HandModel::bones order).
 class TrackedHand {
   public:
@@ -47,7 +51,11 @@ class TrackedHand {
     // The pose that gives the model its build pose.
     [[nodiscard]] HandPoseInput buildPose() const;
     // Index of the finger's distal phalanx among the reference poses.
-    [[nodiscard]] int referenceDistal(config::Finger finger) const;
+    [[nodiscard]] int referenceDistal(config::Finger finger) const {
+        return referencePhalanx(finger, 2);
+    }
+    // The same for phalanx 0 (proximal), 1 (middle) or 2 (distal).
+    [[nodiscard]] int referencePhalanx(config::Finger finger, int phalanx) const;
 
   private:
     HandKinematics reference_kinematics_;  // of a finger model behind a fingertip model
@@ -109,6 +117,58 @@ class PressSlideEdgeScript {
     Vec3 half_extents_;
     double pad_radius_m_{0.0};
     double distal_half_length_m_{0.0};
+    bool loop_{true};
+};
+
+// Scripted grasp_lift_place_push: a lateral pinch (thumb pad against the radial side of the
+// index) takes the target box across its y faces, lifts it kLiftHeight, sets it back where
+// it stood, slides it kPushDistance along the world +x axis (into whatever stands there),
+// opens and withdraws upwards. Palm down, fingers along +x. Needs a hand model with thumb
+// and index. A deterministic function of time with period kPeriod.
+class GraspLiftPlacePushScript {
+  public:
+    // Phase boundaries (s).
+    static constexpr double kCloseEnd = 0.8;
+    static constexpr double kLiftStart = 1.0;
+    static constexpr double kLiftEnd = 2.0;
+    static constexpr double kPlaceStart = 2.4;
+    static constexpr double kPlaceEnd = 3.4;
+    static constexpr double kPushStart = 3.6;
+    static constexpr double kPushEnd = 5.0;
+    static constexpr double kOpenEnd = 5.6;
+    static constexpr double kPeriod = 6.5;
+    static constexpr double kLiftHeight = 0.05;
+    static constexpr double kPushDistance = 0.05;
+    // How far the closed thumb would put its pad past the box face: the grip force comes
+    // from the tracking springs pulling the thumb towards that.
+    static constexpr double kSqueeze = 0.010;
+    static constexpr double kOpenGap = 0.012;  // thumb pad to box face before closing
+
+    // Throws std::invalid_argument when the target is not a box, the hand lacks the thumb or
+    // the index, or the box does not fit between them.
+    GraspLiftPlacePushScript(const TrackedHand& hand, const config::HandConfig& config,
+                             const config::SceneObject& target, bool loop);
+
+    [[nodiscard]] HandPoseInput at(double t_s) const;
+    // Where the script carries the box centre (world).
+    [[nodiscard]] Vec3 boxTarget(double t_s) const;
+
+  private:
+    [[nodiscard]] std::array<double, kHandPoseAngles> posture(double closure) const;
+    // The held box's centre in the wrist frame at a thumb closure; optionally the y of the
+    // thumb pad's surface.
+    [[nodiscard]] Vec3 boxInWrist(double closure, double* thumb_surface_y) const;
+    [[nodiscard]] double closureForGap(double gap_m) const;
+    [[nodiscard]] double closure(double t_s) const;
+
+    const TrackedHand& hand_;
+    Vec3 start_{Vec3::Zero()};
+    double half_width_m_{0.0};
+    double thumb_pad_radius_m_{0.0};
+    double index_side_radius_m_{0.0};
+    double thumb_pad_offset_m_{0.0};
+    double open_{0.0};
+    double closed_{1.0};
     bool loop_{true};
 };
 
