@@ -94,7 +94,7 @@ TEST(ShippedConfig, Exoskeleton) {
     EXPECT_EQ(cfg.can.state_timeout_ms, 10);
     EXPECT_EQ(cfg.can.transport, CanTransport::kUdp);
     EXPECT_EQ(cfg.can.udp_port, 47000);
-    EXPECT_EQ(cfg.can.udp_slots, 8);
+    EXPECT_EQ(cfg.can.udp_slots, 4);
     EXPECT_DOUBLE_EQ(cfg.safety.max_force_n, 10.0);
     EXPECT_DOUBLE_EQ(cfg.safety.max_stiffness_n_per_m, 2000.0);
     EXPECT_EQ(cfg.safety.fade_out_ms, 100);
