@@ -3,21 +3,23 @@
 // Scenes at 200 Hz (dt = 5 ms): a fingertip pressing 4 mm into a table and sliding 1 cm (the
 // thimble scene), one finger flexing against a table (the exoskeleton scene), and the whole
 // hand moved up and down by its tracking (no contact).
-// Counters: p50_us / p99_us over the steps of the run; pcg_iters, backtracks and substeps per
-// step; force_err = RMS(F - F_ref) / RMS(F_ref) of the normal force on the table over the
-// first second, press_err the same over its first 0.2 s (pressing in, no sliding yet: the
-// fine reference stick-slips while sliding, which dominates force_err); tip_err_mm = RMS distance
-// of the distal bone from the reference (flex). The reference is the same scene one resolution
-// level finer than the finest row, with PCG to a relative tolerance of 1e-8 (up to 2000
-// iterations), computed once before the rows run.
+// Counters: p50_us / p99_us over the steps of the run; pcg_iters, backtracks, substeps and
+// newton_extra (Newton iterations beyond the first) per step; force_err = RMS(F - F_ref) /
+// RMS(F_ref) of the normal force on the table over the first second, press_err the same over its
+// first 0.2 s (pressing in, no sliding yet: the fine reference stick-slips while sliding, which
+// dominates force_err); tip_err_mm = RMS distance of the distal bone from the reference (flex). The
+// reference is the same scene one resolution level finer than the finest row, with PCG to a
+// relative tolerance of 1e-8 (up to 2000 iterations), computed once before the rows run.
 
 #include <benchmark/benchmark.h>
 #include <malloc.h>
+#include <time.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -40,6 +42,24 @@ using bench::kPressSteps;
 using bench::Sample;
 using bench::solverSettings;
 constexpr int kFlexReferenceLevel = 3;
+
+// CPU time of this thread: on the shared 2-vCPU machine wall time per step is 1.5-3x the
+// CPU time, so percentiles of both are reported.
+double threadCpuUs() {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return 1e6 * static_cast<double>(t.tv_sec) + 1e-3 * static_cast<double>(t.tv_nsec);
+}
+
+// p50 and p99 of per-step times into the state's counters, with `prefix`.
+void addPercentiles(benchmark::State& state, std::vector<double> us, const char* prefix) {
+    std::sort(us.begin(), us.end());
+    const auto at = [&](double q) {
+        return us[static_cast<std::size_t>(q * static_cast<double>(us.size() - 1))];
+    };
+    state.counters[std::string(prefix) + "p50_us"] = at(0.5);
+    state.counters[std::string(prefix) + "p99_us"] = at(0.99);
+}
 
 // One finger flexing all three joints by up to 0.8 rad and back, 1 s period; the fingertip
 // meets the table at the end of the flexion.
@@ -110,9 +130,11 @@ void run(benchmark::State& state, int reference_level) {
     const std::vector<Sample>& ref = reference<Scene>(reference_level);
     Scene scene(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), 1e-4);
     std::vector<double> step_us;
+    std::vector<double> cpu_us;
     double pcg_iterations = 0.0;
     double backtracks = 0.0;
     double substeps = 0.0;
+    double newton = 0.0;
     double force_error2 = 0.0;
     double force_ref2 = 0.0;
     double tip_error2 = 0.0;
@@ -121,13 +143,16 @@ void run(benchmark::State& state, int reference_level) {
     int step = 0;
     for (auto _ : state) {
         scene.setInput(step);
+        const double c0 = threadCpuUs();
         const auto t0 = std::chrono::steady_clock::now();
         const StepReport r = scene.step();
         const auto t1 = std::chrono::steady_clock::now();
+        cpu_us.push_back(threadCpuUs() - c0);
         step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
         pcg_iterations += r.pcg_iterations;
         backtracks += r.backtracks;
         substeps += r.substeps;
+        newton += r.newton_iterations;
         if (step < kCycleSteps) {
             const Sample s = scene.sample();
             const Sample& expected = ref[static_cast<std::size_t>(step)];
@@ -142,19 +167,16 @@ void run(benchmark::State& state, int reference_level) {
         ++step;
         benchmark::DoNotOptimize(r.energy_j);
     }
-    std::sort(step_us.begin(), step_us.end());
-    const auto at = [&](double q) {
-        return step_us[static_cast<std::size_t>(q * static_cast<double>(step_us.size() - 1))];
-    };
     const auto steps = static_cast<double>(step_us.size());
     const double compared = std::min(steps, static_cast<double>(kCycleSteps));
     state.counters["nodes"] = scene.simulation().nodeCount();
     state.counters["tets"] = scene.simulation().tetCount();
-    state.counters["p50_us"] = at(0.5);
-    state.counters["p99_us"] = at(0.99);
+    addPercentiles(state, step_us, "");
+    addPercentiles(state, cpu_us, "cpu_");
     state.counters["pcg_iters"] = pcg_iterations / steps;
     state.counters["backtracks"] = backtracks / steps;
     state.counters["substeps"] = substeps / steps;
+    state.counters["newton_extra"] = newton / steps;
     state.counters["force_err"] = std::sqrt(force_error2 / std::max(force_ref2, 1e-30));
     state.counters["press_err"] = std::sqrt(press_error2 / std::max(press_ref2, 1e-30));
     state.counters["tip_err_mm"] = 1e3 * std::sqrt(tip_error2 / compared);
@@ -178,7 +200,10 @@ void wholeHand(benchmark::State& state) {
                            model.simulation.bodyRotation(bone.body));
     }
     std::vector<double> step_us;
+    std::vector<double> cpu_us;
     double pcg_iterations = 0.0;
+    double substeps = 0.0;
+    double newton = 0.0;
     int step = 0;
     for (auto _ : state) {
         const double lift = 0.01 * std::sin(2.0 * 3.14159265 * (step++ % kCycleSteps) * kDt);
@@ -186,22 +211,25 @@ void wholeHand(benchmark::State& state) {
             model.simulation.setTrackingTarget(
                 model.bones[k].body, build[k].first + Vec3(0.0, 0.0, lift), build[k].second);
         }
+        const double c0 = threadCpuUs();
         const auto t0 = std::chrono::steady_clock::now();
         const StepReport r = model.simulation.step(kDt);
         const auto t1 = std::chrono::steady_clock::now();
+        cpu_us.push_back(threadCpuUs() - c0);
         step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
         pcg_iterations += r.pcg_iterations;
+        substeps += r.substeps;
+        newton += r.newton_iterations;
         benchmark::DoNotOptimize(r.energy_j);
     }
-    std::sort(step_us.begin(), step_us.end());
-    const auto at = [&](double q) {
-        return step_us[static_cast<std::size_t>(q * static_cast<double>(step_us.size() - 1))];
-    };
+    const auto steps = static_cast<double>(step_us.size());
     state.counters["nodes"] = model.simulation.nodeCount();
     state.counters["tets"] = model.simulation.tetCount();
-    state.counters["p50_us"] = at(0.5);
-    state.counters["p99_us"] = at(0.99);
-    state.counters["pcg_iters"] = pcg_iterations / static_cast<double>(step_us.size());
+    addPercentiles(state, step_us, "");
+    addPercentiles(state, cpu_us, "cpu_");
+    state.counters["pcg_iters"] = pcg_iterations / steps;
+    state.counters["substeps"] = substeps / steps;
+    state.counters["newton_extra"] = newton / steps;
 }
 
 // handsim's physics for the shipped default scene (config/scenes/default.yaml: index finger,

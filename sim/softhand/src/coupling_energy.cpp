@@ -90,40 +90,39 @@ double EnergyTerms::contact(const Sim& sim, const Sim::Configuration& q, Assembl
     const double k_n = sim.settings_.contact_stiffness_n_per_m;
     const double k_f = sim.settings_.friction_stiffness_n_per_m;
     double energy = 0.0;
-    if (assembler == nullptr) {
-        // Energy check: true penetration of every skin node, detected or not, so a step that
-        // tunnels into an object is seen as an energy increase.
-        for (int ci = 0; ci < static_cast<int>(sim.colliders_.size()); ++ci) {
-            const auto [c, rotation] = sim.colliderPose(q, ci);
-            for (int node : sim.skin_) {
-                const auto query = querySurface(sim.colliders_[ci].desc.shape,
-                                                rotation.transpose() * (q.x[node] - c));
-                if (query.phi_m < 0.0) {
-                    energy += 0.5 * k_n * query.phi_m * query.phi_m;
-                }
+    JacobianBlocks blocks;
+    // Normal penalty on the true penetration of every skin node, detected or not: the energy
+    // check then sees a step that tunnels into an object, and a Newton iteration after the
+    // first linearises the nodes that touched within the step.
+    for (int ci = 0; ci < static_cast<int>(sim.colliders_.size()); ++ci) {
+        const auto [c, rotation] = sim.colliderPose(q, ci);
+        const int body = sim.colliders_[ci].desc.body;
+        for (int node : sim.skin_) {
+            const auto query =
+                querySurface(sim.colliders_[ci].desc.shape, rotation.transpose() * (q.x[node] - c));
+            if (!(query.phi_m < 0.0)) {
+                continue;
             }
+            if (assembler == nullptr) {
+                energy += 0.5 * k_n * query.phi_m * query.phi_m;
+                continue;
+            }
+            const Vec3 normal = rotation * query.normal;
+            const Vec3 surface = c + rotation * query.surface_point_m;
+            blocks.clear();
+            blocks.push_back({nodeDof(node), Mat3::Identity()});
+            if (body >= 0) {
+                appendBodyPoint(blocks, bodyDof(sim, body), surface - q.c[body], -1.0);
+            }
+            energy += addResidualTerm(assembler, k_n * normal * normal.transpose(),
+                                      query.phi_m * normal, blocks);
         }
     }
-    JacobianBlocks blocks;
     for (const auto& contact : sim.contacts_) {
         const auto& collider = sim.colliders_[contact.collider];
         const auto [c, rotation] = sim.colliderPose(q, contact.collider);
         const Vec3& x = q.x[contact.node];
         const int body = collider.desc.body;
-        if (assembler != nullptr) {
-            const auto query = querySurface(collider.desc.shape, rotation.transpose() * (x - c));
-            if (query.phi_m < 0.0) {
-                const Vec3 normal = rotation * query.normal;
-                const Vec3 surface = c + rotation * query.surface_point_m;
-                blocks.clear();
-                blocks.push_back({nodeDof(contact.node), Mat3::Identity()});
-                if (body >= 0) {
-                    appendBodyPoint(blocks, bodyDof(sim, body), surface - q.c[body], -1.0);
-                }
-                energy += addResidualTerm(assembler, k_n * normal * normal.transpose(),
-                                          query.phi_m * normal, blocks);
-            }
-        }
         const Vec3 anchor = c + rotation * contact.anchor_local;
         const Mat3 tangent = Mat3::Identity() - contact.normal * contact.normal.transpose();
         blocks.clear();

@@ -30,6 +30,7 @@ int Simulation::addTissue(const TetMesh& mesh, const TissueMaterial& m) {
         throw std::invalid_argument("addTissue: E > 0, 0 <= nu < 0.5 and density > 0 required");
     }
     const int first = nodeCount();
+    tissue_energy_valid_ = false;
     for (const Vec3& p : mesh.nodes_m) {
         rest_.push_back(p);
         x_.push_back(p);
@@ -162,6 +163,7 @@ void Simulation::setColliderPose(int collider, const Vec3& position_m, const Mat
 
 void Simulation::setNodePosition(int node, const Vec3& position_m) {
     x_.at(node) = position_m;
+    tissue_energy_valid_ = false;
 }
 
 void Simulation::setBodyPose(int body, const Vec3& position_m, const Mat3& rotation) {

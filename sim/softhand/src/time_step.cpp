@@ -158,79 +158,120 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
         w.pattern.appendBlocks(blocks);
         w.pattern.build(block_rows, std::move(blocks));
     }
+    report.strain_limited_elements = stats.strain_limited_elements;
+    report.inverted_elements = stats.inverted_elements;
 
     const double alpha = settings_.mass_damping_per_s;
     const double gamma = settings_.stiffness_damping_s;
-    // System (1 + h alpha) M + h^2 H + h gamma H_tissue, i.e. D = alpha M + gamma H_tissue
-    // (Rayleigh on the tissue only).
-    w.system.resize(w.hessian.size());
-    for (std::size_t k = 0; k < w.system.size(); ++k) {
-        w.system[k] = (h * h) * w.hessian[k] + (h * gamma) * w.tissue_hessian[k];
-    }
-    StepAssembly::addMass(node_mass_, bodies_, w, 1.0 + h * alpha);
+    // Rayleigh damping D = alpha M + gamma H_tissue (tissue only) with H_tissue frozen at the
+    // prediction for the whole step, so the merit below is one function across iterations.
+    w.damping_hessian.swap(w.tissue_hessian);
     StepAssembly::massTimes(node_mass_, bodies_, w, velocity, w.mass_velocity);
-    w.pattern.multiply(w.tissue_hessian, velocity, w.tissue_trial);
-    w.rhs = -h * (w.gradient + alpha * w.mass_velocity + gamma * w.tissue_trial);
+    w.pattern.multiply(w.damping_hessian, velocity, w.tissue_trial);
     const double damping_start =
         alpha * velocity.dot(w.mass_velocity) + gamma * velocity.dot(w.tissue_trial);
-
-    w.preconditioner.compute(w.pattern, w.system, layout.nodes, w.free_mask);
-    if (warm_start_.size() != n || !warm_start_.allFinite()) {
-        warm_start_ = Eigen::VectorXd::Zero(n);
-    }
-    w.delta = warm_start_;
-    const PcgResult pcg =
-        solvePcg(w.pattern, w.system, w.rhs, w.free_mask, w.preconditioner,
-                 settings_.pcg_max_iterations, settings_.pcg_relative_tolerance, w.delta, w.pcg);
-    report.pcg_iterations += pcg.iterations;
-    report.pcg_relative_residual = pcg.relative_residual;
-    if (!pcg.converged) {
-        report.pcg_capped = true;
-        report.clamped = true;
-    }
-    report.strain_limited_elements = stats.strain_limited_elements;
-    report.inverted_elements = stats.inverted_elements;
 
     // Energy check. A step is accepted when it lowers the backward-Euler merit
     //   Phi(v+) = 1/2 dv^T M dv + U(q + h v+) + h/2 v+^T D v+   (whose minimiser is the step)
     // and does not raise the total energy 1/2 v^T M v + U(q). The exact backward-Euler step
     // satisfies both for convex energies; one Newton step on a non-convex or non-smooth one
-    // (co-rotation, strain limits, contact set changes) may not, and then it is halved.
+    // (co-rotation, strain limits, friction switching between stick and slip, contacts
+    // starting within the step) may not.
     struct Evaluation {
         double merit;
         double energy;
     };
+    double trial_tissue = 0.0;  // tissue energy of the last evaluation
     const auto evaluate = [&](const Eigen::VectorXd& v_plus) {
         StepAssembly::massTimes(node_mass_, bodies_, w, v_plus, w.mass_trial);
-        w.pattern.multiply(w.tissue_hessian, v_plus, w.tissue_trial);
+        w.pattern.multiply(w.damping_hessian, v_plus, w.tissue_trial);
         const double damping =
             alpha * v_plus.dot(w.mass_trial) + gamma * v_plus.dot(w.tissue_trial);
         integrate(q, v_plus, h, w.trial);
-        const double potential = EnergyTerms::potential(*this, w.trial, nullptr, nullptr);
+        trial_tissue = EnergyTerms::tissue(*this, w.trial, nullptr, nullptr);
+        const double potential = trial_tissue + EnergyTerms::external(*this, w.trial, nullptr) +
+                                 EnergyTerms::skeleton(*this, w.trial, nullptr) +
+                                 EnergyTerms::contact(*this, w.trial, nullptr);
         const double kinetic_change = (v_plus - velocity).dot(w.mass_trial - w.mass_velocity);
         return Evaluation{0.5 * kinetic_change + potential + 0.5 * h * damping,
                           0.5 * v_plus.dot(w.mass_trial) + potential};
     };
-    const double energy_before =
-        0.5 * velocity.dot(w.mass_velocity) + EnergyTerms::potential(*this, q, nullptr, nullptr);
+    const double energy_before = 0.5 * velocity.dot(w.mass_velocity) + potentialNow(q);
     // Phi(v) is the potential at the prediction, already summed by the assembly above.
     const double merit_start = potential_predicted + 0.5 * h * damping_start;
+    const double merit_slack = 1e-12 * std::max(1.0, std::abs(merit_start));
     const double energy_slack = 1e-12 + 1e-9 * std::abs(energy_before);
-    double step_fraction = 1.0;
-    double previous_excess = std::numeric_limits<double>::infinity();
-    bool accepted = false;
+
+    // Newton iterations on the merit. Most rejected full steps lower the merit but overshoot
+    // where the linearisation was wrong (a node modelled as sliding that the step stops, a
+    // node that touches within the step): they were halved and then substepped, each
+    // substep a full step again. Relinearising at the better point instead (a damped Newton
+    // iteration, with the same acceptance test) reaches the backward-Euler step in one or
+    // two more solves; substeps stay the last resort.
+    if (warm_start_.size() != n || !warm_start_.allFinite()) {
+        warm_start_ = Eigen::VectorXd::Zero(n);
+    }
     Eigen::VectorXd& v_plus = w.v_plus;
-    v_plus = velocity;
-    if (w.delta.allFinite() && std::isfinite(merit_start)) {
-        for (int attempt = 0; attempt <= settings_.max_backtracks; ++attempt) {
-            v_plus = velocity + step_fraction * w.delta;
+    Eigen::VectorXd& iterate = w.iterate;
+    iterate = velocity;
+    double merit_iterate = merit_start;
+    bool accepted = false;
+    int halvings_left = settings_.max_backtracks;
+    // Not with inverted elements: the inversion-safe energy has spurious minima there, and
+    // converged iterations settled into one (SofthandStability.InvertedElementsRecover kept
+    // 3 elements inverted), where substeps from a fresh prediction get out.
+    const int newton_iterations =
+        stats.inverted_elements > 0 ? 1 : std::max(1, settings_.max_newton_iterations);
+    for (int newton = 0; newton < newton_iterations && std::isfinite(merit_start); ++newton) {
+        const bool last = newton + 1 == newton_iterations;
+        if (newton > 0) {
+            integrate(q, iterate, h, w.trial);
+            Assembler assembler(w.pattern, w.hessian, w.tissue_hessian, w.gradient, w.missing);
+            (void)EnergyTerms::potential(*this, w.trial, &assembler, nullptr);
+            if (!w.missing.empty()) {
+                break;  // a new contact block: the pattern would change under D; substep
+            }
+            ++report.newton_iterations;
+        }
+        buildSystem(iterate, h, w);
+        w.delta = newton == 0 ? warm_start_ : Eigen::VectorXd::Zero(n);
+        const PcgResult pcg = solvePcg(w.pattern, w.system, w.rhs, w.free_mask, w.preconditioner,
+                                       settings_.pcg_max_iterations,
+                                       settings_.pcg_relative_tolerance, w.delta, w.pcg);
+        report.pcg_iterations += pcg.iterations;
+        report.pcg_relative_residual = pcg.relative_residual;
+        report.pcg_capped = report.pcg_capped || !pcg.converged;
+        report.clamped = report.clamped || !pcg.converged;
+        if (!w.delta.allFinite()) {
+            break;
+        }
+        if (newton == 0) {
+            // The next step starts PCG from the first full Newton direction (not from the
+            // accepted, possibly halved or corrected step): with a small iteration cap the
+            // scripted scenes track their targets markedly better that way.
+            w.first_delta = w.delta;
+        }
+        double step_fraction = 1.0;
+        double previous_excess = std::numeric_limits<double>::infinity();
+        bool improved = false;
+        for (;;) {
+            v_plus = iterate + step_fraction * w.delta;
             const Evaluation value = evaluate(v_plus);
             const bool merit_lowered =
-                std::isfinite(value.merit) &&
-                value.merit <= merit_start + 1e-12 * std::max(1.0, std::abs(merit_start));
+                std::isfinite(value.merit) && value.merit <= merit_start + merit_slack;
             const double excess = value.energy - energy_before;
             if (merit_lowered && excess <= energy_slack) {
                 accepted = true;
+                break;
+            }
+            // Not yet acceptable but better than the iterate: linearise again there.
+            if (!last && std::isfinite(value.merit) && value.merit < merit_iterate) {
+                iterate = v_plus;
+                merit_iterate = value.merit;
+                improved = true;
+                break;
+            }
+            if (halvings_left-- <= 0) {
                 break;
             }
             ++report.backtracks;
@@ -243,6 +284,12 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
             previous_excess = merit_lowered ? excess : previous_excess;
             step_fraction *= 0.5;
         }
+        if (accepted || !improved) {
+            break;
+        }
+    }
+    if (!accepted) {
+        v_plus = velocity;
     }
     if (!accepted && depth < settings_.max_substep_depth) {
         const bool first = advance(0.5 * h, depth + 1, report);
@@ -255,12 +302,13 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
         v_plus.setZero();
     }
     if (accepted) {
-        warm_start_ = w.delta;
+        warm_start_ = w.first_delta;
     } else {
         warm_start_.setZero();
     }
 
     // Speed clamp: a tracking teleport must not fling tissue across the scene.
+    bool speed_clamped = false;
     const double v_max = settings_.max_speed_m_per_s;
     for (int i = 0; i < layout.nodes + layout.bodies; ++i) {
         const int dof = i < layout.nodes ? 3 * i : layout.body(i - layout.nodes);
@@ -268,9 +316,15 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
         if (speed > v_max) {
             v_plus.segment<3>(dof) *= v_max / speed;
             report.clamped = true;
+            speed_clamped = true;
         }
     }
     integrate(q, v_plus, h, w.trial);
+    // The accepted evaluation was at these very positions unless the clamp moved them: its
+    // tissue energy (the costly term) is that of the new state, for the report and the
+    // next step's energy check.
+    tissue_energy_valid_ = accepted && !speed_clamped;
+    tissue_energy_ = trial_tissue;
     const Configuration& next = w.trial;
     for (int i = 0; i < layout.nodes; ++i) {
         x_[i] = next.x[i];
@@ -288,6 +342,23 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
     updateAnchors();
     ++report.substeps;
     return accepted;
+}
+
+void Simulation::buildSystem(const Eigen::VectorXd& iterate, double h, Workspace& w) {
+    const double alpha = settings_.mass_damping_per_s;
+    const double gamma = settings_.stiffness_damping_s;
+    // System (1 + h alpha) M + h^2 H + h gamma H_tissue; right-hand side minus the merit's
+    // gradient at v+ = iterate: M (iterate - v) + h (grad U + D iterate).
+    w.system.resize(w.hessian.size());
+    for (std::size_t k = 0; k < w.system.size(); ++k) {
+        w.system[k] = (h * h) * w.hessian[k] + (h * gamma) * w.damping_hessian[k];
+    }
+    StepAssembly::addMass(node_mass_, bodies_, w, 1.0 + h * alpha);
+    StepAssembly::massTimes(node_mass_, bodies_, w, iterate, w.mass_trial);
+    w.pattern.multiply(w.damping_hessian, iterate, w.tissue_trial);
+    w.rhs = -h * (w.gradient + alpha * w.mass_trial + gamma * w.tissue_trial);
+    w.rhs -= w.mass_trial - w.mass_velocity;
+    w.preconditioner.compute(w.pattern, w.system, nodeCount(), w.free_mask);
 }
 
 int Simulation::relax(double dt_s, int max_steps, double displacement_tolerance_m) {
@@ -348,7 +419,16 @@ double Simulation::energyNow() {
         kinetic += 0.5 * b.mass * b.v.squaredNorm() + 0.5 * b.w.dot(inertia * b.w);
     }
     currentConfiguration(work_.start);
-    return kinetic + EnergyTerms::potential(*this, work_.start, nullptr, nullptr);
+    return kinetic + potentialNow(work_.start);
+}
+
+double Simulation::potentialNow(const Configuration& q) {
+    if (!tissue_energy_valid_) {
+        tissue_energy_ = EnergyTerms::tissue(*this, q, nullptr, nullptr);
+        tissue_energy_valid_ = true;
+    }
+    return tissue_energy_ + EnergyTerms::external(*this, q, nullptr) +
+           EnergyTerms::skeleton(*this, q, nullptr) + EnergyTerms::contact(*this, q, nullptr);
 }
 
 }  // namespace haptic::softhand

@@ -42,10 +42,14 @@ using Mat3 = Eigen::Matrix3d;
 // Rotation of the polar decomposition F = R S (det F > 0) by Higham's scaled Newton
 // iteration X <- (zeta X + X^-T / zeta) / 2: quadratic convergence, a handful of iterations
 // for the moderately deformed elements of a step and no trigonometry, which made the
-// eigen-decomposition path the largest cost of the energy check. Returns false (and leaves
-// `rotation` alone) when det F <= 0 or it does not converge; callers then take the SVD.
+// eigen-decomposition path the largest cost of the energy check. The scale is the Frobenius
+// one, zeta = (|X^-1| / |X|)^(1/2) (two square roots; the determinant scaling's cube root
+// was a fifth of the step), and is dropped once X is near orthogonal, where it is 1 anyway.
+// Returns false (and leaves `rotation` alone) when det F <= 0 or it does not converge;
+// callers then take the SVD.
 [[nodiscard]] inline bool polarRotation(const Mat3& f, Mat3& rotation) {
     Mat3 x = f;
+    bool scaled = true;
     for (int iteration = 0; iteration < 16; ++iteration) {
         Mat3 cofactor;
         cofactor.col(0) = x.col(1).cross(x.col(2));
@@ -55,7 +59,9 @@ using Mat3 = Eigen::Matrix3d;
         if (!(det > 0.0) || !std::isfinite(det)) {
             return false;
         }
-        const double zeta = std::cbrt(1.0 / det);
+        // X^-T = cofactor / det.
+        const double zeta =
+            scaled ? std::sqrt(std::sqrt(cofactor.squaredNorm() / x.squaredNorm()) / det) : 1.0;
         const Mat3 next = 0.5 * (zeta * x + cofactor * (1.0 / (zeta * det)));
         const double change = (next - x).squaredNorm();
         x = next;
@@ -64,6 +70,7 @@ using Mat3 = Eigen::Matrix3d;
             rotation = x;
             return true;
         }
+        scaled = change > 1e-6;
     }
     return false;
 }

@@ -39,6 +39,7 @@ struct SolverSettings {
     double stiffness_damping_s{0.002};  // Rayleigh gamma
     int pcg_max_iterations{200};
     double pcg_relative_tolerance{1e-4};
+    int max_newton_iterations{5};               // per step (or substep), before substepping
     int max_backtracks{10};                     // halvings of the Newton step before substepping
     int max_substep_depth{3};                   // 2^3 = 8 substeps at most
     double max_speed_m_per_s{5.0};              // node and body speed clamp
@@ -89,7 +90,8 @@ struct StepReport {
     bool substepped{false};
     int substeps{1};
     int backtracks{0};
-    int pcg_iterations{0};  // summed over substeps
+    int newton_iterations{0};  // beyond the first, summed over substeps
+    int pcg_iterations{0};     // summed over substeps
     bool pcg_capped{false};
     double pcg_relative_residual{0.0};  // of the last solve
     int active_contacts{0};
@@ -234,13 +236,14 @@ class Simulation {
     // first (the Hessian pattern only grows when a contact couples a node to a new body).
     struct Workspace {
         BlockPattern pattern;
-        std::vector<double> hessian;         // 9 values per pattern block
-        std::vector<double> tissue_hessian;  // the tissue part of `hessian`
-        std::vector<double> system;          // (1 + h alpha) M + h^2 H + h gamma H_tissue
+        std::vector<double> hessian;          // 9 values per pattern block
+        std::vector<double> tissue_hessian;   // the tissue part of `hessian`
+        std::vector<double> damping_hessian;  // tissue part at the prediction (Rayleigh)
+        std::vector<double> system;           // (1 + h alpha) M + h^2 H + h gamma H_tissue
         std::vector<std::pair<int, int>> missing;
         std::vector<char> free_mask;
         std::vector<Mat3> body_inertia;  // world frame
-        Eigen::VectorXd gradient, velocity, rhs, delta, v_plus;
+        Eigen::VectorXd gradient, velocity, rhs, delta, first_delta, v_plus, iterate;
         Eigen::VectorXd mass_velocity, mass_trial, tissue_trial;
         Configuration start, predicted, trial;
         BlockJacobiPreconditioner preconditioner;
@@ -249,6 +252,9 @@ class Simulation {
 
   private:
     bool advance(double dt_s, int depth, StepReport& report);
+    // The Newton system at v+ = iterate, its right-hand side and preconditioner.
+    // (w.mass_velocity = M v must be set.)
+    void buildSystem(const Eigen::VectorXd& iterate, double h, Workspace& w);
     void detectContacts(const Configuration& q);
     void updateAnchors();
     [[nodiscard]] std::size_t anchorSlot(int node, int collider) const {
@@ -257,6 +263,8 @@ class Simulation {
     [[nodiscard]] Configuration currentConfiguration() const;
     void currentConfiguration(Configuration& out) const;
     [[nodiscard]] double energyNow();
+    // Potential of the current state q (= x_ and the bodies), with the tissue term cached.
+    [[nodiscard]] double potentialNow(const Configuration& q);
     [[nodiscard]] std::pair<Vec3, Mat3> colliderPose(const Configuration& q, int collider) const;
 
     SolverSettings settings_;
@@ -280,6 +288,9 @@ class Simulation {
     std::vector<ContactForce> contact_forces_;
     Eigen::VectorXd warm_start_;
     StepReport pending_;  // input rejections and clamps waiting for the next report
+    // Tissue energy of x_ (it depends on node positions only), while they are unchanged.
+    double tissue_energy_{0.0};
+    bool tissue_energy_valid_{false};
     Workspace work_;
 
     friend struct EnergyTerms;
