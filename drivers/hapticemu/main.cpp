@@ -15,6 +15,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <exception>
 #include <memory>
 #include <string>
@@ -147,14 +148,34 @@ int main(int argc, char** argv) {
         bool stdin_open = true;
         const std::int64_t start_ns = haptic::can::monotonicNowNs();
         const auto duration_ns = static_cast<std::int64_t>(duration_s * 1e9);
+        // Stream mode runs on its own 1 kHz clock, as a device's controller does: it sleeps
+        // until the next tick and then drains the bus. Waiting on the socket instead would
+        // make every frame hapticd sends wake this process from inside hapticd's write()
+        // (a cross-CPU wake-up, tens of µs in a VM) and charge it to hapticd's RT tick.
+        // Lockstep mode answers each command at once, so it waits on the socket.
+        const bool clocked = options.mode == haptic::emu::EmulatorMode::kStream;
+        constexpr std::int64_t kTickNs = 1'000'000;
+        std::int64_t next_tick_ns = start_ns;
         while (!haptic::process::shutdownRequested()) {
             std::int64_t now_ns = haptic::can::monotonicNowNs();
             if (duration_ns > 0 && now_ns - start_ns >= duration_ns) {
                 break;
             }
             emulator->tick(now_ns);
-            pollfd fds[2] = {{bus->pollFd(), POLLIN, 0}, {stdin_open ? 0 : -1, POLLIN, 0}};
-            if (::poll(fds, 2, 1) < 0 && errno != EINTR) {
+            pollfd fds[2] = {{clocked ? -1 : bus->pollFd(), POLLIN, 0},
+                             {stdin_open ? 0 : -1, POLLIN, 0}};
+            if (clocked) {
+                next_tick_ns += kTickNs;
+                if (next_tick_ns < now_ns - 10 * kTickNs) {
+                    next_tick_ns = now_ns + kTickNs;  // starved for a while: do not catch up
+                }
+                const timespec wake{static_cast<time_t>(next_tick_ns / 1'000'000'000),
+                                    static_cast<long>(next_tick_ns % 1'000'000'000)};
+                while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &wake, nullptr) == EINTR &&
+                       !haptic::process::shutdownRequested()) {
+                }
+            }
+            if (::poll(fds, 2, clocked ? 0 : 1) < 0 && errno != EINTR) {
                 throw std::runtime_error(std::string("poll: ") + std::strerror(errno));
             }
             if ((fds[1].revents & (POLLIN | POLLHUP)) != 0) {
