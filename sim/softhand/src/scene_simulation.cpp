@@ -6,7 +6,7 @@ namespace haptic::softhand {
 
 SceneSimulationSettings realtimeSceneSettings() {
     SceneSimulationSettings settings;
-    settings.solver.pcg_max_iterations = 10;
+    settings.solver.pcg_max_iterations = 30;
     settings.solver.max_backtracks = 2;
     settings.solver.max_substep_depth = 1;
     return settings;
