@@ -146,6 +146,16 @@ double ramp(double t, double start, double end) {
     return smooth((t - start) / (end - start));
 }
 
+// Rolls the hand about its length (thumb side up). Unrolled, the index's proximal phalanx
+// meets the box's +y face about 9 mm above the thumb pad: the pinch is then a couple that
+// rolls the box about x until its face leaves the index, and the box slips out during the
+// lift. Rolled, both contacts sit at about the same height.
+constexpr double kWristRollRad = -0.2;
+
+Mat3 wristRoll() {
+    return Eigen::AngleAxisd(kWristRollRad, Vec3::UnitX()).toRotationMatrix();
+}
+
 }  // namespace
 
 GraspLiftPlacePushScript::GraspLiftPlacePushScript(const TrackedHand& hand,
@@ -164,6 +174,7 @@ GraspLiftPlacePushScript::GraspLiftPlacePushScript(const TrackedHand& hand,
     const Mat3 rotation = rotationFromRpy(target.pose.rpy_rad);
     const Vec3 half(box->half_extents_m[0], box->half_extents_m[1], box->half_extents_m[2]);
     half_width_m_ = rotation.row(1).cwiseAbs().dot(half);
+    half_length_m_ = rotation.row(0).cwiseAbs().dot(half);
     const double diameter = config.anthropometry.fingertip_diameter_m;
     // Tissue radii as hand_builder.cpp makes them: the thumb 1.15x, the proximal 1.08x.
     thumb_pad_radius_m_ = 0.5 * diameter * 1.15;
@@ -172,6 +183,7 @@ GraspLiftPlacePushScript::GraspLiftPlacePushScript(const TrackedHand& hand,
                                                            config.anthropometry.hand_length_m)[2];
     open_ = closureForGap(kOpenGap);
     closed_ = closureForGap(-kSqueeze);
+    eased_ = closureForGap(-kSetDownSqueeze);
 }
 
 std::array<double, kHandPoseAngles> GraspLiftPlacePushScript::posture(double closure) const {
@@ -192,13 +204,21 @@ Vec3 GraspLiftPlacePushScript::boxInWrist(double closure, double* thumb_surface_
         poses[static_cast<std::size_t>(hand_.referenceDistal(config::Finger::kThumb))];
     const BonePose& index_proximal =
         poses[static_cast<std::size_t>(hand_.referencePhalanx(config::Finger::kIndex, 0))];
-    const Vec3 pad = thumb.position_m + thumb.rotation * Vec3(thumb_pad_offset_m_, 0.0, 0.0);
-    const Vec3 pad_normal = -(thumb.rotation * Vec3::UnitZ());
+    const Mat3 roll = wristRoll();
+    const Vec3 pad =
+        roll * (thumb.position_m + thumb.rotation * Vec3(thumb_pad_offset_m_, 0.0, 0.0));
+    const Vec3 pad_normal = -(roll * thumb.rotation * Vec3::UnitZ());
     if (thumb_surface_y != nullptr) {
         *thumb_surface_y = (pad + thumb_pad_radius_m_ * pad_normal).y();
     }
-    const double index_face_y = index_proximal.position_m.y() - index_side_radius_m_;
-    return {pad.x(), index_face_y - half_width_m_, pad.z()};
+    const Vec3 index_start = roll * index_proximal.position_m;
+    const double index_face_y = index_start.y() - index_side_radius_m_;
+    // The index touches the face from its knuckle to the box's front edge, the thumb at one
+    // point: the box centre goes where the line between the pad and the middle of the index
+    // contact crosses the box's mid-plane, so that the box hangs under the pinch axis rather
+    // than pitching about it.
+    const double x = (2.0 * pad.x() + index_start.x() + half_length_m_) / 3.0;
+    return {x, index_face_y - half_width_m_, pad.z()};
 }
 
 double GraspLiftPlacePushScript::closureForGap(double gap_m) const {
@@ -225,7 +245,12 @@ double GraspLiftPlacePushScript::closureForGap(double gap_m) const {
 
 double GraspLiftPlacePushScript::closure(double t_s) const {
     const double t = scriptTime(t_s, loop_, kPeriod);
-    return open_ + (closed_ - open_) * (ramp(t, 0.0, kCloseEnd) - ramp(t, kPushEnd, kOpenEnd));
+    // The grip eases over the end of the set-down and tightens again before the push: pressed
+    // onto the table with the full squeeze, the box pitches about the pinch axis and climbs
+    // in the grip instead of settling flat.
+    return open_ + (closed_ - open_) * (ramp(t, 0.0, kCloseEnd) - ramp(t, kPushEnd, kOpenEnd)) +
+           (eased_ - closed_) *
+               (ramp(t, kPlaceEnd - 0.4, kPlaceEnd) - ramp(t, kPlaceEnd, kPushStart));
 }
 
 Vec3 GraspLiftPlacePushScript::boxTarget(double t_s) const {
@@ -237,13 +262,16 @@ Vec3 GraspLiftPlacePushScript::boxTarget(double t_s) const {
 }
 
 HandPoseInput GraspLiftPlacePushScript::at(double t_s) const {
-    // Palm down, fingers along +x, the pinch across y: the wrist keeps the world's axes and
+    // Palm down, fingers along +x, the pinch across y (rolled by kWristRollRad): the wrist
     // carries the pinched box's centre along boxTarget.
     HandPoseInput input;
     const double c = closure(t_s);
     input.flexion_rad = posture(c);
-    input.wrist.rotation = Mat3::Identity();
-    input.wrist.position_m = boxTarget(t_s) - boxInWrist(c, nullptr);
+    input.wrist.rotation = wristRoll();
+    // The wrist stays where the closed pinch holds the box: only the thumb moves while it
+    // closes. Placing it for the current closure instead moved the index (already on the box)
+    // 8 mm up and back along the face during the close, and friction rolled and lifted the box.
+    input.wrist.position_m = boxTarget(t_s) - boxInWrist(closed_, nullptr);
     return input;
 }
 

@@ -142,7 +142,8 @@ class GraspLiftPlacePushScript {
     // How far the closed thumb would put its pad past the box face: the grip force comes
     // from the tracking springs pulling the thumb towards that.
     static constexpr double kSqueeze = 0.010;
-    static constexpr double kOpenGap = 0.012;  // thumb pad to box face before closing
+    static constexpr double kOpenGap = 0.012;         // thumb pad to box face before closing
+    static constexpr double kSetDownSqueeze = 0.004;  // the eased grip as the box lands
 
     // Throws std::invalid_argument when the target is not a box, the hand lacks the thumb or
     // the index, or the box does not fit between them.
@@ -164,11 +165,13 @@ class GraspLiftPlacePushScript {
     const TrackedHand& hand_;
     Vec3 start_{Vec3::Zero()};
     double half_width_m_{0.0};
+    double half_length_m_{0.0};
     double thumb_pad_radius_m_{0.0};
     double index_side_radius_m_{0.0};
     double thumb_pad_offset_m_{0.0};
     double open_{0.0};
     double closed_{1.0};
+    double eased_{1.0};
     bool loop_{true};
 };
 
