@@ -120,8 +120,13 @@ TEST_F(RoudiTest, DaemonAndSimExchangeMessagesAndStatusIsLive) {
                                   std::regex(R"(([0-9.]+) Hz, (\d+) received, (\d+) rejected)")))
         << status.out;
     // Two devices at 60 Hz (6 frames per 50 ms status window); allow for late frames on a
-    // loaded machine.
-    EXPECT_GT(std::stod(rate[1]), kSanitized ? 0.0 : 70.0) << status.out;
+    // loaded machine. A sanitized sim steps a few times a second, so a 50 ms window may hold
+    // none of its messages: there the count received is the evidence that messages flow.
+    if (kSanitized) {
+        EXPECT_GT(std::stoul(rate[2]), 0U) << status.out;
+    } else {
+        EXPECT_GT(std::stod(rate[1]), 70.0) << status.out;
+    }
     EXPECT_EQ(rate[3], "0") << "the soft-hand sim must produce only valid messages";
 
     // Let the sim run a little, then kill it without warning: the daemon must notice.
