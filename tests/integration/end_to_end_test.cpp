@@ -72,8 +72,13 @@ class RoudiTest : public ::testing::Test {
         }
     }
 
+    // hapticctl waits 2 s for a status sample by default. Under the sanitizers, with ctest
+    // running two suites at once, DDS discovery of the new participant alone has taken longer
+    // (CI rehearsal: exit 3 once in 315 tests), so the sanitized build waits 8 s.
     CommandResult hapticctlStatus() {
-        return runCommand({HAPTICCTL_PATH, "--dds-domain", domainArgument(), "status"}, 10s);
+        return runCommand({HAPTICCTL_PATH, "--dds-domain", domainArgument(), "status", "--timeout",
+                           kSanitized ? "8" : "2"},
+                          15s);
     }
 
     std::unique_ptr<ChildProcess> roudi_;
@@ -104,7 +109,9 @@ TEST_F(RoudiTest, DaemonAndSimExchangeMessagesAndStatusIsLive) {
     } while (std::chrono::steady_clock::now() < deadline);
 
     ASSERT_EQ(status.exit_code, 0) << status.err;
-    EXPECT_LT(status.seconds, 2.5) << "hapticctl must answer within 2 s of starting";
+    if (!kSanitized) {
+        EXPECT_LT(status.seconds, 2.5) << "hapticctl must answer within 2 s of starting";
+    }
     EXPECT_THAT(status.out, HasSubstr("State: IDLE"));
     EXPECT_THAT(status.out, HasSubstr("Loop: 1000 Hz"));
     EXPECT_THAT(status.out, Not(HasSubstr("period   p50     0.0 us")))
