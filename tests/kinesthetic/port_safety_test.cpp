@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -104,7 +105,13 @@ TEST(ActuatorPortGuard, PassivityActsAfterTheRateLimitAndOnlyReducesTheForce) {
 TEST(SaturateForce, ClampsMagnitudeThenRate) {
     EXPECT_DOUBLE_EQ(saturateForce(50.0, 0.0, 10.0, 1e6, 1e-3), 10.0);
     EXPECT_DOUBLE_EQ(saturateForce(10.0, 0.0, 20.0, 500.0, 1e-3), 0.5);
-    EXPECT_DOUBLE_EQ(saturateForce(-10.0, 0.2, 20.0, 500.0, 1e-3), -0.3);
+    // Growth is limited on either side of zero; a fall towards zero is not (releasing the hand
+    // is the safe direction), so a sign flip drops to zero and then grows by one step.
+    EXPECT_DOUBLE_EQ(saturateForce(-10.0, 0.2, 20.0, 500.0, 1e-3), -0.5);
+    EXPECT_DOUBLE_EQ(saturateForce(10.0, -0.2, 20.0, 500.0, 1e-3), 0.5);
+    EXPECT_DOUBLE_EQ(saturateForce(0.0, 8.0, 20.0, 500.0, 1e-3), 0.0);
+    EXPECT_DOUBLE_EQ(saturateForce(3.0, 8.0, 20.0, 500.0, 1e-3), 3.0);
+    EXPECT_DOUBLE_EQ(saturateForce(-8.0, -3.0, 20.0, 500.0, 1e-3), -3.5);
 }
 
 PortGuardConfig guardConfig() {
@@ -132,6 +139,30 @@ TEST(ActuatorPortGuard, FadesInFadesOutOnStaleInputAndNeverSteps) {
         previous = command.force_n;
     }
     EXPECT_NEAR(previous, 0.0, 1e-12);
+}
+
+// The daemon's output gain (fade-in after a sim stall or an enable) goes through the guard, so
+// a gain that rises while the rendered force rises cannot make the force sent step, and a
+// gain of zero (E-stop, FAULT) cuts it at once.
+TEST(ActuatorPortGuard, OutputGainIsRateLimitedWhenItRisesAndCutsAtOnce) {
+    PortGuardConfig config = guardConfig();
+    config.max_force_rate_n_per_s = 500.0;  // 0.5 N per tick
+    ActuatorPortGuard sut(config);
+    double previous = 0.0;
+    for (int k = 1; k <= 40; ++k) {
+        const double gain = std::min(1.0, k / 10.0);
+        const auto command = sut.apply(10.0, 0.0, true, gain);
+        EXPECT_LE(command.force_n - previous, 0.5 + 1e-12) << "tick " << k;
+        EXPECT_GE(command.force_n, previous) << "tick " << k;
+        previous = command.force_n;
+    }
+    EXPECT_NEAR(previous, 10.0, 1e-12);
+    auto command = sut.apply(10.0, 0.0, true, 0.0);
+    EXPECT_DOUBLE_EQ(command.force_n, 0.0) << "gain 0 must cut the force, not ramp it";
+    command = sut.apply(10.0, 0.0, true, std::numeric_limits<double>::quiet_NaN());
+    EXPECT_DOUBLE_EQ(command.force_n, 0.0) << "a NaN gain counts as 0";
+    command = sut.apply(10.0, 0.0, true, 1.0);
+    EXPECT_DOUBLE_EQ(command.force_n, 0.5) << "and the force grows back at the rate limit";
 }
 
 TEST(ActuatorPortGuard, RejectsNaNAndSaturates) {

@@ -63,7 +63,7 @@ double saturateForce(double u, double previous, double max_force, double max_rat
                      double period_s) noexcept {
     const double clamped = std::clamp(u, -max_force, max_force);
     const double step = max_rate * period_s;
-    return std::clamp(clamped, previous - step, previous + step);
+    return std::clamp(clamped, std::min(previous, 0.0) - step, std::max(previous, 0.0) + step);
 }
 
 StaleInputFade::StaleInputFade(double period_s, double fade_time_s) noexcept
@@ -116,7 +116,8 @@ ActuatorPortGuard::ActuatorPortGuard(const PortGuardConfig& config)
     passivity_.setEnabled(config.passivity_enabled);
 }
 
-PortCommand ActuatorPortGuard::apply(double u_desired, double ell, bool input_fresh) noexcept {
+PortCommand ActuatorPortGuard::apply(double u_desired, double ell, bool input_fresh,
+                                     double output_gain) noexcept {
     PortCommand command;
     bool fresh = input_fresh;
     double u = u_desired;
@@ -138,7 +139,9 @@ PortCommand ActuatorPortGuard::apply(double u_desired, double ell, bool input_fr
     if (fresh) {
         held_force_n_ = std::clamp(u, -config_.max_force_n, config_.max_force_n);
     }
-    const double target = held_force_n_ * gain;
+    // A NaN gain counts as 0: the port stops pushing rather than passing NaN on.
+    const double output = output_gain > 0.0 ? std::min(output_gain, 1.0) : 0.0;
+    const double target = held_force_n_ * gain * output;
     const double clamped = std::clamp(target, -config_.max_force_n, config_.max_force_n);
     if (fresh && std::abs(u) > config_.max_force_n) {
         command.flags |= kPortForceSaturated;
@@ -149,7 +152,7 @@ PortCommand ActuatorPortGuard::apply(double u_desired, double ell, bool input_fr
         command.flags |= kPortRateLimited;
     }
     // Passivity last: it only moves the force towards zero, so both limits above still hold
-    // (a drop towards zero may be faster than the rate limit, which is the safe direction).
+    // (a drop towards zero may be faster than the rate limit, the safe direction, as above).
     double applied = limited;
     if (position_valid) {
         passivity_.observe(ell);

@@ -41,7 +41,6 @@ ExoskeletonChannel::ExoskeletonChannel(const config::DeviceConfig& device, can::
       model_(device.exoskeleton()),
       renderer_(model_, exoskeletonRenderParameters(device.exoskeleton())),
       guard_(portGuardConfig(device, settings)),
-      max_force_step_n_(device.safety.max_force_rate_n_per_s * settings.period_s),
       max_constraints_(static_cast<std::size_t>(device.exoskeleton().rendering.max_constraints)),
       q_(kinesthetic::ConfigVector::Zero(model_.dofs())),
       q_dot_(kinesthetic::ConfigVector::Zero(model_.dofs())) {
@@ -110,20 +109,12 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
         desired_n = out_.actuator_force.size() > 0 ? out_.actuator_force[0] : 0.0;
     }
     // Without a fresh device state the guard fades the last good force out (never a step).
-    const kinesthetic::PortCommand port = guard_.apply(desired_n, stroke_m_, state_fresh);
+    // The output gain goes through the guard too, so that its rate limit and the passivity
+    // controller see the force really sent (the gain rises during a fade-in, falls to 0 at
+    // once on E-stop, FAULT or a dead sim).
     const double gain = heldSafe() ? 0.0 : core.outputGain(index);
-    // The guard limits the rate of its own output, but the gain can rise too (the fade-in
-    // after a sim stall) while that output rises, and their product would then step faster
-    // than safety.max_force_rate_n_per_s. Limit the force actually sent whenever it grows;
-    // a fall towards zero (gain 0 on E-stop, FAULT, a dead sim) still passes at once.
-    double force_n = port.force_n * gain;
-    if (std::abs(force_n) > std::abs(commanded_n_)) {
-        force_n =
-            std::clamp(force_n, commanded_n_ - max_force_step_n_, commanded_n_ + max_force_step_n_);
-    }
-    commanded_n_ = force_n;
-    // The passivity observer must book the force really applied, which the gain may reduce.
-    guard_.passivity().record(force_n);
+    const kinesthetic::PortCommand port = guard_.apply(desired_n, stroke_m_, state_fresh, gain);
+    const double force_n = port.force_n;
     command_.force_n = force_n;
     command_.enable = gain > 0.0;
 

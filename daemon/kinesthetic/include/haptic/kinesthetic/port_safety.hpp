@@ -63,7 +63,11 @@ class PassivityController {
     bool enabled_{true};
 };
 
-// Clamp to [-max_force, max_force], then limit the change from `previous` to max_rate * period.
+// Clamp to [-max_force, max_force], then limit how fast the force grows: from `previous` it may
+// fall to any value between `previous` and zero at once (releasing the hand is the safe
+// direction: E-stop, FAULT and a dead sim cut the force immediately) but grow away from zero,
+// on either side, by at most max_rate * period per tick. A sign flip therefore drops to zero
+// and rises on the other side at the rate limit.
 [[nodiscard]] double saturateForce(double u, double previous, double max_force, double max_rate,
                                    double period_s) noexcept;
 
@@ -112,7 +116,12 @@ class ActuatorPortGuard {
     // Throws std::invalid_argument if a limit is not finite and positive.
     explicit ActuatorPortGuard(const PortGuardConfig& config);
 
-    PortCommand apply(double u_desired, double ell, bool input_fresh) noexcept;
+    // output_gain in [0, 1] scales the force before the rate limit: the daemon's fade-in after
+    // a sim stall or an enable, and 0 while the port is not allowed to push. Because the limit
+    // applies to the product, a gain that rises together with the rendered force can never
+    // make the force sent step faster than max_force_rate_n_per_s.
+    PortCommand apply(double u_desired, double ell, bool input_fresh,
+                      double output_gain = 1.0) noexcept;
 
     [[nodiscard]] PassivityController& passivity() noexcept { return passivity_; }
     [[nodiscard]] const PassivityController& passivity() const noexcept { return passivity_; }
@@ -122,8 +131,8 @@ class ActuatorPortGuard {
     PortGuardConfig config_;
     PassivityController passivity_;
     StaleInputFade fade_;
-    double previous_force_n_{0.0};
-    double held_force_n_{0.0};  // last valid force, faded out while the input is stale
+    double previous_force_n_{0.0};  // the force applied last tick, after the output gain
+    double held_force_n_{0.0};      // last valid force, faded out while the input is stale
 };
 
 }  // namespace haptic::kinesthetic

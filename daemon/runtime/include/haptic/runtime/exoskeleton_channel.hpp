@@ -50,8 +50,6 @@ class ExoskeletonChannel final
     kinesthetic::ExoskeletonDevice model_;  // before renderer_, which keeps a reference
     kinesthetic::KinestheticRenderer renderer_;
     kinesthetic::ActuatorPortGuard guard_;
-    double max_force_step_n_;  // safety.max_force_rate_n_per_s over one period
-    double commanded_n_{0.0};  // the force sent last tick, after the output gain
     std::size_t max_constraints_;
     msgs::DeviceId applied_method_{};
     kinesthetic::ConfigVector q_;
