@@ -11,6 +11,7 @@ void BlockPattern::build(int block_rows, std::vector<std::pair<int, int>> blocks
     std::sort(blocks.begin(), blocks.end());
     blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
     block_rows_ = block_rows;
+    ++generation_;
     row_start_.assign(static_cast<std::size_t>(block_rows) + 1, 0);
     columns_.clear();
     columns_.reserve(blocks.size());

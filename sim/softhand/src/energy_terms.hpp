@@ -3,6 +3,7 @@
 // Internal: the potential energy terms of ALGORITHMS.md §2.4, each able to return its energy
 // alone (energy check) or also add its gradient and Gauss-Newton Hessian (Newton step).
 
+#include <array>
 #include <span>
 #include <vector>
 
@@ -46,13 +47,66 @@ class Assembler {
     }
     void addGradient(int dof, const Vec3& g) { gradient.segment<3>(dof) += g; }
 
+    // Adds `block` at pattern index k, or its transpose (the mirrored block of a symmetric
+    // term, so each pair is computed once).
+    void addBlockAt(int k, const Mat3& block) {
+        RowBlock(hessian_.data() + 9 * k) += block;
+        if (collecting_tissue) {
+            RowBlock(tissue_hessian_.data() + 9 * k) += block;
+        }
+    }
+    void addTransposedBlockAt(int k, const Mat3& block) {
+        RowBlock(hessian_.data() + 9 * k) += block.transpose();
+        if (collecting_tissue) {
+            RowBlock(tissue_hessian_.data() + 9 * k) += block.transpose();
+        }
+    }
+
+    // Caches element block indices in `cache` (kept by the caller between steps) for
+    // elementSlots(); without a cache every element looks its blocks up.
+    void useElementBlocks(ElementBlockSlots& cache, std::size_t elements) {
+        if (cache.generation != pattern_.generation() || cache.slots.size() != elements) {
+            std::array<int, 16> unknown;
+            unknown.fill(ElementBlockSlots::kUnknown);
+            cache.slots.assign(elements, unknown);
+            cache.generation = pattern_.generation();
+        }
+        element_blocks_ = &cache;
+    }
+    // The 16 block indices of element e over `nodes`, or nullptr when there is no cache or a
+    // block is missing from the pattern (the caller then adds blocks one by one, and the
+    // missing ones are listed for the next pattern).
+    [[nodiscard]] const std::array<int, 16>* elementSlots(std::size_t e,
+                                                          const std::array<int, 4>& nodes) {
+        if (element_blocks_ == nullptr) {
+            return nullptr;
+        }
+        std::array<int, 16>& slots = element_blocks_->slots[e];
+        if (slots[0] == ElementBlockSlots::kUnknown) {
+            for (int i = 0; i < 4; ++i) {
+                for (int j = 0; j < 4; ++j) {
+                    const int k = pattern_.find(nodes[i], nodes[j]);
+                    if (k < 0) {
+                        slots.fill(ElementBlockSlots::kUnknown);
+                        return nullptr;
+                    }
+                    slots[4 * i + j] = k;
+                }
+            }
+        }
+        return &slots;
+    }
+
     Eigen::VectorXd& gradient;
     // Tissue blocks are also kept apart: Rayleigh stiffness damping applies to them only.
     // Damping the contact and friction springs would turn Coulomb sliding into viscous creep.
     bool collecting_tissue{false};
 
   private:
+    using RowBlock = Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>;
+
     const BlockPattern& pattern_;
+    ElementBlockSlots* element_blocks_{nullptr};
     std::vector<double>& hessian_;
     std::vector<double>& tissue_hessian_;
     std::vector<std::pair<int, int>>& missing_;

@@ -148,6 +148,7 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
     for (;;) {
         stats = TermStats{};
         Assembler assembler(w.pattern, w.hessian, w.tissue_hessian, w.gradient, w.missing);
+        assembler.useElementBlocks(w.tet_slots, tets_.size());
         potential_predicted = EnergyTerms::potential(*this, w.predicted, &assembler, &stats);
         if (w.missing.empty()) {
             break;
@@ -227,6 +228,7 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
         if (newton > 0) {
             integrate(q, iterate, h, w.trial);
             Assembler assembler(w.pattern, w.hessian, w.tissue_hessian, w.gradient, w.missing);
+            assembler.useElementBlocks(w.tet_slots, tets_.size());
             (void)EnergyTerms::potential(*this, w.trial, &assembler, nullptr);
             if (!w.missing.empty()) {
                 break;  // a new contact block: the pattern would change under D; substep

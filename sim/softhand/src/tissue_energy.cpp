@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 
 #include "energy_terms.hpp"
 
@@ -31,7 +32,8 @@ double EnergyTerms::tissue(const Sim& sim, const Sim::Configuration& q, Assemble
         assembler->collecting_tissue = true;
     }
     double energy = 0.0;
-    for (const auto& tet : sim.tets_) {
+    for (std::size_t e = 0; e < sim.tets_.size(); ++e) {
+        const auto& tet = sim.tets_[e];
         const auto& n = tet.nodes;
         Mat3 ds;
         ds.col(0) = q.x[n[1]] - q.x[n[0]];
@@ -100,8 +102,10 @@ double EnergyTerms::tissue(const Sim& sim, const Sim::Configuration& q, Assemble
         for (int i = 0; i < 4; ++i) {
             rotated[i] = rotation * g[i];
         }
+        // K_ji = K_ij^T, so the ten blocks i <= j are computed and mirrored.
+        const std::array<int, 16>* slots = assembler->elementSlots(e, n);
         for (int i = 0; i < 4; ++i) {
-            for (int j = 0; j < 4; ++j) {
+            for (int j = i; j < 4; ++j) {
                 Mat3 block = tet.volume_m3 * (tet.mu * g[i].dot(g[j]) * Mat3::Identity() +
                                               tet.mu * rotated[j] * rotated[i].transpose() +
                                               tet.lambda * rotated[i] * rotated[j].transpose());
@@ -116,7 +120,17 @@ double EnergyTerms::tissue(const Sim& sim, const Sim::Configuration& q, Assemble
                                  ua * ua.transpose();
                     }
                 }
-                assembler->addBlock(nodeDof(n[i]), nodeDof(n[j]), block);
+                if (slots != nullptr) {
+                    assembler->addBlockAt((*slots)[4 * i + j], block);
+                    if (j != i) {
+                        assembler->addTransposedBlockAt((*slots)[4 * j + i], block);
+                    }
+                } else {
+                    assembler->addBlock(nodeDof(n[i]), nodeDof(n[j]), block);
+                    if (j != i) {
+                        assembler->addBlock(nodeDof(n[j]), nodeDof(n[i]), block.transpose());
+                    }
+                }
             }
         }
     }

@@ -236,6 +236,7 @@ class Simulation {
     // first (the Hessian pattern only grows when a contact couples a node to a new body).
     struct Workspace {
         BlockPattern pattern;
+        ElementBlockSlots tet_slots;
         std::vector<double> hessian;          // 9 values per pattern block
         std::vector<double> tissue_hessian;   // the tissue part of `hessian`
         std::vector<double> damping_hessian;  // tissue part at the prediction (Rayleigh)
