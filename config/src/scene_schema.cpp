@@ -44,7 +44,7 @@ HandConfig readHand(MapReader map) {
             out.fingers.push_back(finger);
         }
     }
-    out.resolution = map.optional("resolution", 2, spec::Integer<int>::closed(1, 8));
+    out.resolution = map.optional("resolution", 2, spec::Integer<int>::closed(0, 8));
     MapReader anthropometry = map.requiredMap("anthropometry");
     out.anthropometry.hand_length_m =
         anthropometry.required("hand_length_m", Real::closed(0.10, 0.30));

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -66,24 +67,38 @@ TEST(SofthandHandBuilder, FingerSceneHasThreeJointedPhalangesOnAKinematicPalm) {
     EXPECT_EQ(model.findBone("thumb_distal"), nullptr);
 }
 
+// Level 0 (two cells across a finger) is the whole hand's real-time level, level 1 the next.
 TEST(SofthandHandBuilder, WholeHandHasSixteenBonesAndStaysTogetherUnderGravity) {
-    HandModel model = buildHand(handConfig(config::HandModel::kHand, 1), {});
-    EXPECT_EQ(model.bones.size(), 16u);
-    EXPECT_EQ(model.joints.size(), 15u);
-    ElasticTracking tracking(model);
-    const auto poses = buildPoses(model);
-    ASSERT_TRUE(tracking.setTrackedPoses(poses, nullptr));
-    for (int s = 0; s < 4; ++s) {
-        tracking.update(model, 0.01);
-        const StepReport report = model.simulation.step(0.01);
-        ASSERT_TRUE(std::isfinite(report.energy_j));
+    for (const int level : {0, 1}) {
+        SCOPED_TRACE("resolution " + std::to_string(level));
+        HandModel model = buildHand(handConfig(config::HandModel::kHand, level), {});
+        EXPECT_EQ(model.bones.size(), 16u);
+        EXPECT_EQ(model.joints.size(), 15u);
+        ElasticTracking tracking(model);
+        const auto poses = buildPoses(model);
+        ASSERT_TRUE(tracking.setTrackedPoses(poses, nullptr));
+        for (int s = 0; s < 4; ++s) {
+            tracking.update(model, 0.01);
+            const StepReport report = model.simulation.step(0.01);
+            ASSERT_TRUE(std::isfinite(report.energy_j));
+        }
+        // Tracked in its build pose, every bone stays within a few millimetres of it.
+        for (std::size_t k = 0; k < model.bones.size(); ++k) {
+            EXPECT_LT(
+                (model.simulation.bodyPosition(model.bones[k].body) - poses[k].position_m).norm(),
+                0.005)
+                << model.bones[k].name;
+        }
     }
-    // Tracked in its build pose, every bone stays within a few millimetres of it.
-    for (std::size_t k = 0; k < model.bones.size(); ++k) {
-        EXPECT_LT((model.simulation.bodyPosition(model.bones[k].body) - poses[k].position_m).norm(),
-                  0.005)
-            << model.bones[k].name;
-    }
+}
+
+TEST(SofthandHandBuilder, ResolutionOutsideZeroToEightIsRefused) {
+    EXPECT_THROW((void)buildHand(handConfig(config::HandModel::kFingertip, -1), {}),
+                 std::invalid_argument);
+    EXPECT_THROW((void)buildHand(handConfig(config::HandModel::kFingertip, 9), {}),
+                 std::invalid_argument);
+    EXPECT_EQ(cellsAcross(0), 2);
+    EXPECT_EQ(cellsAcross(1), 4);
 }
 
 TEST(SofthandElasticTracking, IntermediateSkeletonRepairsAJointBreakingInput) {

@@ -292,18 +292,21 @@ void defaultScene(benchmark::State& state) {
 }
 
 BENCHMARK(fingertipPress)
-    ->ArgsProduct({{1, 2, 3}, {10, 30, 100}})
+    ->ArgsProduct({{0, 1, 2, 3}, {10, 30, 100}})
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(400);
 BENCHMARK(fingerFlex)
-    ->ArgsProduct({{1, 2}, {10, 30, 100}})
+    ->ArgsProduct({{0, 1, 2}, {10, 30, 100}})
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(400);
 BENCHMARK(defaultScene)
     ->ArgsProduct({{1, 2}, {10, 30}, {0, 2, 10}, {0, 1, 3}})
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(1200);
-BENCHMARK(wholeHand)->ArgsProduct({{1, 2}, {30}})->Unit(benchmark::kMicrosecond)->Iterations(200);
+BENCHMARK(wholeHand)
+    ->ArgsProduct({{0, 1, 2}, {10, 30}})
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(200);
 
 }  // namespace
 }  // namespace haptic::softhand

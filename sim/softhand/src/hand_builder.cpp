@@ -154,8 +154,8 @@ struct Builder {
 }  // namespace
 
 int cellsAcross(int resolution) {
-    if (resolution < 1 || resolution > 8) {
-        throw std::invalid_argument("hand resolution must be in 1..8");
+    if (resolution < 0 || resolution > 8) {
+        throw std::invalid_argument("hand resolution must be in 0..8");
     }
     return 2 + 2 * resolution;
 }

@@ -60,7 +60,7 @@ struct HandConfig {
     // The hand model's fingers on its palm; empty = all five. A pinch needs only thumb and
     // index, at less than half the cost of the whole hand.
     std::vector<Finger> fingers;
-    int resolution{2};  // mesh refinement level, 1 (coarse) .. 8 (fine)
+    int resolution{2};  // mesh refinement level, 0 (coarse) .. 8 (fine)
     Anthropometry anthropometry;
 
     // Whether a device bound to `f` has a simulated finger to attach to.

@@ -59,7 +59,7 @@ struct HandModel {
 [[nodiscard]] HandModel buildHand(const config::HandConfig& hand, const SolverSettings& settings,
                                   const HandBuildOptions& options = {});
 
-// Tissue cells across the finger diameter for a resolution level (1..8).
+// Tissue cells across the finger diameter for a resolution level (0..8): 2 + 2 level.
 [[nodiscard]] int cellsAcross(int resolution);
 
 }  // namespace haptic::softhand
