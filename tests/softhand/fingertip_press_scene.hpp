@@ -39,6 +39,7 @@ class FingertipPress {
     StepReport step() { return model_.simulation.step(kDt); }
     [[nodiscard]] Sample sample() const;
     [[nodiscard]] const Simulation& simulation() const { return model_.simulation; }
+    [[nodiscard]] SolverSettings& solver() { return model_.simulation.settings(); }
     [[nodiscard]] const HandModel& model() const { return model_; }
 
   private:

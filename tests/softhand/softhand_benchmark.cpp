@@ -3,13 +3,14 @@
 // Scenes at 200 Hz (dt = 5 ms): a fingertip pressing 4 mm into a table and sliding 1 cm (the
 // thimble scene), one finger flexing against a table (the exoskeleton scene), and the whole
 // hand moved up and down by its tracking (no contact).
-// Counters: p50_us / p99_us over the steps of the run; pcg_iters, backtracks, substeps and
-// newton_extra (Newton iterations beyond the first) per step; force_err = RMS(F - F_ref) /
-// RMS(F_ref) of the normal force on the table over the first second, press_err the same over its
-// first 0.2 s (pressing in, no sliding yet: the fine reference stick-slips while sliding, which
-// dominates force_err); tip_err_mm = RMS distance of the distal bone from the reference (flex). The
-// reference is the same scene one resolution level finer than the finest row, with PCG to a
-// relative tolerance of 1e-8 (up to 2000 iterations), computed once before the rows run.
+// Counters: p50_us / p99_us over the steps of the run; pcg_iters, backtracks, substeps,
+// newton_extra (Newton iterations beyond the first) and zeroed (steps the energy check refused
+// with no substep left, which kept positions and zeroed velocities) per step; force_err = RMS(F -
+// F_ref) / RMS(F_ref) of the normal force on the table over the first second, press_err the same
+// over its first 0.2 s (pressing in, no sliding yet: the fine reference stick-slips while sliding,
+// which dominates force_err); tip_err_mm = RMS distance of the distal bone from the reference
+// (flex). The reference is the same scene one resolution level finer than the finest row, with PCG
+// to a relative tolerance of 1e-8 (up to 2000 iterations), computed once before the rows run.
 
 #include <benchmark/benchmark.h>
 #include <malloc.h>
@@ -99,6 +100,7 @@ class FingerFlex {
                 model_.simulation.bodyPosition(model_.bones.back().body)};
     }
     [[nodiscard]] const Simulation& simulation() const { return model_.simulation; }
+    [[nodiscard]] SolverSettings& solver() { return model_.simulation.settings(); }
 
   private:
     HandModel model_;
@@ -125,16 +127,30 @@ const std::vector<Sample>& reference(int level) {
     return found->second;
 }
 
+// How a row limits the solver's work per step beyond the PCG cap.
+enum class StepLimits {
+    kBenchmark,  // SolverSettings' defaults: 5 Newton iterations, 10 halvings, 8 substeps
+    kHandsim,    // handsim's real-time limits, realtimeSceneSettings()
+};
+
 template <typename Scene>
-void run(benchmark::State& state, int reference_level) {
+void run(benchmark::State& state, int reference_level, StepLimits limits) {
     const std::vector<Sample>& ref = reference<Scene>(reference_level);
     Scene scene(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), 1e-4);
+    if (limits == StepLimits::kHandsim) {
+        const SolverSettings realtime = realtimeSceneSettings().solver;
+        SolverSettings& solver = scene.solver();
+        solver.max_newton_iterations = realtime.max_newton_iterations;
+        solver.max_backtracks = realtime.max_backtracks;
+        solver.max_substep_depth = realtime.max_substep_depth;
+    }
     std::vector<double> step_us;
     std::vector<double> cpu_us;
     double pcg_iterations = 0.0;
     double backtracks = 0.0;
     double substeps = 0.0;
     double newton = 0.0;
+    double zeroed = 0.0;
     double force_error2 = 0.0;
     double force_ref2 = 0.0;
     double tip_error2 = 0.0;
@@ -153,6 +169,7 @@ void run(benchmark::State& state, int reference_level) {
         backtracks += r.backtracks;
         substeps += r.substeps;
         newton += r.newton_iterations;
+        zeroed += r.zeroed_steps;
         if (step < kCycleSteps) {
             const Sample s = scene.sample();
             const Sample& expected = ref[static_cast<std::size_t>(step)];
@@ -177,16 +194,25 @@ void run(benchmark::State& state, int reference_level) {
     state.counters["backtracks"] = backtracks / steps;
     state.counters["substeps"] = substeps / steps;
     state.counters["newton_extra"] = newton / steps;
+    state.counters["zeroed"] = zeroed / steps;
     state.counters["force_err"] = std::sqrt(force_error2 / std::max(force_ref2, 1e-30));
     state.counters["press_err"] = std::sqrt(press_error2 / std::max(press_ref2, 1e-30));
     state.counters["tip_err_mm"] = 1e3 * std::sqrt(tip_error2 / compared);
 }
 
 void fingertipPress(benchmark::State& state) {
-    run<FingertipPress>(state, kPressReferenceLevel);
+    run<FingertipPress>(state, kPressReferenceLevel, StepLimits::kBenchmark);
 }
 void fingerFlex(benchmark::State& state) {
-    run<FingerFlex>(state, kFlexReferenceLevel);
+    run<FingerFlex>(state, kFlexReferenceLevel, StepLimits::kBenchmark);
+}
+// The same scenes under handsim's real-time limits (fewer halvings, one substep level): what
+// the thimble scene costs in the running handsim.
+void fingertipPressHandsimLimits(benchmark::State& state) {
+    run<FingertipPress>(state, kPressReferenceLevel, StepLimits::kHandsim);
+}
+void fingerFlexHandsimLimits(benchmark::State& state) {
+    run<FingerFlex>(state, kFlexReferenceLevel, StepLimits::kHandsim);
 }
 
 // Whole hand held by its tracking and moved 1 cm up and down once per second.
@@ -258,6 +284,7 @@ void defaultScene(benchmark::State& state) {
     msgs::ContactSurface surface;
     double substeps = 0.0;
     double backtracks = 0.0;
+    double zeroed = 0.0;
     double substepped_us = 0.0;
     int substepped = 0;
     int contacts = 0;
@@ -272,6 +299,7 @@ void defaultScene(benchmark::State& state) {
         pcg_iterations += r.pcg_iterations;
         substeps += r.substeps;
         backtracks += r.backtracks;
+        zeroed += r.zeroed_steps;
         if (r.substeps > 1) {
             substepped_us += step_us.back();
             ++substepped;
@@ -284,6 +312,7 @@ void defaultScene(benchmark::State& state) {
     state.counters["substeps"] = substeps / static_cast<double>(step_us.size());
     state.counters["max_contacts"] = contacts;
     state.counters["backtracks"] = backtracks / static_cast<double>(step_us.size());
+    state.counters["zeroed"] = zeroed / static_cast<double>(step_us.size());
     state.counters["substepped_mean_us"] = substepped > 0 ? substepped_us / substepped : 0.0;
     std::sort(step_us.begin(), step_us.end());
     state.counters["p50_us"] = step_us[step_us.size() / 2];
@@ -297,6 +326,14 @@ BENCHMARK(fingertipPress)
     ->Iterations(400);
 BENCHMARK(fingerFlex)
     ->ArgsProduct({{0, 1, 2}, {10, 30, 100}})
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(400);
+BENCHMARK(fingertipPressHandsimLimits)
+    ->ArgsProduct({{0, 1, 2}, {30}})
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(400);
+BENCHMARK(fingerFlexHandsimLimits)
+    ->ArgsProduct({{0, 1}, {30}})
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(400);
 BENCHMARK(defaultScene)

@@ -301,6 +301,7 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
     if (!accepted) {
         // Out of substeps: stop rather than gain energy. Positions stay, velocities vanish.
         report.clamped = true;
+        ++report.zeroed_steps;
         v_plus.setZero();
     }
     if (accepted) {

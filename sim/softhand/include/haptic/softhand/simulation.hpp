@@ -90,6 +90,9 @@ struct StepReport {
     bool substepped{false};
     int substeps{1};
     int backtracks{0};
+    // (Sub)steps the energy check refused with no substep left: they kept their positions
+    // and zeroed the velocities rather than gain energy (also counted as clamped).
+    int zeroed_steps{0};
     int newton_iterations{0};  // beyond the first, summed over substeps
     int pcg_iterations{0};     // summed over substeps
     bool pcg_capped{false};
