@@ -56,9 +56,9 @@ TEST(SofthandGrasp, DISABLED_PinchLiftPlaceAndPushABoxInBullet) {
     ASSERT_EQ(box.name, scene.tracking.target_object);
 
     // The accurate solver's step control (10 halvings, 3 substep levels) with PCG capped at
-    // 40 iterations. handsim's real-time budget (realtimeSceneSettings: 10 iterations, 2
-    // halvings, 1 substep level) zeroes most steps once the pinch closes, and the frozen
-    // hand drops the box.
+    // 40 iterations. handsim's real-time budget (realtimeSceneSettings, then 10 iterations, 2
+    // halvings, 1 substep level) zeroed most steps once the pinch closed, and the frozen
+    // hand dropped the box.
     SceneSimulationSettings settings;
     settings.solver.pcg_max_iterations = 40;
     SceneSimulation sim(scene, {}, settings);

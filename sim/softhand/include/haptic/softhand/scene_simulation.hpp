@@ -25,10 +25,13 @@ struct SceneSimulationSettings {
 };
 
 // handsim's solver budget: PCG capped at 30 iterations, at most 2 halvings of the Newton
-// step and one level of substeps (2) before the energy check zeroes the step. Chosen so the
-// default scene holds its rate: with the re-linearised Newton iterations a cap of 30 costs
-// less on average than 10 (fewer failed steps) and is more accurate
-// (sim/softhand/BENCHMARK.md, defaultScene and fingertipPress rows).
+// step and no substeps: a step the energy check still refuses keeps its positions and zeroes
+// the velocities (StepReport::zeroed_steps). Chosen so the default scene holds its rate: with
+// the re-linearised Newton iterations a cap of 30 costs less on average than 10 (fewer failed
+// steps) and is more accurate; and one substep level, measured against none, doubled the
+// default scene's p99 (12.6 against 6.1 ms) and the thimble scene's (2.8 against 1.6 ms)
+// while zeroing about as many steps (8.5% against 6.6%; 5.0% against 5.5%)
+// (sim/softhand/BENCHMARK.md, "handsim's limits").
 [[nodiscard]] SceneSimulationSettings realtimeSceneSettings();
 
 // A device the simulation computes outputs for (one of sim.yaml's devices).
