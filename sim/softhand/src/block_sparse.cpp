@@ -37,14 +37,25 @@ int BlockPattern::find(int row, int col) const {
 
 void BlockPattern::multiply(const std::vector<double>& values, const Eigen::VectorXd& x,
                             Eigen::VectorXd& y) const {
-    using Block = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>;
+    // Written out: through Eigen's mapped 3x3 blocks this product was a quarter of the soft
+    // hand step, and the scalar form measured faster.
     y.resize(3 * static_cast<Eigen::Index>(block_rows_));
+    const double* in = x.data();
+    double* out = y.data();
     for (int r = 0; r < block_rows_; ++r) {
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        double s0 = 0.0;
+        double s1 = 0.0;
+        double s2 = 0.0;
         for (int k = row_start_[r]; k < row_start_[r + 1]; ++k) {
-            sum.noalias() += Block(values.data() + 9 * k) * x.segment<3>(3 * columns_[k]);
+            const double* b = values.data() + 9 * static_cast<std::size_t>(k);
+            const double* v = in + 3 * static_cast<std::size_t>(columns_[k]);
+            s0 += b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
+            s1 += b[3] * v[0] + b[4] * v[1] + b[5] * v[2];
+            s2 += b[6] * v[0] + b[7] * v[1] + b[8] * v[2];
         }
-        y.segment<3>(3 * r) = sum;
+        out[3 * r] = s0;
+        out[3 * r + 1] = s1;
+        out[3 * r + 2] = s2;
     }
 }
 

@@ -18,17 +18,22 @@ namespace haptic::softhand {
 // `missing`, and the caller grows the pattern and assembles again.
 class Assembler {
   public:
+    // `keep_tissue_part` false leaves `tissue_hessian` alone: only the step's first
+    // linearisation needs it (Rayleigh damping is frozen there for the whole step).
     Assembler(const BlockPattern& pattern, std::vector<double>& hessian,
               std::vector<double>& tissue_hessian, Eigen::VectorXd& gradient,
-              std::vector<std::pair<int, int>>& missing)
+              std::vector<std::pair<int, int>>& missing, bool keep_tissue_part = true)
         : gradient(gradient),
           pattern_(pattern),
           hessian_(hessian),
           tissue_hessian_(tissue_hessian),
-          missing_(missing) {
+          missing_(missing),
+          keep_tissue_part_(keep_tissue_part) {
         const auto values = static_cast<std::size_t>(9 * pattern.blockCount());
         hessian_.assign(values, 0.0);
-        tissue_hessian_.assign(values, 0.0);
+        if (keep_tissue_part_) {
+            tissue_hessian_.assign(values, 0.0);
+        }
         gradient.setZero(3 * static_cast<Eigen::Index>(pattern.blockRows()));
         missing_.clear();
     }
@@ -46,6 +51,7 @@ class Assembler {
         }
     }
     void addGradient(int dof, const Vec3& g) { gradient.segment<3>(dof) += g; }
+    [[nodiscard]] bool keepsTissuePart() const { return keep_tissue_part_; }
 
     // Adds `block` at pattern index k, or its transpose (the mirrored block of a symmetric
     // term, so each pair is computed once).
@@ -110,6 +116,7 @@ class Assembler {
     std::vector<double>& hessian_;
     std::vector<double>& tissue_hessian_;
     std::vector<std::pair<int, int>>& missing_;
+    bool keep_tissue_part_;
 };
 
 // One Jacobian block d(residual)/d(dof .. dof+2).

@@ -227,7 +227,8 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
         const bool last = newton + 1 == newton_iterations;
         if (newton > 0) {
             integrate(q, iterate, h, w.trial);
-            Assembler assembler(w.pattern, w.hessian, w.tissue_hessian, w.gradient, w.missing);
+            Assembler assembler(w.pattern, w.hessian, w.tissue_hessian, w.gradient, w.missing,
+                                /*keep_tissue_part=*/false);
             assembler.useElementBlocks(w.tet_slots, tets_.size());
             (void)EnergyTerms::potential(*this, w.trial, &assembler, nullptr);
             if (!w.missing.empty()) {

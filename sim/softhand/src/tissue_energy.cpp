@@ -29,7 +29,7 @@ double addResidualTerm(Assembler* assembler, const Mat3& weight, const Vec3& res
 double EnergyTerms::tissue(const Sim& sim, const Sim::Configuration& q, Assembler* assembler,
                            TermStats* stats) {
     if (assembler != nullptr) {
-        assembler->collecting_tissue = true;
+        assembler->collecting_tissue = assembler->keepsTissuePart();
     }
     double energy = 0.0;
     for (std::size_t e = 0; e < sim.tets_.size(); ++e) {
