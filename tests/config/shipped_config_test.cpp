@@ -193,6 +193,17 @@ TEST(ShippedConfig, DefaultScene) {
     EXPECT_EQ(cfg.devices.at("thimble").finger, Finger::kIndex);
 }
 
+TEST(ShippedConfig, WholeHandSceneRunsAllFingersAtLevelZeroAt200Hz) {
+    const SceneConfig cfg = loadSceneConfig(kConfigDir / "scenes/whole_hand.yaml");
+    EXPECT_EQ(cfg.hand.model, HandModel::kHand);
+    EXPECT_TRUE(cfg.hand.fingers.empty()) << "empty = all five fingers";
+    EXPECT_EQ(cfg.hand.resolution, 0);
+    EXPECT_EQ(cfg.rate_hz, 200);
+    EXPECT_EQ(cfg.tracking.script, TrackingScript::kPressSlideEdge);
+    EXPECT_NE(cfg.findObject("block"), nullptr);
+    EXPECT_EQ(cfg.devices.size(), 2U);
+}
+
 TEST(ShippedConfig, ThimbleOnlyScene) {
     const SceneConfig cfg = loadSceneConfig(kConfigDir / "scenes/thimble_only.yaml");
     EXPECT_EQ(cfg.hand.model, HandModel::kFingertip);

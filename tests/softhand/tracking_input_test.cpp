@@ -7,8 +7,11 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <string>
 
+#include "haptic/config/scene.hpp"
 #include "haptic/softhand/scene_simulation.hpp"
 
 namespace haptic::softhand {
@@ -252,6 +255,51 @@ TEST(SceneSimulationScripted, PressSlideEdgeForcesRiseAndFallAndOutputsFollow) {
     EXPECT_LT(pressed_min_distance, -0.0005);
     EXPECT_EQ(lifted_constraints, 0U);
     EXPECT_GE(pressed_constraints, 1U);
+}
+
+// The shipped whole-hand scene (config/scenes/whole_hand.yaml: five fingers and the palm at
+// resolution 0, 200 Hz) through handsim's real-time limits for the first 3 s of its script:
+// the index presses the block and its pad samples go into the face, and nothing is refused.
+TEST(SceneSimulationScripted, WholeHandSceneAt200HzPressesTheBlockWithTheIndex) {
+    const config::SceneConfig scene =
+        config::loadSceneConfig(std::string(HAPTIC_SOURCE_DIR) + "/config/scenes/whole_hand.yaml");
+    const DeviceRequest exo{"exo", config::Finger::kIndex, true, {}, 64};
+    const DeviceRequest thimble{"thimble", config::Finger::kIndex, false, {{0, 0, -0.012}, {}}, 64};
+    SceneSimulation sim(scene, {exo, thimble}, realtimeSceneSettings());
+    ASSERT_EQ(sim.model().bones.size(), 16U);
+    const config::SceneObject& block = *scene.findObject("block");
+    const PressSlideEdgeScript script(sim.trackedHand(), scene.hand, block, true);
+    sim.reset(script.at(0.0));
+    const int block_collider =
+        sim.coupling().colliderOf(static_cast<int>(&block - scene.objects.data()));
+    const double dt = 1.0 / scene.rate_hz;
+    double pressed_force = 0.0;
+    double pressed_min_distance = 1.0;
+    int zeroed = 0;
+    msgs::ContactSurface surface;
+    const int steps = static_cast<int>(3.0 / dt);
+    for (int step = 1; step <= steps; ++step) {
+        const double t = step * dt;
+        ASSERT_EQ(sim.setHandPose(script.at(t)), std::nullopt);
+        const StepReport report = sim.step(dt);
+        ASSERT_FALSE(report.rejected_input) << report.rejection_reason;
+        ASSERT_TRUE(std::isfinite(report.energy_j)) << "t = " << t;
+        zeroed += report.zeroed_steps;
+        sim.fill(1, surface);
+        if (t > 1.5) {  // pressed 3 mm and sliding on the top face
+            pressed_force = std::max(pressed_force,
+                                     sim.model().simulation.forceOnCollider(block_collider).norm());
+            for (const auto& s : surface.samples) {
+                pressed_min_distance = std::min(pressed_min_distance, s.signed_distance_m);
+            }
+        }
+    }
+    std::printf("pressed force %.2f N, deepest pad sample %.2f mm, %d of %d steps zeroed\n",
+                pressed_force, 1e3 * pressed_min_distance, zeroed, steps);
+    EXPECT_GT(pressed_force, 0.2);
+    EXPECT_LT(pressed_min_distance, -0.0005);
+    // Most steps pass the energy check; the rest are zeroed and say so.
+    EXPECT_LT(zeroed, steps / 5);
 }
 
 }  // namespace
