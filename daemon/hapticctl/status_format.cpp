@@ -133,4 +133,31 @@ std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s) 
     return out;
 }
 
+std::string formatSimStatus(const msgs::SimStatus& status, double sample_age_s) {
+    std::string out;
+    out += fmt::format("\u25cf handsim - soft hand simulation, scene '{}'\n",
+                       status.header.source_id.view());
+    out += fmt::format("     Model: {} ({} nodes, {} elements)\n", status.model.view(),
+                       status.node_count, status.element_count);
+    out += sample_age_s < 0.0
+               ? fmt::format("     Steps: {} at {:.1f} Hz   (status #{})\n", status.steps,
+                             status.rate_hz, status.header.seq)
+               : fmt::format("     Steps: {} at {:.1f} Hz   (status #{}, {:.2f} s old)\n",
+                             status.steps, status.rate_hz, status.header.seq, sample_age_s);
+    out += percentilesLine("step", status.step_time_us);
+    out +=
+        fmt::format("    Solver: last step {} PCG iterations, residual {:.2e}, energy {:.3e} J\n",
+                    status.solver_iterations, status.solver_residual, status.energy_j);
+    const double steps = status.steps > 0 ? static_cast<double>(status.steps) : 1.0;
+    out += fmt::format(
+        "      Held: {} steps zeroed by the energy check ({:.1f}%), {} substepped ({:.1f}%)\n",
+        status.steps_zeroed, 100.0 * static_cast<double>(status.steps_zeroed) / steps,
+        status.steps_substepped, 100.0 * static_cast<double>(status.steps_substepped) / steps);
+    out += status.inputs_rejected == 0
+               ? std::string("  Tracking: no input rejected\n")
+               : fmt::format("  Tracking: {} inputs rejected, last: {}\n", status.inputs_rejected,
+                             status.last_rejection.view());
+    return out;
+}
+
 }  // namespace haptic::ctl

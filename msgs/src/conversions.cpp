@@ -27,6 +27,8 @@ static_assert(Member<decltype(idl::Fault{}.message())>::max_size == kShortTextCa
 static_assert(Member<decltype(idl::HapticCommandReply{}.message())>::max_size ==
               kLongTextCapacity - 1);
 static_assert(Member<decltype(idl::SimStatus{}.model())>::max_size == kModelNameCapacity - 1);
+static_assert(Member<decltype(idl::SimStatus{}.last_rejection())>::max_size ==
+              kShortTextCapacity - 1);
 // Sequence bounds are not visible to the compiler; tests/msgs checks them by serialising
 // a sample filled to capacity (must fit) and one past it (must not).
 
@@ -475,6 +477,10 @@ idl::SimStatus toIdl(const SimStatus& in) {
     out.solver_iterations(in.solver_iterations);
     out.energy_j(in.energy_j);
     copyString(in.model, out.model());
+    out.steps_zeroed(in.steps_zeroed);
+    out.steps_substepped(in.steps_substepped);
+    out.inputs_rejected(in.inputs_rejected);
+    copyString(in.last_rejection, out.last_rejection());
     return out;
 }
 
@@ -489,6 +495,10 @@ ConversionResult fromIdl(const idl::SimStatus& in, SimStatus& out) {
     out.solver_iterations = in.solver_iterations();
     out.energy_j = in.energy_j();
     copyString(in.model(), out.model);
+    out.steps_zeroed = in.steps_zeroed();
+    out.steps_substepped = in.steps_substepped();
+    out.inputs_rejected = in.inputs_rejected();
+    copyString(in.last_rejection(), out.last_rejection);
     return {};
 }
 

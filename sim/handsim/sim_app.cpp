@@ -144,8 +144,12 @@ int runSim(const SimOptions& options) {
     auto last_status = started;
     std::uint64_t steps = 0;
     std::uint64_t status_seq = 0;
-    std::uint64_t rejected_inputs = 0;
+    std::uint64_t rejected_inputs = 0;  // in this status window, for the log
     std::string last_rejection;
+    // Since start, for sim/status: what the solver did instead of a plain step.
+    std::uint64_t total_rejected_inputs = 0;
+    std::uint64_t zeroed_steps = 0;
+    std::uint64_t substepped_steps = 0;
     softhand::StepReport last_report;
     std::vector<double> run_step_times_us;  // whole run with --duration, summary at exit
     run_step_times_us.reserve(
@@ -169,11 +173,15 @@ int runSim(const SimOptions& options) {
         const softhand::StepReport report = physics.step(dt_s);
         if (report.rejected_input) {
             ++rejected_inputs;
+            ++total_rejected_inputs;
             last_rejection = report.rejection_reason;
         } else if (!rejection.empty()) {
             ++rejected_inputs;
+            ++total_rejected_inputs;
             last_rejection = rejection;
         }
+        zeroed_steps += report.zeroed_steps > 0 ? 1 : 0;
+        substepped_steps += report.substepped ? 1 : 0;
         const std::int64_t stamp = monotonicNs();
 
         for (std::size_t index = 0; index < links.size(); ++index) {
@@ -246,6 +254,10 @@ int runSim(const SimOptions& options) {
             status.solver_iterations = static_cast<std::uint32_t>(last_report.pcg_iterations);
             status.energy_j = last_report.energy_j;
             status.model.assign(physics.modelName());
+            status.steps_zeroed = zeroed_steps;
+            status.steps_substepped = substepped_steps;
+            status.inputs_rejected = total_rejected_inputs;
+            status.last_rejection.assign(last_rejection);
             if (rejected_inputs > 0) {
                 spdlog::warn(
                     "{} tracking input(s) rejected in the last {:.1f} s: {}", rejected_inputs,
@@ -274,8 +286,9 @@ int runSim(const SimOptions& options) {
         const msgs::Percentiles run = percentiles(run_step_times_us);
         spdlog::info(
             "{} steps in {:.1f} s ({:.1f} Hz); step time p50 {:.0f} us, p99 {:.0f} us, max {:.0f} "
-            "us",
-            steps, run_s, static_cast<double>(steps) / run_s, run.p50, run.p99, run.max);
+            "us; {} zeroed by the energy check, {} substepped; {} tracking input(s) rejected",
+            steps, run_s, static_cast<double>(steps) / run_s, run.p50, run.p99, run.max,
+            zeroed_steps, substepped_steps, total_rejected_inputs);
     }
     for (const auto& link : links) {
         spdlog::info("device '{}': published {} targets, received {} device states",

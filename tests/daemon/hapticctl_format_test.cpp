@@ -10,6 +10,36 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::Not;
 
+TEST(SimStatusFormat, ShowsRateStepTimeZeroedStepsAndTheLastRejectedInput) {
+    msgs::SimStatus status;
+    status.header.seq = 42;
+    status.header.source_id.assign("thimble_only");
+    status.model.assign("softhand_fingertip_index_res1");
+    status.node_count = 169;
+    status.element_count = 516;
+    status.steps = 4000;
+    status.rate_hz = 200.0;
+    status.step_time_us = {511.0, 1286.0, 2543.0};
+    status.solver_iterations = 30;
+    status.solver_residual = 1.5e-4;
+    status.energy_j = 2.5e-3;
+    status.steps_zeroed = 220;
+    status.steps_substepped = 0;
+    const std::string clean = formatSimStatus(status, 0.2);
+    EXPECT_THAT(clean, HasSubstr("scene 'thimble_only'"));
+    EXPECT_THAT(clean, HasSubstr("softhand_fingertip_index_res1 (169 nodes, 516 elements)"));
+    EXPECT_THAT(clean, HasSubstr("4000 at 200.0 Hz"));
+    EXPECT_THAT(clean, HasSubstr("p50   511.0 us"));
+    EXPECT_THAT(clean, HasSubstr("220 steps zeroed by the energy check (5.5%)"));
+    EXPECT_THAT(clean, HasSubstr("no input rejected"));
+
+    status.inputs_rejected = 3;
+    status.last_rejection.assign("hand pose: position is not finite");
+    const std::string rejected = formatSimStatus(status, -1.0);
+    EXPECT_THAT(rejected, HasSubstr("3 inputs rejected, last: hand pose: position is not finite"));
+    EXPECT_THAT(rejected, Not(HasSubstr("s old")));
+}
+
 TEST(StatusFormat, ShowsStateLoopSimLinkDevicesAndFaults) {
     msgs::HapticStatus status;
     status.state = msgs::DaemonState::kIdle;

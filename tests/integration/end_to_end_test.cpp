@@ -136,6 +136,20 @@ TEST_F(RoudiTest, DaemonAndSimExchangeMessagesAndStatusIsLive) {
     }
     EXPECT_EQ(rate[3], "0") << "the soft-hand sim must produce only valid messages";
 
+    // handsim's own status, as hapticctl shows it: the default scene's soft finger stepping,
+    // with its solver counters and no refused input.
+    // handsim publishes it every 500 ms on a volatile topic, so hapticctl waits for DDS
+    // discovery and then the next sample: 0.2-0.5 s or, in about a third of runs here,
+    // about 2.4 s (a missed initial discovery announcement).
+    const CommandResult sim_status = runCommand({HAPTICCTL_PATH, "--dds-domain", domainArgument(),
+                                                 "sim", "--timeout", kSanitized ? "10" : "6"},
+                                                20s);
+    ASSERT_EQ(sim_status.exit_code, 0) << sim_status.err;
+    EXPECT_THAT(sim_status.out, HasSubstr("handsim - soft hand simulation, scene 'default'"));
+    EXPECT_THAT(sim_status.out, HasSubstr("softhand_finger_index_res1 (602 nodes"));
+    EXPECT_THAT(sim_status.out, HasSubstr("steps zeroed by the energy check"));
+    EXPECT_THAT(sim_status.out, HasSubstr("Tracking: no input rejected"));
+
     // Let the sim run a little, then kill it without warning: the daemon must notice.
     std::this_thread::sleep_for(1s);
     ASSERT_TRUE(sim.running());
@@ -437,6 +451,15 @@ TEST(FailFast, MissingDaemonIsAOneLineErrorWithinTheTimeout) {
     EXPECT_THAT(result.err, HasSubstr("no hapticd status on DDS topic 'haptic/status'"));
     EXPECT_EQ(lineCount(result.err), 1U) << result.err;
     EXPECT_THAT(result.out, Not(HasSubstr("State:")));
+}
+
+TEST(FailFast, SimStatusWithoutHandsimIsAOneLineErrorWithinTheTimeout) {
+    const auto result = runCommand(
+        {HAPTICCTL_PATH, "--dds-domain", domainArgument(), "--timeout", "1", "sim"}, 10s);
+    EXPECT_EQ(result.exit_code, 3);
+    EXPECT_LT(result.seconds, 3.0);
+    EXPECT_THAT(result.err, HasSubstr("no handsim status on DDS topic 'sim/status'"));
+    EXPECT_EQ(lineCount(result.err), 1U) << result.err;
 }
 
 TEST(FailFast, MalformedConfigIsAOneLineErrorNamingFileLineAndKey) {

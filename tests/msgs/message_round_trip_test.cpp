@@ -239,6 +239,10 @@ class Filler {
         fill(m.solver_iterations);
         fill(m.energy_j);
         fill(m.model);
+        fill(m.steps_zeroed);
+        fill(m.steps_substepped);
+        fill(m.inputs_rejected);
+        fill(m.last_rejection);
     }
 
   private:

@@ -237,6 +237,12 @@ struct SimStatus {
     std::uint32_t solver_iterations{0};
     double energy_j{0.0};
     FixedString<kModelNameCapacity> model{};
+    // Since handsim started: steps the energy check zeroed (positions held, velocities 0),
+    // steps it split into substeps, and refused tracking inputs with the latest reason.
+    std::uint64_t steps_zeroed{0};
+    std::uint64_t steps_substepped{0};
+    std::uint64_t inputs_rejected{0};
+    FixedString<kShortTextCapacity> last_rejection{};
     friend bool operator==(const SimStatus&, const SimStatus&) = default;
 };
 
