@@ -221,6 +221,8 @@ TEST(ShippedConfig, GraspScene) {
     EXPECT_FALSE(cfg.hand.simulates(Finger::kMiddle));
     EXPECT_EQ(cfg.tracking.script, TrackingScript::kGraspLiftPlacePush);
     EXPECT_FALSE(cfg.tracking.loop);
+    EXPECT_EQ(cfg.rate_hz, 200);  // the pinch did not hold at 60 Hz
+    EXPECT_EQ(cfg.hand.resolution, 0);
     ASSERT_EQ(cfg.objects.size(), 3U);
     EXPECT_GT(cfg.objects[1].mass_kg, 0.0);  // both boxes are dynamic (Bullet moves them)
     EXPECT_GT(cfg.objects[2].mass_kg, 0.0);
