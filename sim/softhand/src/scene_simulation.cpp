@@ -7,6 +7,7 @@ namespace haptic::softhand {
 SceneSimulationSettings realtimeSceneSettings() {
     SceneSimulationSettings settings;
     settings.solver.pcg_max_iterations = 30;
+    settings.solver.max_newton_iterations = 1;
     settings.solver.max_backtracks = 2;
     settings.solver.max_substep_depth = 0;
     return settings;

@@ -24,13 +24,17 @@ struct SceneSimulationSettings {
     KinestheticOutputSettings kinesthetic;
 };
 
-// handsim's solver budget: PCG capped at 30 iterations, at most 2 halvings of the Newton
-// step and no substeps: a step the energy check still refuses keeps its positions and zeroes
-// the velocities (StepReport::zeroed_steps). Chosen so the default scene holds its rate: with
-// the re-linearised Newton iterations a cap of 30 costs less on average than 10 (fewer failed
-// steps) and is more accurate; and one substep level, measured against none, doubled the
-// default scene's p99 (12.6 against 6.1 ms) and the thimble scene's (2.8 against 1.6 ms)
-// while zeroing about as many steps (8.5% against 6.6%; 5.0% against 5.5%)
+// handsim's solver budget: PCG capped at 30 iterations, one Newton iteration (no
+// re-linearisation), at most 2 halvings of the Newton step and no substeps: a step the
+// energy check still refuses keeps its positions and zeroes the velocities
+// (StepReport::zeroed_steps). Chosen so the scenes hold their rates: a cap of 30 costs less
+// on average than 10 (fewer failed steps) and is more accurate; one substep level, measured
+// against none, doubled the default scene's p99 (12.6 against 6.1 ms) and the thimble
+// scene's (2.8 against 1.6 ms) while zeroing about as many steps. Re-linearising (up to 5
+// Newton iterations) made the steps that needed it 2-4 times the median and, at levels 0
+// and 1, bought no accuracy: thimble press p99 1.28 against 0.73 ms, force error 0.115
+// against 0.118, 5.5% against 6.0% steps zeroed; finger flex p99 6.3 against 3.1 ms. At
+// level 2 it does help (21% of the press's steps zeroed with one iteration, 9% with five)
 // (sim/softhand/BENCHMARK.md, "handsim's limits").
 [[nodiscard]] SceneSimulationSettings realtimeSceneSettings();
 
