@@ -262,14 +262,11 @@ void wholeHand(benchmark::State& state) {
 // table and block, scripted press_slide_edge) at the scene's rate, with both device outputs
 // filled each step: args = resolution, PCG cap, backtracks, substep depth. 1200 steps cover two
 // script periods at 100 Hz.
-void defaultScene(benchmark::State& state) {
+void runDefaultScene(benchmark::State& state, int resolution,
+                     const SceneSimulationSettings& settings) {
     config::SceneConfig scene =
         config::loadSceneConfig(HAPTIC_SOURCE_DIR "/config/scenes/default.yaml");
-    scene.hand.resolution = static_cast<int>(state.range(0));
-    SceneSimulationSettings settings;
-    settings.solver.pcg_max_iterations = static_cast<int>(state.range(1));
-    settings.solver.max_backtracks = static_cast<int>(state.range(2));
-    settings.solver.max_substep_depth = static_cast<int>(state.range(3));
+    scene.hand.resolution = resolution;
     DeviceRequest exo{"exo", config::Finger::kIndex, true, {}, 64};
     DeviceRequest thimble{"thimble", config::Finger::kIndex, false, {{0.0, 0.0, -0.012}, {}}, 64};
     SceneSimulation sim(scene, {exo, thimble}, settings);
@@ -285,6 +282,7 @@ void defaultScene(benchmark::State& state) {
     double substeps = 0.0;
     double backtracks = 0.0;
     double zeroed = 0.0;
+    double newton = 0.0;
     double substepped_us = 0.0;
     int substepped = 0;
     int contacts = 0;
@@ -300,6 +298,7 @@ void defaultScene(benchmark::State& state) {
         substeps += r.substeps;
         backtracks += r.backtracks;
         zeroed += r.zeroed_steps;
+        newton += r.newton_iterations;
         if (r.substeps > 1) {
             substepped_us += step_us.back();
             ++substepped;
@@ -318,6 +317,21 @@ void defaultScene(benchmark::State& state) {
     state.counters["p50_us"] = step_us[step_us.size() / 2];
     state.counters["p99_us"] = step_us[static_cast<std::size_t>(0.99 * (step_us.size() - 1))];
     state.counters["pcg_iters"] = pcg_iterations / static_cast<double>(step_us.size());
+    state.counters["newton_extra"] = newton / static_cast<double>(step_us.size());
+}
+
+// The grid: <resolution>/<PCG cap>/<backtracks>/<substep depth>, 5 Newton iterations.
+void defaultScene(benchmark::State& state) {
+    SceneSimulationSettings settings;
+    settings.solver.pcg_max_iterations = static_cast<int>(state.range(1));
+    settings.solver.max_backtracks = static_cast<int>(state.range(2));
+    settings.solver.max_substep_depth = static_cast<int>(state.range(3));
+    runDefaultScene(state, static_cast<int>(state.range(0)), settings);
+}
+
+// Exactly what handsim runs: realtimeSceneSettings() at <resolution>.
+void defaultSceneHandsimLimits(benchmark::State& state) {
+    runDefaultScene(state, static_cast<int>(state.range(0)), realtimeSceneSettings());
 }
 
 BENCHMARK(fingertipPress)
@@ -338,6 +352,11 @@ BENCHMARK(fingerFlexHandsimLimits)
     ->Iterations(400);
 BENCHMARK(defaultScene)
     ->ArgsProduct({{1, 2}, {10, 30}, {0, 2, 10}, {0, 1, 3}})
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(1200);
+BENCHMARK(defaultSceneHandsimLimits)
+    ->Arg(1)
+    ->Arg(2)
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(1200);
 BENCHMARK(wholeHand)
