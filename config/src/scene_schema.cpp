@@ -161,6 +161,16 @@ std::map<std::string, DeviceBinding, std::less<>> readBindings(MapReader map,
     return out;
 }
 
+SolverLimits readSolver(MapReader map) {
+    SolverLimits out;
+    out.newton_iterations =
+        map.optional("newton_iterations", out.newton_iterations, spec::Integer<int>::closed(1, 10));
+    out.pcg_max_iterations = map.optional("pcg_max_iterations", out.pcg_max_iterations,
+                                          spec::Integer<int>::closed(5, 500));
+    map.finish();
+    return out;
+}
+
 }  // namespace
 
 SceneConfig loadSceneConfig(const std::filesystem::path& path) {
@@ -174,6 +184,9 @@ SceneConfig loadSceneConfig(const std::filesystem::path& path) {
     out.tracking = readTracking(root.requiredMap("tracking"), out.objects);
     if (std::optional<MapReader> bindings = root.optionalMap("devices")) {
         out.devices = readBindings(*std::move(bindings), out.hand);
+    }
+    if (std::optional<MapReader> solver = root.optionalMap("solver")) {
+        out.solver = readSolver(*std::move(solver));
     }
     root.finish();
     return out;

@@ -129,14 +129,16 @@ int runSim(const SimOptions& options) {
     msgs::DeviceState dds_state;
 
     softhand::SceneSimulation physics(cfg.scene, deviceRequests(cfg),
-                                      softhand::realtimeSceneSettings());
+                                      softhand::realtimeSceneSettings(cfg.scene.solver));
     auto tracking = makeTrackingSource(cfg.scene, physics, participant);
     physics.reset(tracking->initialPose());
     const double dt_s = 1.0 / cfg.scene.rate_hz;
     spdlog::info("scene '{}': soft hand {} ({} nodes, {} tetrahedra), tracking from {}",
                  cfg.scene.name, physics.modelName(), physics.model().simulation.nodeCount(),
                  physics.model().simulation.tetCount(), tracking->describe());
-    spdlog::info("stepping at {} Hz for {} device(s)", cfg.scene.rate_hz, cfg.devices.size());
+    spdlog::info("stepping at {} Hz for {} device(s); solver: {} Newton iteration(s), PCG cap {}",
+                 cfg.scene.rate_hz, cfg.devices.size(), cfg.scene.solver.newton_iterations,
+                 cfg.scene.solver.pcg_max_iterations);
 
     const auto period = std::chrono::nanoseconds(1'000'000'000LL / cfg.scene.rate_hz);
     const auto started = std::chrono::steady_clock::now();

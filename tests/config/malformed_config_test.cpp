@@ -136,6 +136,22 @@ TEST(ConfigUnknownKeys, ThimbleKeyInExoskeletonFile) {
                  "allowed: name, type, can, safety, actuator, finger, linkage, rendering)"});
 }
 
+// handsim has no substeps under its real-time limits, so the solver block does not offer them.
+TEST(ConfigUnknownKeys, SolverKeyHandsimDoesNotOffer) {
+    const auto file = kDataDir / "scenes/solver_unknown_key.yaml";
+    expectError(sceneError("solver_unknown_key.yaml"),
+                {file.string(), lineOf(file, "max_substep_depth"), 3, "solver.max_substep_depth",
+                 "unknown key 'solver.max_substep_depth' (allowed: newton_iterations, "
+                 "pcg_max_iterations)"});
+}
+
+TEST(ConfigOutOfRange, SolverNeedsAtLeastOneNewtonIteration) {
+    const auto file = kDataDir / "scenes/solver_out_of_range.yaml";
+    expectError(sceneError("solver_out_of_range.yaml"),
+                {file.string(), lineOf(file, "newton_iterations"), 22, "solver.newton_iterations",
+                 "expected an integer in [1, 10], got 0"});
+}
+
 TEST(ConfigUnknownKeys, SizeKeyOfAnotherShape) {
     const auto file = kDataDir / "scenes/shape_unknown_key.yaml";
     expectError(

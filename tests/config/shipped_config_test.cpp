@@ -171,6 +171,8 @@ TEST(ShippedConfig, DefaultScene) {
     EXPECT_EQ(cfg.hand.finger, Finger::kIndex);
     EXPECT_EQ(cfg.hand.resolution, 1);
     EXPECT_DOUBLE_EQ(cfg.hand.anthropometry.hand_length_m, 0.19);
+    // 60 Hz leaves room to re-linearise; the 200 Hz scenes keep one iteration.
+    EXPECT_EQ(cfg.solver, (SolverLimits{5, 30}));
 
     ASSERT_EQ(cfg.objects.size(), 2U);
     EXPECT_EQ(cfg.objects[0].name, "table");
@@ -223,6 +225,7 @@ TEST(ShippedConfig, GraspScene) {
     EXPECT_FALSE(cfg.tracking.loop);
     EXPECT_EQ(cfg.rate_hz, 200);  // the pinch did not hold at 60 Hz
     EXPECT_EQ(cfg.hand.resolution, 0);
+    EXPECT_EQ(cfg.solver, SolverLimits{});  // handsim's default budget: 1 Newton, cap 30
     ASSERT_EQ(cfg.objects.size(), 3U);
     EXPECT_GT(cfg.objects[1].mass_kg, 0.0);  // both boxes are dynamic (Bullet moves them)
     EXPECT_GT(cfg.objects[2].mass_kg, 0.0);

@@ -67,7 +67,7 @@ TEST_P(SofthandGrasp, PinchLiftPlaceAndPushABoxInBullet) {
 
     SceneSimulationSettings settings;
     if (GetParam().realtime_limits) {
-        settings = realtimeSceneSettings();
+        settings = realtimeSceneSettings(scene.solver);
     } else {
         settings.solver.pcg_max_iterations = 40;
     }

@@ -4,10 +4,10 @@
 
 namespace haptic::softhand {
 
-SceneSimulationSettings realtimeSceneSettings() {
+SceneSimulationSettings realtimeSceneSettings(const config::SolverLimits& limits) {
     SceneSimulationSettings settings;
-    settings.solver.pcg_max_iterations = 30;
-    settings.solver.max_newton_iterations = 1;
+    settings.solver.pcg_max_iterations = limits.pcg_max_iterations;
+    settings.solver.max_newton_iterations = limits.newton_iterations;
     settings.solver.max_backtracks = 2;
     settings.solver.max_substep_depth = 0;
     return settings;

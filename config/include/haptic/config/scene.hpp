@@ -161,6 +161,19 @@ struct DeviceBinding {
     Finger finger{Finger::kIndex};
 };
 
+// YAML: solver: {newton_iterations, pcg_max_iterations}. handsim's per-step solver budget,
+// chosen per scene because the budget is 1/rate_hz: a 60 Hz finger can afford to
+// re-linearise a stiff contact, a 200 Hz fingertip cannot. The trade is measured in
+// sim/softhand/BENCHMARK.md ("handsim's limits"). Omitted keys keep these defaults.
+struct SolverLimits {
+    // Newton iterations per step. More re-linearise after the first PCG solve, which halves
+    // the steps the energy check refuses on the default scene but doubles the p99.
+    int newton_iterations{1};
+    int pcg_max_iterations{30};  // per Newton iteration
+
+    friend bool operator==(const SolverLimits&, const SolverLimits&) = default;
+};
+
 struct SceneConfig {
     std::filesystem::path source;
     std::string name;
@@ -169,6 +182,7 @@ struct SceneConfig {
     std::vector<SceneObject> objects;  // names unique
     TrackingConfig tracking;
     std::map<std::string, DeviceBinding, std::less<>> devices;  // by device name
+    SolverLimits solver;
 
     [[nodiscard]] const SceneObject* findObject(std::string_view object_name) const noexcept {
         for (const auto& object : objects) {

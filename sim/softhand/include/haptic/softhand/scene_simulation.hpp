@@ -24,7 +24,7 @@ struct SceneSimulationSettings {
     KinestheticOutputSettings kinesthetic;
 };
 
-// handsim's solver budget: PCG capped at 30 iterations, one Newton iteration (no
+// handsim's solver budget: by default PCG capped at 30 iterations, one Newton iteration (no
 // re-linearisation), at most 2 halvings of the Newton step and no substeps: a step the
 // energy check still refuses keeps its positions and zeroes the velocities
 // (StepReport::zeroed_steps). Chosen so the scenes hold their rates: a cap of 30 costs less
@@ -35,8 +35,11 @@ struct SceneSimulationSettings {
 // and 1, bought no accuracy: thimble press p99 1.28 against 0.73 ms, force error 0.115
 // against 0.118, 5.5% against 6.0% steps zeroed; finger flex p99 6.3 against 3.1 ms. At
 // level 2 it does help (21% of the press's steps zeroed with one iteration, 9% with five)
-// (sim/softhand/BENCHMARK.md, "handsim's limits").
-[[nodiscard]] SceneSimulationSettings realtimeSceneSettings();
+// (sim/softhand/BENCHMARK.md, "handsim's limits"). A scene's `solver:` block overrides
+// the Newton and PCG counts: the default scene at 60 Hz takes 5 Newton iterations, because on
+// it one iteration zeroes twice as many steps (11.5% against 5.4%) and its budget is 16.7 ms.
+[[nodiscard]] SceneSimulationSettings realtimeSceneSettings(
+    const config::SolverLimits& limits = {});
 
 // A device the simulation computes outputs for (one of sim.yaml's devices).
 struct DeviceRequest {
