@@ -28,45 +28,70 @@ LatencySummary summarize(std::vector<double>& samples_us) {
     return summary;
 }
 
-std::optional<LatencySummary> parseCyclictestHistogram(const std::string& output,
-                                                       std::string& error) {
-    std::vector<std::pair<double, std::uint64_t>> bins;
-    LatencySummary summary;
+std::optional<LatencyHistogram> parseCyclictestOutput(const std::string& output,
+                                                      std::string& error) {
+    LatencyHistogram histogram;
+    bool have_bins = false;
     bool have_max = false;
     std::istringstream lines(output);
     std::string line;
     while (std::getline(lines, line)) {
         if (line.rfind("# Max Latencies:", 0) == 0) {
-            summary.max = std::stod(line.substr(16));
+            histogram.max = std::stod(line.substr(16));
             have_max = true;
         } else if (line.rfind("# Histogram Overflows:", 0) == 0) {
-            summary.overflows = std::stoull(line.substr(22));
+            histogram.overflows = std::stoull(line.substr(22));
         } else if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0])) != 0) {
             std::istringstream row(line);
-            double latency_us = 0.0;
+            std::size_t latency_us = 0;
             std::uint64_t count = 0;
             if (row >> latency_us >> count) {
-                bins.emplace_back(latency_us, count);
+                if (histogram.counts.size() <= latency_us) {
+                    histogram.counts.resize(latency_us + 1, 0);
+                }
+                histogram.counts[latency_us] += count;
+                have_bins = true;
             }
         }
     }
-    if (bins.empty() || !have_max) {
+    if (!have_bins || !have_max) {
         error = "no histogram in cyclictest's output (was it run with -q -h <range>?)";
         return std::nullopt;
     }
-    std::uint64_t in_range = 0;
-    for (const auto& bin : bins) {
-        in_range += bin.second;
+    return histogram;
+}
+
+void merge(LatencyHistogram& total, const LatencyHistogram& round) {
+    if (total.counts.size() < round.counts.size()) {
+        total.counts.resize(round.counts.size(), 0);
     }
-    summary.count = in_range + summary.overflows;
-    const double range_top = bins.back().first + 1.0;
+    for (std::size_t us = 0; us < round.counts.size(); ++us) {
+        total.counts[us] += round.counts[us];
+    }
+    total.overflows += round.overflows;
+    total.max = std::max(total.max, round.max);
+}
+
+LatencySummary summarize(const LatencyHistogram& histogram) {
+    LatencySummary summary;
+    summary.overflows = histogram.overflows;
+    summary.max = histogram.max;
+    std::uint64_t in_range = 0;
+    for (const std::uint64_t count : histogram.counts) {
+        in_range += count;
+    }
+    summary.count = in_range + histogram.overflows;
+    if (summary.count == 0) {
+        return summary;
+    }
+    const auto range_top = static_cast<double>(histogram.counts.size());
     const auto percentile = [&](double q) {
         const std::size_t wanted = rankIndex(q, summary.count) + 1;
         std::uint64_t seen = 0;
-        for (const auto& [latency_us, count] : bins) {
-            seen += count;
+        for (std::size_t us = 0; us < histogram.counts.size(); ++us) {
+            seen += histogram.counts[us];
             if (seen >= wanted) {
-                return latency_us;
+                return static_cast<double>(us);
             }
         }
         return range_top;  // among the overflows
@@ -75,6 +100,15 @@ std::optional<LatencySummary> parseCyclictestHistogram(const std::string& output
     summary.p99 = percentile(0.99);
     summary.p999 = percentile(0.999);
     return summary;
+}
+
+std::optional<LatencySummary> parseCyclictestHistogram(const std::string& output,
+                                                       std::string& error) {
+    const auto histogram = parseCyclictestOutput(output, error);
+    if (!histogram) {
+        return std::nullopt;
+    }
+    return summarize(*histogram);
 }
 
 }  // namespace haptic::bench

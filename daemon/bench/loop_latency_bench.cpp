@@ -1,13 +1,15 @@
 // hapticd_loop_bench: the daemon's 1 kHz loop against Debian's cyclictest on the same
 // machine in one run. See README "Loop latency benchmark" and daemon/bench/RESULTS.md.
 //
-// Phases, sequential and of equal duration, with the same SCHED_FIFO priority and CPU
-// affinity (both read from the daemon config):
-//   1. cyclictest -m -p <prio> [-a <cpu>] -i 1000 -h 20000 -q --laptop, with RouDi, handsim
-//      and any --with processes running as they will in phase 2;
+// Phases, with the same SCHED_FIFO priority and CPU affinity (both read from the daemon
+// config), and RouDi, handsim and any --with processes running throughout:
+//   1. cyclictest -m -p <prio> [-a <cpu>] -i 1000 -h 20000 -q --laptop, and
 //   2. the real hapticd process; its per-tick wake-up latency and compute time come from
 //      haptic/telemetry over DDS (every tick carries them), so hapticemu for both devices can
-//      be added with --with and a daemon config that binds them, without code changes;
+//      be added with --with and a daemon config that binds them, without code changes.
+//      1 and 2 take turns in --rounds rounds of equal length, and each side's rounds are
+//      added up: on a VM the host's noise comes in bursts of seconds, and one long window
+//      each compared two different stretches of it;
 //   3. the sim -> daemon message latency over iceoryx and over DDS (sim_link_probe.hpp).
 
 #include <sys/utsname.h>
@@ -20,8 +22,11 @@
 #include <ctime>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "HapticTelemetryPubSubTypes.h"
 #include "child_process.hpp"
@@ -43,6 +48,7 @@ using namespace std::chrono_literals;
 struct BenchOptions {
     double duration_s{30.0};
     double latency_duration_s{10.0};
+    int rounds{5};
     std::string daemon_config{HAPTIC_DEFAULT_CONFIG_DIR "/daemon.yaml"};
     std::string sim_config{HAPTIC_DEFAULT_CONFIG_DIR "/sim.yaml"};
     std::string realtime;  // hapticd --realtime override; empty = the config's
@@ -52,14 +58,14 @@ struct BenchOptions {
     std::string command_line;
 };
 
-struct DaemonLoopResult {
-    LatencySummary wakeup;
-    LatencySummary compute;  // the tick's work: read + render + write
-    LatencySummary read;
-    LatencySummary render;
-    LatencySummary write;
-    std::uint64_t first_tick{0};
-    std::uint64_t last_tick{0};
+// hapticd's per-tick telemetry, added up over the rounds.
+struct DaemonLoopSamples {
+    std::vector<double> wakeup_us;
+    std::vector<double> compute_us;  // the tick's work: read + render + write
+    std::vector<double> read_us;
+    std::vector<double> render_us;
+    std::vector<double> write_us;
+    std::uint64_t ticks_spanned{0};  // per round, last - first counted tick + 1
     std::string error;
 };
 
@@ -83,7 +89,8 @@ std::string row(const std::string& name, const LatencySummary& s) {
            " | " + fixed(s.max) + " | " + std::to_string(s.count) + " |\n";
 }
 
-LatencySummary runCyclictest(int priority, int cpu, double duration_s, std::string& error) {
+std::optional<LatencyHistogram> runCyclictest(int priority, int cpu, double duration_s,
+                                              std::string& error) {
     std::vector<std::string> argv{
         HAPTIC_CYCLICTEST_PATH, "-m", "-p", std::to_string(priority), "-i", "1000", "-l",
         std::to_string(static_cast<long>(duration_s * 1000.0)), "-q", "-h", "20000",
@@ -96,26 +103,24 @@ LatencySummary runCyclictest(int priority, int cpu, double duration_s, std::stri
         argv, std::chrono::milliseconds(static_cast<long>(duration_s * 1000.0) + 30'000));
     if (result.exit_code != 0) {
         error = "cyclictest failed (exit " + std::to_string(result.exit_code) + "): " + result.err;
-        return {};
+        return std::nullopt;
     }
-    auto summary = parseCyclictestHistogram(result.out, error);
-    return summary.value_or(LatencySummary{});
+    return parseCyclictestOutput(result.out, error);
 }
 
-// Runs hapticd for `duration_s` of counted ticks after a 1 s warm-up and collects every
-// tick's wake-up latency and compute time from haptic/telemetry.
-DaemonLoopResult runDaemonLoop(const BenchOptions& options, const config::DaemonConfig& cfg,
-                               const std::string& domain) {
-    DaemonLoopResult result;
+// Runs hapticd for `duration_s` of counted ticks after a 1 s warm-up and appends every
+// tick's wake-up latency and compute time from haptic/telemetry to `out`.
+void runDaemonLoop(const BenchOptions& options, const config::DaemonConfig& cfg,
+                   const std::string& domain, double duration_s, DaemonLoopSamples& out) {
     ipc::DdsParticipant participant(
         ipc::DdsSettings{static_cast<std::uint32_t>(std::stoi(domain)),
                          cfg.dds.profiles_file.string(), cfg.dds.participant_profile},
         "hapticd_loop_bench");
     auto reader = participant.createReader<idl::HapticTelemetryPubSubType>(ipc::kTelemetryTopic,
                                                                            ipc::TopicKind::kStream);
-    std::vector<std::string> argv{
-        HAPTICD_PATH, "-c",         options.daemon_config,          "--dds-domain",
-        domain,       "--duration", fixed(options.duration_s + 5.0)};
+    std::vector<std::string> argv{HAPTICD_PATH,           "-c",   options.daemon_config,
+                                  "--dds-domain",         domain, "--duration",
+                                  fixed(duration_s + 5.0)};
     if (!options.realtime.empty()) {
         argv.insert(argv.end(), {"--realtime", options.realtime});
     }
@@ -124,20 +129,15 @@ DaemonLoopResult runDaemonLoop(const BenchOptions& options, const config::Daemon
     }
     ChildProcess daemon(argv, "bench-hapticd");
 
-    const auto wanted = static_cast<std::uint64_t>(options.duration_s * cfg.loop.rate_hz);
+    const auto wanted = static_cast<std::uint64_t>(duration_s * cfg.loop.rate_hz);
     const auto warmup = static_cast<std::uint64_t>(cfg.loop.rate_hz);
-    std::vector<double> wakeup_us;
-    std::vector<double> compute_us;
-    std::vector<double> read_us;
-    std::vector<double> render_us;
-    std::vector<double> write_us;
-    for (auto* series : {&wakeup_us, &compute_us, &read_us, &render_us, &write_us}) {
-        series->reserve(wanted);
-    }
+    const std::size_t before = out.wakeup_us.size();
+    std::uint64_t first_tick = 0;
+    std::uint64_t last_tick = 0;
     idl::HapticTelemetry batch;
     const auto deadline =
-        std::chrono::steady_clock::now() + std::chrono::duration<double>(options.duration_s + 15.0);
-    while (wakeup_us.size() < wanted && std::chrono::steady_clock::now() < deadline &&
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(duration_s + 15.0);
+    while (out.wakeup_us.size() - before < wanted && std::chrono::steady_clock::now() < deadline &&
            daemon.running()) {
         if (!reader.waitAndTake(batch, 100ms)) {
             continue;
@@ -147,28 +147,26 @@ DaemonLoopResult runDaemonLoop(const BenchOptions& options, const config::Daemon
             if (sample.device_index() != 0 || sample.tick() < warmup) {
                 continue;
             }
-            if (wakeup_us.empty()) {
-                result.first_tick = sample.tick();
+            if (out.wakeup_us.size() == before) {
+                first_tick = sample.tick();
             }
-            result.last_tick = sample.tick();
-            wakeup_us.push_back(sample.wakeup_latency_us());
-            compute_us.push_back(sample.compute_us());
-            read_us.push_back(sample.read_us());
-            write_us.push_back(sample.write_us());
-            render_us.push_back(sample.compute_us() - sample.read_us() - sample.write_us());
+            last_tick = sample.tick();
+            out.wakeup_us.push_back(sample.wakeup_latency_us());
+            out.compute_us.push_back(sample.compute_us());
+            out.read_us.push_back(sample.read_us());
+            out.write_us.push_back(sample.write_us());
+            out.render_us.push_back(sample.compute_us() - sample.read_us() - sample.write_us());
         }
     }
-    if (wakeup_us.size() < wanted) {
-        result.error = "hapticd delivered " + std::to_string(wakeup_us.size()) + " of " +
-                       std::to_string(wanted) + " ticks: " + daemon.stderrText();
+    const std::size_t delivered = out.wakeup_us.size() - before;
+    if (delivered > 0) {
+        out.ticks_spanned += last_tick - first_tick + 1;
+    }
+    if (delivered < wanted && out.error.empty()) {
+        out.error = "hapticd delivered " + std::to_string(delivered) + " of " +
+                    std::to_string(wanted) + " ticks: " + daemon.stderrText();
     }
     daemon.terminate();
-    result.wakeup = summarize(wakeup_us);
-    result.compute = summarize(compute_us);
-    result.read = summarize(read_us);
-    result.render = summarize(render_us);
-    result.write = summarize(write_us);
-    return result;
 }
 
 std::unique_ptr<ChildProcess> startSim(const BenchOptions& options, const std::string& transport,
@@ -268,11 +266,25 @@ int runBenchmark(const BenchOptions& options) {
     std::this_thread::sleep_for(1s);
 
     std::string error;
-    std::fprintf(stderr, "cyclictest for %.0f s ...\n", options.duration_s);
-    const LatencySummary cyclic =
-        runCyclictest(cfg.loop.priority, cfg.loop.cpu_affinity, options.duration_s, error);
-    std::fprintf(stderr, "hapticd for %.0f s ...\n", options.duration_s);
-    const DaemonLoopResult loop = runDaemonLoop(options, cfg, domain);
+    const double round_s = options.duration_s / options.rounds;
+    LatencyHistogram cyclic_total;
+    DaemonLoopSamples loop;
+    for (auto* series :
+         {&loop.wakeup_us, &loop.compute_us, &loop.read_us, &loop.render_us, &loop.write_us}) {
+        series->reserve(static_cast<std::size_t>(options.duration_s * cfg.loop.rate_hz));
+    }
+    for (int round = 1; round <= options.rounds && error.empty(); ++round) {
+        std::fprintf(stderr, "round %d of %d: cyclictest for %.1f s, then hapticd ...\n", round,
+                     options.rounds, round_s);
+        if (const auto histogram =
+                runCyclictest(cfg.loop.priority, cfg.loop.cpu_affinity, round_s, error)) {
+            merge(cyclic_total, *histogram);
+        }
+        runDaemonLoop(options, cfg, domain, round_s, loop);
+    }
+    const LatencySummary cyclic = summarize(cyclic_total);
+    const LatencySummary wakeup = summarize(loop.wakeup_us);
+    const std::uint64_t ticks = loop.wakeup_us.size();
     sim.reset();
     std::fprintf(stderr, "sim -> daemon latency, iceoryx then DDS, %.0f s each ...\n",
                  options.latency_duration_s);
@@ -283,21 +295,24 @@ int runBenchmark(const BenchOptions& options) {
     extra.clear();
     roudi->terminate();
 
-    std::string report = "### " + hostLine() + "\n\nCommand: `" + options.command_line +
-                         "`\n\nSCHED_FIFO priority " + std::to_string(cfg.loop.priority) +
-                         ", CPU affinity " + std::to_string(cfg.loop.cpu_affinity) +
-                         ", daemon sim link " + (iceoryx_daemon ? "iceoryx" : "dds") + ".\n\n" +
-                         "| µs | p50 | p99 | p99.9 | max | samples |\n|---|---|---|---|---|---|\n";
+    std::string report =
+        "### " + hostLine() + "\n\nCommand: `" + options.command_line +
+        "`\n\nSCHED_FIFO priority " + std::to_string(cfg.loop.priority) + ", CPU affinity " +
+        std::to_string(cfg.loop.cpu_affinity) + ", daemon sim link " +
+        (iceoryx_daemon ? "iceoryx" : "dds") + "; cyclictest and hapticd took turns in " +
+        std::to_string(options.rounds) + " rounds of " + fixed(round_s) + " s each.\n\n" +
+        "| µs | p50 | p99 | p99.9 | max | samples |\n|---|---|---|---|---|---|\n";
     report += row("cyclictest wake-up latency", cyclic);
-    report += row("hapticd wake-up latency", loop.wakeup);
-    report += "| hapticd / cyclictest wake-up (target ≤ 1.5) | " +
-              ratio(loop.wakeup.p50, cyclic.p50) + " | " + ratio(loop.wakeup.p99, cyclic.p99) +
-              " | " + ratio(loop.wakeup.p999, cyclic.p999) + " | " +
-              ratio(loop.wakeup.max, cyclic.max) + " | |\n";
-    report += row("hapticd tick compute (read + compute + write; target p99 ≤ 100)", loop.compute);
-    report += row("… of which read (CAN read, sim inputs, commands)", loop.read);
-    report += row("… of which render (core, strategies, optimiser, safety)", loop.render);
-    report += row("… of which write (CAN write, DeviceState hand-off)", loop.write);
+    report += row("hapticd wake-up latency", wakeup);
+    report += "| hapticd / cyclictest wake-up (target ≤ 1.5) | " + ratio(wakeup.p50, cyclic.p50) +
+              " | " + ratio(wakeup.p99, cyclic.p99) + " | " + ratio(wakeup.p999, cyclic.p999) +
+              " | " + ratio(wakeup.max, cyclic.max) + " | |\n";
+    report += row("hapticd tick compute (read + compute + write; target p99 ≤ 100)",
+                  summarize(loop.compute_us));
+    report += row("… of which read (CAN read, sim inputs, commands)", summarize(loop.read_us));
+    report +=
+        row("… of which render (core, strategies, optimiser, safety)", summarize(loop.render_us));
+    report += row("… of which write (CAN write, DeviceState hand-off)", summarize(loop.write_us));
     report += row("sim → daemon, iceoryx, stamp → taken by the 1 kHz tick", iceoryx.tick);
     report += row("sim → daemon, DDS, stamp → taken by the 1 kHz tick", dds.tick);
     report += row("sim → daemon, iceoryx, stamp → delivered (exo, event-driven)", iceoryx.delivery);
@@ -306,9 +321,9 @@ int runBenchmark(const BenchOptions& options) {
         report += "\ncyclictest: " + std::to_string(cyclic.overflows) +
                   " samples beyond its 20 ms histogram.\n";
     }
-    if (loop.last_tick >= loop.first_tick && loop.wakeup.count > 0) {
-        report += "\nhapticd telemetry covered " + std::to_string(loop.wakeup.count) + " of " +
-                  std::to_string(loop.last_tick - loop.first_tick + 1) + " ticks.\n";
+    if (ticks > 0) {
+        report += "\nhapticd telemetry covered " + std::to_string(ticks) + " of " +
+                  std::to_string(loop.ticks_spanned) + " ticks.\n";
     }
     for (const auto& message : {error, loop.error, iceoryx_error, dds_error}) {
         if (!message.empty()) {
@@ -335,6 +350,10 @@ int main(int argc, char** argv) {
     app.add_option("--duration", options.duration_s, "seconds for cyclictest and for hapticd")
         ->capture_default_str()
         ->check(CLI::Range(2.0, 3600.0));
+    app.add_option("--rounds", options.rounds,
+                   "cyclictest and hapticd take turns this many times, --duration / rounds each")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 60));
     app.add_option("--latency-duration", options.latency_duration_s,
                    "seconds per sim -> daemon latency probe (iceoryx, DDS)")
         ->capture_default_str()
@@ -358,6 +377,13 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"iceoryx", "dds"}));
     app.add_option("--dds-domain", probe_domain, "internal: the probe's DDS domain");
     CLI11_PARSE(app, argc, argv);
+    if (probe.empty() && options.duration_s / options.rounds < 1.0) {
+        std::fprintf(stderr,
+                     "hapticd_loop_bench: --duration %.1f over --rounds %d leaves under 1 s per "
+                     "round; each round needs at least 1 s past hapticd's 1 s warm-up\n",
+                     options.duration_s, options.rounds);
+        return EXIT_FAILURE;
+    }
     for (int i = 0; i < argc; ++i) {
         options.command_line +=
             (i == 0 ? std::string("hapticd_loop_bench") : " " + std::string(argv[i]));

@@ -53,6 +53,29 @@ TEST(LoopBenchStats, CyclictestHistogramPercentilesCountOverflowsAsSlowest) {
     EXPECT_DOUBLE_EQ(summary->max, 950.0);
 }
 
+// The bench interleaves cyclictest and hapticd in rounds; the rounds' histograms add up to
+// one, whose percentiles are those of all samples together.
+TEST(LoopBenchStats, RoundsOfCyclictestMergeIntoOneHistogram) {
+    std::string error;
+    auto total = parseCyclictestOutput(kHistogram, error);
+    ASSERT_TRUE(total.has_value()) << error;
+    const std::string slow_round =
+        "000000 000000\n000001 000000\n000002 000000\n000003 000000\n000004 000000\n"
+        "000005 000000\n000006 000000\n000007 001000\n# Max Latencies: 00007\n"
+        "# Histogram Overflows: 00000\n";
+    const auto round = parseCyclictestOutput(slow_round, error);
+    ASSERT_TRUE(round.has_value()) << error;
+    merge(*total, *round);
+    const LatencySummary summary = summarize(*total);
+    EXPECT_EQ(summary.count, 2000U);
+    EXPECT_EQ(summary.overflows, 11U);
+    // Below 7 us: 989 samples, all from the first round.
+    EXPECT_DOUBLE_EQ(summary.p50, 7.0);   // 1000th of 2000
+    EXPECT_DOUBLE_EQ(summary.p99, 7.0);   // 1980th of the 1989 in range
+    EXPECT_DOUBLE_EQ(summary.p999, 8.0);  // 1998th: among the 11 overflows, the range top
+    EXPECT_DOUBLE_EQ(summary.max, 950.0);
+}
+
 TEST(LoopBenchStats, OutputWithoutHistogramIsAnError) {
     std::string error;
     EXPECT_FALSE(parseCyclictestHistogram("T: 0 ( 1) P:80 I:1000 C: 10 Min: 3\n", error));
