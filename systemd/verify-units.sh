@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Checks the generated systemd units: `systemd-analyze verify` (syntax, unknown keys,
 # dependencies, executables) plus the properties hapticd relies on (README "Running on real
-# hardware"). Usage: verify-units.sh UNIT_DIR INSTALL_BINDIR HAPTICD_DIR HANDSIM_DIR
+# hardware"). Usage: verify-units.sh UNIT_DIR INSTALL_BINDIR HAPTICD_DIR HANDSIM_DIR SIM_LINK
 # Exit 0 pass, 1 fail, 77 systemd-analyze not installed (ctest reports SKIPPED).
 set -euo pipefail
-units=$1 install_bindir=$2 hapticd_dir=$3 handsim_dir=$4
+units=$1 install_bindir=$2 hapticd_dir=$3 handsim_dir=$4 sim_link=$5
 
 if ! command -v systemd-analyze >/dev/null; then
     echo "systemd-analyze not found: cannot verify the units" >&2
@@ -36,9 +36,22 @@ require hapticd.service 'WatchdogSec=[0-9]+m?s' 'pinged only while the RT loop t
 require hapticd.service 'LimitRTPRIO=[0-9]+' 'SCHED_FIFO'
 require hapticd.service 'LimitMEMLOCK=infinity' 'mlockall'
 require hapticd.service 'Restart=(on-failure|always|on-watchdog|on-abnormal)' 'restart policy'
-require hapticd.service 'BindsTo=iox-roudi.service' 'a RouDi restart orphans iceoryx clients'
-require hapticd.service 'After=iox-roudi.service.*' 'start after RouDi'
-require handsim.service 'BindsTo=iox-roudi.service' 'a RouDi restart orphans iceoryx clients'
+reject() {  # unit, regex, why
+    if grep -Eq "^$2\$" "$work/$1"; then
+        echo "$1: has '$2' ($3)" >&2
+        status=1
+    fi
+}
+for unit in hapticd.service handsim.service; do
+    require $unit "ExecStart=.* --sim-link $sim_link" 'the unit runs the sim link it was made for'
+    if [[ $sim_link == iceoryx ]]; then
+        require $unit 'BindsTo=iox-roudi.service' 'a RouDi restart orphans iceoryx clients'
+        require $unit 'After=iox-roudi.service.*' 'start after RouDi'
+    else
+        reject $unit '(BindsTo|Requires|Wants)=.*iox-roudi.*' 'over DDS a RouDi restart must not stop it'
+        reject $unit 'After=.*iox-roudi.*' 'over DDS it does not wait for RouDi'
+    fi
+done
 require iox-roudi.service 'Restart=on-failure' 'restart policy'
 for unit in "$work"/*.service; do
     if grep -Eq '^PrivateTmp=(yes|true)' "$unit"; then
@@ -46,5 +59,5 @@ for unit in "$work"/*.service; do
         status=1
     fi
 done
-[[ $status -eq 0 ]] && echo "systemd units verified: $(cd "$work" && echo *.service)"
+[[ $status -eq 0 ]] && echo "systemd units verified ($sim_link sim link): $(cd "$work" && echo *.service)"
 exit $status
