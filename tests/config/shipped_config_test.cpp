@@ -43,6 +43,26 @@ TEST(ShippedConfig, EveryDeviceAndSceneFileLoads) {
     EXPECT_GE(scenes, 2);
 }
 
+// hapticd fades a device's force from 3/4 of sim_timeout_ms on, so a scene that delivers less
+// often than that makes the force ripple at the sim rate (what the demo's 60 Hz scene did).
+// 1.5 sim periods within the timeout leave the fade start half a period for step jitter.
+TEST(ShippedConfig, EveryShippedSceneOutrunsTheDaemonsFade) {
+    const DaemonConfig daemon = loadDaemonConfig(kConfigDir / "daemon.yaml");
+    int scenes = 0;
+    for (const auto& entry : fs::directory_iterator(kConfigDir / "scenes")) {
+        if (entry.path().extension() != ".yaml") {
+            continue;
+        }
+        const SceneConfig scene = loadSceneConfig(entry.path());
+        const double period_ms = 1000.0 / scene.rate_hz;
+        EXPECT_LE(1.5 * period_ms, daemon.loop.sim_timeout_ms)
+            << entry.path() << ": " << scene.rate_hz << " Hz against sim_timeout_ms "
+            << daemon.loop.sim_timeout_ms;
+        ++scenes;
+    }
+    EXPECT_GE(scenes, 4);
+}
+
 TEST(ShippedConfig, Daemon) {
     const DaemonConfig cfg = loadDaemonConfig(kConfigDir / "daemon.yaml");
     EXPECT_EQ(cfg.log_level, LogLevel::kInfo);
@@ -166,13 +186,13 @@ TEST(ShippedConfig, Thimble) {
 TEST(ShippedConfig, DefaultScene) {
     const SceneConfig cfg = loadSceneConfig(kConfigDir / "scenes/default.yaml");
     EXPECT_EQ(cfg.name, "default");
-    EXPECT_EQ(cfg.rate_hz, 60);
+    EXPECT_EQ(cfg.rate_hz, 100);
     EXPECT_EQ(cfg.hand.model, HandModel::kFinger);
     EXPECT_EQ(cfg.hand.finger, Finger::kIndex);
     EXPECT_EQ(cfg.hand.resolution, 1);
     EXPECT_DOUBLE_EQ(cfg.hand.anthropometry.hand_length_m, 0.19);
-    // 60 Hz leaves room to re-linearise; the 200 Hz scenes keep one iteration.
-    EXPECT_EQ(cfg.solver, (SolverLimits{5, 30}));
+    // 100 Hz leaves room to re-linearise once; the 200 Hz scenes keep one iteration.
+    EXPECT_EQ(cfg.solver, (SolverLimits{2, 30}));
 
     ASSERT_EQ(cfg.objects.size(), 2U);
     EXPECT_EQ(cfg.objects[0].name, "table");

@@ -121,12 +121,12 @@ TEST_F(RoudiTest, DaemonAndSimExchangeMessagesAndStatusIsLive) {
     }
     EXPECT_THAT(status.out, HasSubstr("exo "));
     EXPECT_THAT(status.out, HasSubstr("thimble "));
-    // Both devices publish at the scene rate (60 Hz each in the default scene).
+    // Both devices publish at the scene rate (100 Hz each in the default scene).
     std::smatch rate;
     ASSERT_TRUE(std::regex_search(status.out, rate,
                                   std::regex(R"(([0-9.]+) Hz, (\d+) received, (\d+) rejected)")))
         << status.out;
-    // Two devices at 60 Hz (6 frames per 50 ms status window); allow for late frames on a
+    // Two devices at 100 Hz (10 frames per 50 ms status window); allow for late frames on a
     // loaded machine. A sanitized sim steps a few times a second, so a 50 ms window may hold
     // none of its messages: there the count received is the evidence that messages flow.
     if (kSanitized) {
@@ -162,7 +162,7 @@ TEST_F(RoudiTest, DaemonAndSimExchangeMessagesAndStatusIsLive) {
     ASSERT_TRUE(daemon.running()) << "a dead sim must not take the daemon down";
 
     // A fresh sim reconnects, and the daemon's DeviceState stream reaches it (handsim takes
-    // the newest state once per 60 Hz step, so ~120 in 2 s).
+    // the newest state once per 100 Hz step, so ~200 in 2 s).
     ChildProcess sim2({HANDSIM_PATH, "--dds-domain", domainArgument(), "--duration", "2"},
                       "handsim2");
     ASSERT_EQ(sim2.waitFor(15s), std::optional<int>(0)) << sim2.stderrText();

@@ -302,13 +302,13 @@ TEST(SceneSimulationScripted, WholeHandSceneAt200HzPressesTheBlockWithTheIndex) 
     EXPECT_LT(zeroed, steps / 5);
 }
 
-// The shipped default scene's solver: block reaches the solver: with it (5 Newton iterations)
+// The shipped default scene's solver: block reaches the solver: with it (2 Newton iterations)
 // the stiff steps of the press are re-linearised instead of refused, and with handsim's default
 // budget (one iteration) nothing is re-linearised.
 TEST(SceneSimulationScripted, DefaultSceneSolverBlockSetsTheNewtonIterations) {
     const config::SceneConfig scene =
         config::loadSceneConfig(std::string(HAPTIC_SOURCE_DIR) + "/config/scenes/default.yaml");
-    ASSERT_EQ(scene.solver.newton_iterations, 5);
+    ASSERT_EQ(scene.solver.newton_iterations, 2);
     struct Run {
         int relinearised{0};
         int zeroed{0};

@@ -36,8 +36,8 @@ struct SceneSimulationSettings {
 // against 0.118, 5.5% against 6.0% steps zeroed; finger flex p99 6.3 against 3.1 ms. At
 // level 2 it does help (21% of the press's steps zeroed with one iteration, 9% with five)
 // (sim/softhand/BENCHMARK.md, "handsim's limits"). A scene's `solver:` block overrides
-// the Newton and PCG counts: the default scene at 60 Hz takes 5 Newton iterations, because on
-// it one iteration zeroes twice as many steps (11.5% against 5.4%) and its budget is 16.7 ms.
+// the Newton and PCG counts: the default scene at 100 Hz takes 2 Newton iterations, because on
+// it one iteration zeroes about twice as many steps (11% against 6%).
 [[nodiscard]] SceneSimulationSettings realtimeSceneSettings(
     const config::SolverLimits& limits = {});
 
