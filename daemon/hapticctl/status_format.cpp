@@ -107,6 +107,12 @@ std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s) 
     out += fmt::format("  Sim link: {}, {}, last input {}, {:.1f} Hz, {} received, {} rejected\n",
                        toString(link.transport), link.connected ? "connected" : "NOT CONNECTED",
                        age, link.rate_hz, link.received, link.rejected);
+    if (link.late_input_ticks > 0) {
+        out += fmt::format(
+            "            late input faded the force on {} ticks (sim slower than 3/4 of "
+            "sim_timeout_ms, or stalled)\n",
+            link.late_input_ticks);
+    }
 
     out += status.devices.empty() ? "   Devices: none configured\n" : "   Devices:\n";
     for (const auto& device : status.devices) {

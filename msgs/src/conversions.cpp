@@ -297,6 +297,7 @@ idl::HapticStatus toIdl(const HapticStatus& in) {
     link.rate_hz(in.sim_link.rate_hz);
     link.received(in.sim_link.received);
     link.rejected(in.sim_link.rejected);
+    link.late_input_ticks(in.sim_link.late_input_ticks);
     out.sim_link(link);
 
     for (const auto& f : in.faults) {
@@ -359,6 +360,7 @@ ConversionResult fromIdl(const idl::HapticStatus& in, HapticStatus& out) {
     out.sim_link.rate_hz = link.rate_hz();
     out.sim_link.received = link.received();
     out.sim_link.rejected = link.rejected();
+    out.sim_link.late_input_ticks = link.late_input_ticks();
 
     out.faults.clear();
     for (const auto& f : in.faults()) {

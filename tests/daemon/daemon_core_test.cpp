@@ -197,6 +197,33 @@ TEST_F(DaemonCoreTest, StatusReportsDevicesLinkRateAndLoopWindow) {
     EXPECT_THAT(status.rendering_method.view(), Eq("subspace"));
 }
 
+// The fade starts at 15 ms of the 20 ms timeout: a 100 Hz sim never reaches it, a 60 Hz sim
+// (a message every 17 ms) reaches it before every message, and status counts those ticks.
+TEST_F(DaemonCoreTest, StatusCountsTicksOnWhichASlowSimLetTheInputAgePastTheFadeStart) {
+    const auto run = [this](std::int64_t from, int interval_ms, int ticks) {
+        std::int64_t t = from;
+        for (int i = 0; i < ticks; ++i) {
+            if (i % interval_ms == 0) {
+                (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), t);
+                (void)sut.offerContactSurface(1, validContactSurface("thimble_index"), t);
+            }
+            t = runTicks(t, 1);
+        }
+        return t;
+    };
+    msgs::HapticStatus status;
+    std::int64_t t = run(0, 10, 1000);
+    sut.fillStatus(t, status);
+    EXPECT_THAT(status.sim_link.late_input_ticks, Eq(0U)) << "100 Hz is inside the fade start";
+    EXPECT_THAT(sut.simFade(0), Eq(1.0));
+
+    t = run(t, 17, 17 * 60);
+    sut.fillStatus(t, status);
+    // The ticks see ages 1..17 ms of each message; 16 and 17 are past the fade start.
+    EXPECT_THAT(status.sim_link.late_input_ticks, Eq(2U * 60U));
+    EXPECT_TRUE(status.sim_link.connected) << "late, not lost";
+}
+
 TEST_F(DaemonCoreTest, ForceGainFollowsTheFadeOnlyWhileRendering) {
     std::int64_t t = 0;
     for (int i = 0; i < 200; ++i) {

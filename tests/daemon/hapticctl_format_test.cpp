@@ -79,6 +79,16 @@ TEST(StatusFormat, ShowsStateLoopSimLinkDevicesAndFaults) {
     EXPECT_THAT(text, HasSubstr("[7] exo_index: heartbeat missing for 50 ms"));
 }
 
+TEST(StatusFormat, LateSimInputIsShownOnlyWhenItHappened) {
+    msgs::HapticStatus status;
+    status.sim_link.connected = true;
+    EXPECT_THAT(formatStatus(status, 0.05), Not(HasSubstr("late input")));
+    status.sim_link.late_input_ticks = 1234;
+    EXPECT_THAT(formatStatus(status, 0.05),
+                HasSubstr("late input faded the force on 1234 ticks (sim slower than 3/4 of "
+                          "sim_timeout_ms, or stalled)"));
+}
+
 TEST(StatusFormat, SaysWhenTheSimIsNotConnected) {
     msgs::HapticStatus status;
     status.sim_link.age_ms = -1.0;

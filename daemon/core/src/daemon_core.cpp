@@ -95,6 +95,7 @@ void DaemonCore::update(std::int64_t now_ns, const TickTiming& timing) noexcept 
     const double timeout_ms = static_cast<double>(settings_.sim_timeout_ns) * 1e-6;
     const double fade_in_s = std::max(1e-9, static_cast<double>(settings_.fade_in_ns) * 1e-9);
 
+    bool late = false;
     for (auto& slot : devices_) {
         const double age_ms = ageMs(slot, now_ns);
         // Full force up to 3/4 of the timeout, zero at the timeout. Starting the fade late
@@ -104,7 +105,11 @@ void DaemonCore::update(std::int64_t now_ns, const TickTiming& timing) noexcept 
             std::clamp(1.0 - (age_ms - fade_start_ms) / (kFadeFraction * timeout_ms), 0.0, 1.0);
         // Falling follows the target at once; rising is rate limited so force never steps up.
         slot.fade = std::min(target, slot.fade + dt_s / fade_in_s);
+        late = late || (target > 0.0 && target < 1.0);
     }
+    // A sim that delivers slower than the fade start modulates the force at its own rate
+    // (the demo's 60 Hz scene did); counted so that status can say so.
+    late_input_ticks_ += late ? 1U : 0U;
 
     statistics_.add(timing);
     if (statistics_.windowCount() >= window_ticks_) {
@@ -209,6 +214,7 @@ void DaemonCore::fillStatus(std::int64_t now_ns, msgs::HapticStatus& out) noexce
                        : 0.0;
     out.sim_link.received = received;
     out.sim_link.rejected = rejected;
+    out.sim_link.late_input_ticks = late_input_ticks_;
 
     received_at_last_snapshot_ = received;
     last_snapshot_ns_ = now_ns;

@@ -157,6 +157,9 @@ struct SimLinkStatus {
     double rate_hz{0.0};
     std::uint64_t received{0};
     std::uint64_t rejected{0};
+    // Ticks since start on which some device's input was older than the fade start (3/4 of
+    // sim_timeout_ms) but not yet timed out: the sim is alive but slower than the fade allows.
+    std::uint64_t late_input_ticks{0};
     friend bool operator==(const SimLinkStatus&, const SimLinkStatus&) = default;
 };
 

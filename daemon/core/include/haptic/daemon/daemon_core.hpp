@@ -152,6 +152,7 @@ class DaemonCore {
     msgs::LoopStatistics last_window_{};
     std::int64_t last_snapshot_ns_{0};
     std::uint64_t received_at_last_snapshot_{0};
+    std::uint64_t late_input_ticks_{0};
     std::uint64_t status_seq_{0};
 };
 
