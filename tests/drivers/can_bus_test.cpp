@@ -165,10 +165,13 @@ TEST(UdpBusWire, RejectsMalformedDatagrams) {
     EXPECT_FALSE(UdpBus::decode(bad, size, out));  // 0x800 needs 12 bits
 }
 
+// Test port blocks stay below Linux's ephemeral range (32768-60999 by default), where any
+// socket bound to port 0 (Fast DDS opens several per participant) could take them first:
+// 10000-13999 here, 14000-17999 udp_round_trip_test, 18000-27599 device_safety_test.
 UdpBusConfig testBlock(std::uint16_t slots) {
     UdpBusConfig config;
     config.slots = slots;
-    config.base_port = static_cast<std::uint16_t>(20000 + (::getpid() % 2000) * 4);
+    config.base_port = static_cast<std::uint16_t>(10000 + (::getpid() % 1000) * 4);
     return config;
 }
 

@@ -19,11 +19,12 @@ namespace {
 
 constexpr std::uint16_t kSlots = 4;
 
-// Each test process gets its own port block, so parallel ctest runs never share a bus.
+// Each test process gets its own port block, so parallel ctest runs never share a bus, and
+// below the ephemeral port range (see can_bus_test.cpp's testBlock).
 can::UdpBusConfig busForThisProcess() {
     can::UdpBusConfig config;
     config.slots = kSlots;
-    config.base_port = static_cast<std::uint16_t>(30000 + (::getpid() % 2000) * kSlots);
+    config.base_port = static_cast<std::uint16_t>(14000 + (::getpid() % 1000) * kSlots);
     return config;
 }
 

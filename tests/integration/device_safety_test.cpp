@@ -73,7 +73,8 @@ struct TestConfig {
         dir = fs::temp_directory_path() / ("haptic-safety-" + std::to_string(::getpid()));
         fs::remove_all(dir);
         fs::copy(kConfigDir, dir, fs::copy_options::recursive);
-        const int base = 40000 + (::getpid() % 600) * 16;
+        // Below the ephemeral port range (see can_bus_test.cpp's testBlock).
+        const int base = 18000 + (::getpid() % 600) * 16;
         exo_port = base;
         thimble_port = base + 8;
         const std::string timeouts_from = "heartbeat_timeout_ms: 50";
