@@ -102,13 +102,4 @@ LatencySummary summarize(const LatencyHistogram& histogram) {
     return summary;
 }
 
-std::optional<LatencySummary> parseCyclictestHistogram(const std::string& output,
-                                                       std::string& error) {
-    const auto histogram = parseCyclictestOutput(output, error);
-    if (!histogram) {
-        return std::nullopt;
-    }
-    return summarize(*histogram);
-}
-
 }  // namespace haptic::bench

@@ -46,8 +46,4 @@ void merge(LatencyHistogram& total, const LatencyHistogram& round);
 // range's upper bound.
 LatencySummary summarize(const LatencyHistogram& histogram);
 
-// parseCyclictestOutput() then summarize().
-std::optional<LatencySummary> parseCyclictestHistogram(const std::string& output,
-                                                       std::string& error);
-
 }  // namespace haptic::bench

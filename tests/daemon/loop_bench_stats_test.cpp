@@ -43,14 +43,15 @@ const std::string kHistogram =
 
 TEST(LoopBenchStats, CyclictestHistogramPercentilesCountOverflowsAsSlowest) {
     std::string error;
-    const auto summary = parseCyclictestHistogram(kHistogram, error);
-    ASSERT_TRUE(summary.has_value()) << error;
-    EXPECT_EQ(summary->count, 1000U);
-    EXPECT_EQ(summary->overflows, 11U);
-    EXPECT_DOUBLE_EQ(summary->p50, 2.0);  // 500th of 1000
-    EXPECT_DOUBLE_EQ(summary->p99, 8.0);  // 990th falls among the overflows: range top
-    EXPECT_DOUBLE_EQ(summary->p999, 8.0);
-    EXPECT_DOUBLE_EQ(summary->max, 950.0);
+    const auto histogram = parseCyclictestOutput(kHistogram, error);
+    ASSERT_TRUE(histogram.has_value()) << error;
+    const LatencySummary summary = summarize(*histogram);
+    EXPECT_EQ(summary.count, 1000U);
+    EXPECT_EQ(summary.overflows, 11U);
+    EXPECT_DOUBLE_EQ(summary.p50, 2.0);  // 500th of 1000
+    EXPECT_DOUBLE_EQ(summary.p99, 8.0);  // 990th falls among the overflows: range top
+    EXPECT_DOUBLE_EQ(summary.p999, 8.0);
+    EXPECT_DOUBLE_EQ(summary.max, 950.0);
 }
 
 // The bench interleaves cyclictest and hapticd in rounds; the rounds' histograms add up to
@@ -78,7 +79,7 @@ TEST(LoopBenchStats, RoundsOfCyclictestMergeIntoOneHistogram) {
 
 TEST(LoopBenchStats, OutputWithoutHistogramIsAnError) {
     std::string error;
-    EXPECT_FALSE(parseCyclictestHistogram("T: 0 ( 1) P:80 I:1000 C: 10 Min: 3\n", error));
+    EXPECT_FALSE(parseCyclictestOutput("T: 0 ( 1) P:80 I:1000 C: 10 Min: 3\n", error));
     EXPECT_NE(error.find("no histogram"), std::string::npos);
 }
 
