@@ -41,7 +41,7 @@ run_variant() {
 }
 
 # Short libFuzzer run of the CAN frame decoders with the sanitizer build (the 1M-input run is
-# documented in README "CAN drivers"). Before the ctest runs, so ctest's summary closes the log.
+# documented in docs/drivers.md). Before the ctest runs, so ctest's summary closes the log.
 if [[ " ${variants[*]} " == *" asan "* ]]; then
   "$ROOT/tests/drivers/fuzz/run_fuzz.sh" 20000
 fi

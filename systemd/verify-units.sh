@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Checks the generated systemd units: `systemd-analyze verify` (syntax, unknown keys,
-# dependencies, executables) plus the properties hapticd relies on (README "Running on real
-# hardware"). Usage: verify-units.sh UNIT_DIR INSTALL_BINDIR HAPTICD_DIR HANDSIM_DIR SIM_LINK
+# dependencies, executables) plus the properties hapticd relies on (docs/systemd.md).
+# Usage: verify-units.sh UNIT_DIR INSTALL_BINDIR HAPTICD_DIR HANDSIM_DIR SIM_LINK
 # Exit 0 pass, 1 fail, 77 systemd-analyze not installed (ctest reports SKIPPED).
 set -euo pipefail
 units=$1 install_bindir=$2 hapticd_dir=$3 handsim_dir=$4 sim_link=$5

@@ -23,7 +23,7 @@ std::string formatWhat(const std::string& file, int line, int column, const std:
 
 ConfigError::ConfigError(std::string file, int line, int column, std::string key,
                          std::string message)
-    : std::runtime_error(formatWhat(file, line, column, message)),
+    : process::LabelledError("configuration error", formatWhat(file, line, column, message)),
       file_(std::move(file)),
       line_(line),
       column_(column),

@@ -23,12 +23,14 @@
 #include "HapticStatusPubSubTypes.h"
 #include "HapticTelemetryPubSubTypes.h"
 #include "SimStatusPubSubTypes.h"
+#include "haptic/common/clock.hpp"
 #include "haptic/config/daemon.hpp"
 #include "haptic/config/error.hpp"
 #include "haptic/ipc/dds_participant.hpp"
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
 #include "haptic/process/logging.hpp"
+#include "haptic/process/main_skeleton.hpp"
 #include "haptic/process/shutdown.hpp"
 #include "status_format.hpp"
 #include "telemetry_csv.hpp"
@@ -42,12 +44,6 @@ using namespace std::chrono_literals;
 constexpr int kExitError = 1;
 constexpr int kExitRefused = 2;
 constexpr int kExitNoDaemon = 3;
-
-std::int64_t monotonicNs() {
-    timespec now{};
-    ::clock_gettime(CLOCK_MONOTONIC, &now);
-    return now.tv_sec * 1'000'000'000LL + now.tv_nsec;
-}
 
 haptic::ipc::DdsSettings ddsSettings(const haptic::config::DaemonConfig& cfg) {
     return {static_cast<std::uint32_t>(cfg.dds.domain_id), cfg.dds.profiles_file.string(),
@@ -67,7 +63,8 @@ bool renderStatus(const haptic::idl::HapticStatus& sample, std::string& screen) 
     }
     // Stamps are CLOCK_MONOTONIC of the daemon's host; over DDS from another host the age is
     // meaningless, so it is shown only when it is plausible.
-    const double age_s = static_cast<double>(monotonicNs() - status.header.stamp_ns) * 1e-9;
+    const double age_s =
+        static_cast<double>(haptic::common::monotonicNowNs() - status.header.stamp_ns) * 1e-9;
     screen = haptic::ctl::formatStatus(status, age_s >= 0.0 && age_s < 3600.0 ? age_s : -1.0);
     return true;
 }
@@ -114,7 +111,8 @@ int printSimStatus(const haptic::config::DaemonConfig& cfg, double timeout_s) {
         std::fprintf(stderr, "hapticctl: malformed sim status sample: %s\n", result.error.c_str());
         return kExitError;
     }
-    const double age_s = static_cast<double>(monotonicNs() - status.header.stamp_ns) * 1e-9;
+    const double age_s =
+        static_cast<double>(haptic::common::monotonicNowNs() - status.header.stamp_ns) * 1e-9;
     std::cout << haptic::ctl::formatSimStatus(status, age_s >= 0.0 && age_s < 3600.0 ? age_s : -1.0)
               << std::flush;
     return EXIT_SUCCESS;
@@ -263,10 +261,10 @@ int sendCommand(const haptic::config::DaemonConfig& cfg, haptic::msgs::CommandKi
         haptic::ipc::kCommandReplyTopic, haptic::ipc::TopicKind::kStream);
 
     haptic::msgs::HapticCommand command;
-    command.request_id =
-        (static_cast<std::uint64_t>(::getpid()) << 32) ^ static_cast<std::uint64_t>(monotonicNs());
+    command.request_id = (static_cast<std::uint64_t>(::getpid()) << 32) ^
+                         static_cast<std::uint64_t>(haptic::common::monotonicNowNs());
     command.header.seq = 1;
-    command.header.stamp_ns = monotonicNs();
+    command.header.stamp_ns = haptic::common::monotonicNowNs();
     command.header.source_id.assign("hapticctl");
     command.kind = kind;
     if (argument.size() > haptic::msgs::DeviceId::kMaxLength) {
@@ -390,7 +388,7 @@ int main(int argc, char** argv) {
         return app.exit(error) == 0 ? EXIT_SUCCESS : kExitError;
     }
 
-    try {
+    return haptic::process::runMain("hapticctl", [&] {
         auto cfg = haptic::config::loadDaemonConfig(config_path);
         if (dds_domain >= 0) {
             cfg.dds.domain_id = dds_domain;
@@ -426,10 +424,6 @@ int main(int argc, char** argv) {
                 return sendCommand(cfg, entry.kind, "", timeout_s);
             }
         }
-    } catch (const haptic::config::ConfigError& error) {
-        std::fprintf(stderr, "hapticctl: configuration error: %s\n", error.what());
-    } catch (const std::exception& error) {
-        std::fprintf(stderr, "hapticctl: %s\n", error.what());
-    }
-    return kExitError;
+        return kExitError;  // CLI11 requires one subcommand, so this is not reached
+    });
 }

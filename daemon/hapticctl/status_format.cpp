@@ -75,8 +75,8 @@ std::string_view toString(msgs::SimTransport transport) noexcept {
 namespace {
 
 std::string percentilesLine(std::string_view label, const msgs::Percentiles& p) {
-    return fmt::format("            {:<8} p50 {:7.1f} us   p99 {:7.1f} us   max {:7.1f} us\n",
-                       label, p.p50, p.p99, p.max);
+    return fmt::format("           {:<9} p50 {:7.1f} us   p99 {:7.1f} us   max {:7.1f} us\n", label,
+                       p.p50, p.p99, p.max);
 }
 
 }  // namespace
@@ -99,7 +99,7 @@ std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s) 
         loop.overruns_write);
     out += percentilesLine("period", loop.period_us);
     out += percentilesLine("wake-up", loop.wakeup_latency_us);
-    out += percentilesLine("compute", loop.compute_us);
+    out += percentilesLine("tick work", loop.tick_work_us);
 
     const auto& link = status.sim_link;
     const std::string age =

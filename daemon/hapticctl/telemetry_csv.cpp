@@ -18,29 +18,30 @@ std::string quoted(const std::string& path) {
 }  // namespace
 
 std::string telemetryCsvHeader() {
-    std::string header = "tick,time_s,device";
-    for (std::size_t i = 0; i < msgs::kMaxActuators; ++i) {
-        header += fmt::format(",command_{}", i);
+    std::string header = "tick,time_s,device,device_kind,actuator_force_cmd_n";
+    for (std::size_t i = 0; i < msgs::kThimbleServos; ++i) {
+        header += fmt::format(",servo_angle_cmd_{}_rad", i);
     }
-    return header + ",compute_us,wakeup_latency_us,read_us,write_us\n";
+    return header + ",tick_work_us,wakeup_latency_us,read_us,write_us\n";
 }
 
 std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t origin_ns) {
+    const bool thimble = sample.device_kind == msgs::DeviceKind::kThimble;
     std::string row =
-        fmt::format("{},{:.6f},{}", sample.tick,
-                    static_cast<double>(sample.stamp_ns - origin_ns) * 1e-9, sample.device_index);
-    for (const double force : sample.actuator_force_cmd) {
-        row += fmt::format(",{:.4f}", force);
+        fmt::format("{},{:.6f},{},{},{:.4f}", sample.tick,
+                    static_cast<double>(sample.stamp_ns - origin_ns) * 1e-9, sample.device_index,
+                    thimble ? "thimble" : "exoskeleton", sample.exoskeleton.actuator_force_cmd_n);
+    for (const double angle : sample.thimble.servo_angle_cmd_rad) {
+        row += fmt::format(",{:.4f}", angle);
     }
-    return row + fmt::format(",{:.2f},{:.2f},{:.2f},{:.2f}\n", sample.compute_us,
+    return row + fmt::format(",{:.2f},{:.2f},{:.2f},{:.2f}\n", sample.tick_work_us,
                              sample.wakeup_latency_us, sample.read_us, sample.write_us);
 }
 
 std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path) {
-    // Columns: 1 tick, 2 time, 3 device, 4-7 actuator commands, 8 compute (the tick's work),
-    // 9 wake-up latency, 10 read, 11 write. An actuator command is a force in N for a force
-    // port (the exoskeleton) and an angle in rad for a servo (the thimble), so each device
-    // gets its own panel and the label says which unit applies.
+    // Columns: 1 tick, 2 time, 3 device, 4 device kind, 5 exoskeleton force command [N],
+    // 6-8 thimble servo commands [rad], 9 tick work (read + compute + write), 10 wake-up
+    // latency, 11 read, 12 write. One panel per device kind, each in its own unit.
     const std::string csv = quoted(csv_path);
     std::string script = fmt::format(
         "set terminal pngcairo size 1200,1200 noenhanced\n"
@@ -51,25 +52,28 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
         "set xlabel 'time [s]'\n",
         fmt::arg("png", quoted(png_path)),
         fmt::arg("title", quoted("hapticd telemetry: " + csv_path)));
-    for (int device = 0; device < 2; ++device) {
-        script += fmt::format(
-            "set ylabel 'device {d} command [N force / rad servo]'\n"
-            "plot {csv} every ::1 using ($3=={d} ? $2 : 1/0):4 with points pt 7 ps 0.3 title "
-            "'actuator 0', "
-            "{csv} every ::1 using ($3=={d} ? $2 : 1/0):5 with points pt 7 ps 0.3 title "
-            "'actuator 1', "
-            "{csv} every ::1 using ($3=={d} ? $2 : 1/0):6 with points pt 7 ps 0.3 title "
-            "'actuator 2'\n",
-            fmt::arg("d", device), fmt::arg("csv", csv));
-    }
+    script += fmt::format(
+        "set ylabel 'exoskeleton actuator force command [N]'\n"
+        "plot {csv} every ::1 using (strcol(4) eq 'exoskeleton' ? $2 : 1/0):5 with points pt 7 "
+        "ps 0.3 title 'actuator force'\n",
+        fmt::arg("csv", csv));
+    script += fmt::format(
+        "set ylabel 'thimble servo angle command [rad]'\n"
+        "plot {csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):6 with points pt 7 ps "
+        "0.3 title 'servo 0', "
+        "{csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):7 with points pt 7 ps 0.3 "
+        "title 'servo 1', "
+        "{csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):8 with points pt 7 ps 0.3 "
+        "title 'servo 2'\n",
+        fmt::arg("csv", csv));
     script += fmt::format(
         "set ylabel 'loop timing [us, log scale]'\n"
         "set logscale y\n"
-        "plot {csv} every ::1 using ($3==0 ? $2 : 1/0):8 with points pt 7 ps 0.3 title 'tick "
+        "plot {csv} every ::1 using ($3==0 ? $2 : 1/0):9 with points pt 7 ps 0.3 title 'tick "
         "work (read+compute+write)', "
-        "{csv} every ::1 using ($3==0 ? $2 : 1/0):10 with points pt 7 ps 0.3 title 'read', "
-        "{csv} every ::1 using ($3==0 ? $2 : 1/0):11 with points pt 7 ps 0.3 title 'write', "
-        "{csv} every ::1 using ($3==0 ? $2 : 1/0):9 with points pt 7 ps 0.3 title 'wake-up "
+        "{csv} every ::1 using ($3==0 ? $2 : 1/0):11 with points pt 7 ps 0.3 title 'read', "
+        "{csv} every ::1 using ($3==0 ? $2 : 1/0):12 with points pt 7 ps 0.3 title 'write', "
+        "{csv} every ::1 using ($3==0 ? $2 : 1/0):10 with points pt 7 ps 0.3 title 'wake-up "
         "latency'\n"
         "unset multiplot\n",
         fmt::arg("csv", csv));

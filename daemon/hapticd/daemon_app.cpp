@@ -15,6 +15,7 @@
 #include "command_relay.hpp"
 #include "dds_sim_link.hpp"
 #include "device_state_publisher.hpp"
+#include "haptic/common/clock.hpp"
 #include "haptic/daemon/command_channel.hpp"
 #include "haptic/daemon/daemon_core.hpp"
 #include "haptic/daemon/seqlock.hpp"
@@ -32,7 +33,7 @@
 namespace haptic::hapticd {
 namespace {
 
-using daemon::monotonicNowNs;
+using common::monotonicNowNs;
 
 // One sample per device per tick, drained every ~10 ms by the non-RT thread. Telemetry is
 // best effort (the RT thread never waits for it): 2048 slots hold about one second of two

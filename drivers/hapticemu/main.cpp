@@ -20,13 +20,14 @@
 #include <memory>
 #include <string>
 
-#include "haptic/can/clock.hpp"
 #include "haptic/can/socketcan_bus.hpp"
 #include "haptic/can/udp_bus.hpp"
+#include "haptic/common/clock.hpp"
 #include "haptic/config/device.hpp"
 #include "haptic/config/error.hpp"
 #include "haptic/emu/device_emulator.hpp"
 #include "haptic/process/logging.hpp"
+#include "haptic/process/main_skeleton.hpp"
 #include "haptic/process/shutdown.hpp"
 
 namespace {
@@ -99,7 +100,7 @@ int main(int argc, char** argv) {
     app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
     CLI11_PARSE(app, argc, argv);
 
-    try {
+    return haptic::process::runMain("hapticemu", [&] {
         const auto device = haptic::config::loadDeviceConfig(device_path);
         haptic::process::setupLogging("hapticemu", log_level);
         // The emulator joins the bus the device file describes, as hapticd does, unless told
@@ -146,7 +147,7 @@ int main(int argc, char** argv) {
         std::fflush(stdout);
         CommandReader commands;
         bool stdin_open = true;
-        const std::int64_t start_ns = haptic::can::monotonicNowNs();
+        const std::int64_t start_ns = haptic::common::monotonicNowNs();
         const auto duration_ns = static_cast<std::int64_t>(duration_s * 1e9);
         // Stream mode runs on its own 1 kHz clock, as a device's controller does: it sleeps
         // until the next tick and then drains the bus. Waiting on the socket instead would
@@ -157,7 +158,7 @@ int main(int argc, char** argv) {
         constexpr std::int64_t kTickNs = 1'000'000;
         std::int64_t next_tick_ns = start_ns;
         while (!haptic::process::shutdownRequested()) {
-            std::int64_t now_ns = haptic::can::monotonicNowNs();
+            std::int64_t now_ns = haptic::common::monotonicNowNs();
             if (duration_ns > 0 && now_ns - start_ns >= duration_ns) {
                 break;
             }
@@ -183,7 +184,7 @@ int main(int argc, char** argv) {
             }
             haptic::can::CanFrame frame;
             for (int i = 0; i < 256 && bus->read(frame) == haptic::can::IoResult::kOk; ++i) {
-                now_ns = haptic::can::monotonicNowNs();
+                now_ns = haptic::common::monotonicNowNs();
                 emulator->handleFrame(frame, now_ns);
             }
         }
@@ -191,10 +192,5 @@ int main(int argc, char** argv) {
         spdlog::info("stopping: {} commands accepted, {} rejected", emulator->commandsAccepted(),
                      rejects.total());
         return EXIT_SUCCESS;
-    } catch (const haptic::config::ConfigError& error) {
-        std::fprintf(stderr, "hapticemu: configuration error: %s\n", error.what());
-    } catch (const std::exception& error) {
-        std::fprintf(stderr, "hapticemu: %s\n", error.what());
-    }
-    return EXIT_FAILURE;
+    });
 }

@@ -11,6 +11,8 @@
 #include <vector>
 
 #include "SimStatusPubSubTypes.h"
+#include "haptic/common/clock.hpp"
+#include "haptic/common/statistics.hpp"
 #include "haptic/ipc/dds_participant.hpp"
 #include "haptic/ipc/iceoryx_channels.hpp"
 #include "haptic/ipc/iceoryx_runtime.hpp"
@@ -25,12 +27,6 @@
 
 namespace haptic::handsim {
 namespace {
-
-std::int64_t monotonicNs() {
-    return std::chrono::duration_cast<std::chrono::nanoseconds>(
-               std::chrono::steady_clock::now().time_since_epoch())
-        .count();
-}
 
 struct DeviceLink {
     const config::DeviceConfig* device{nullptr};
@@ -67,18 +63,10 @@ std::vector<softhand::DeviceRequest> deviceRequests(const config::SimConfig& cfg
 }
 
 // Step-time percentiles over the last status window, from stored samples (the sim is not on
-// the hard RT path, so a small vector is fine here).
+// the hard RT path, so a small vector is fine here), by the project's one rank rule.
 msgs::Percentiles percentiles(std::vector<double>& samples_us) {
-    if (samples_us.empty()) {
-        return {};
-    }
-    std::sort(samples_us.begin(), samples_us.end());
-    auto at = [&](double q) {
-        return samples_us[std::min(
-            samples_us.size() - 1,
-            static_cast<std::size_t>(q * static_cast<double>(samples_us.size())))];
-    };
-    return {at(0.5), at(0.99), samples_us.back()};
+    const common::PercentileSummary summary = common::summarize(samples_us);
+    return {summary.p50, summary.p99, summary.max};
 }
 
 }  // namespace
@@ -184,7 +172,7 @@ int runSim(const SimOptions& options) {
         }
         zeroed_steps += report.zeroed_steps > 0 ? 1 : 0;
         substepped_steps += report.substepped ? 1 : 0;
-        const std::int64_t stamp = monotonicNs();
+        const std::int64_t stamp = common::monotonicNowNs();
 
         for (std::size_t index = 0; index < links.size(); ++index) {
             auto& link = links[index];

@@ -71,7 +71,7 @@ TEST(StatusFormat, ShowsStateLoopSimLinkDevicesAndFaults) {
     EXPECT_THAT(text, HasSubstr("Uptime: 12.5 s   (status #0, 0.05 s old)"));
     EXPECT_THAT(text, HasSubstr("rendering method: subspace"));
     EXPECT_THAT(text, HasSubstr("1000 Hz, 12500 ticks, 3 overruns (read 0 / compute 2 / write 1)"));
-    EXPECT_THAT(text, HasSubstr("wake-up  p50    11.0 us   p99    52.0 us   max   700.0 us"));
+    EXPECT_THAT(text, HasSubstr("wake-up   p50    11.0 us   p99    52.0 us   max   700.0 us"));
     EXPECT_THAT(text, HasSubstr("iceoryx, connected, last input 4.5 ms ago, 99.8 Hz"));
     EXPECT_THAT(text, HasSubstr("exo_index"));
     EXPECT_THAT(text, HasSubstr("bus-off"));
@@ -109,16 +109,19 @@ TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
     sample.tick = 1234;
     sample.stamp_ns = 3'500'000'000;
     sample.device_index = 1;
-    sample.actuator_force_cmd = {1.5, -0.25, 0.0, 2.0};
-    sample.compute_us = 7.3;
+    sample.device_kind = msgs::DeviceKind::kThimble;
+    sample.exoskeleton.actuator_force_cmd_n = 2.0;
+    sample.thimble.servo_angle_cmd_rad = {1.5, -0.25, 0.0};
+    sample.tick_work_us = 7.3;
     sample.wakeup_latency_us = 55.5;
     sample.read_us = 3.25;
     sample.write_us = 2.5;
     EXPECT_EQ(telemetryCsvHeader(),
-              "tick,time_s,device,command_0,command_1,command_2,command_3,"
-              "compute_us,wakeup_latency_us,read_us,write_us\n");
+              "tick,time_s,device,device_kind,actuator_force_cmd_n,servo_angle_cmd_0_rad,"
+              "servo_angle_cmd_1_rad,servo_angle_cmd_2_rad,"
+              "tick_work_us,wakeup_latency_us,read_us,write_us\n");
     EXPECT_EQ(telemetryCsvRow(sample, 1'000'000'000),
-              "1234,2.500000,1,1.5000,-0.2500,0.0000,2.0000,7.30,55.50,3.25,2.50\n");
+              "1234,2.500000,1,thimble,2.0000,1.5000,-0.2500,0.0000,7.30,55.50,3.25,2.50\n");
 }
 
 TEST(TelemetryCsv, PlotScriptQuotesPathsForGnuplot) {

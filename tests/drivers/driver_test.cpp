@@ -143,7 +143,7 @@ TEST(ExoskeletonDriver, ReportsDeviceFaultsAndTheirClearing) {
     rig.fault("fault 1");
     tick(rig, driver, 2.0);
     EXPECT_NE(driver.faults(rig.now) & kDeviceFault, 0U);
-    EXPECT_EQ(driver.state().last_fault.code, protocol::FaultCode::kOvercurrent);
+    EXPECT_EQ(driver.state().last_fault.code, protocol::DeviceFaultCode::kOvercurrent);
     EXPECT_TRUE(driver.state().last_fault.active);
     EXPECT_NE(driver.state().actuator.status & protocol::kExoFaulted, 0);
     rig.fault("fault 0");

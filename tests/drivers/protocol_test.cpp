@@ -77,10 +77,10 @@ TEST(ExoskeletonCodec, StateFramesRoundTrip) {
     message = host.decode(frame);
     ASSERT_EQ(message.type, Type::kHeartbeat);
     EXPECT_EQ(message.heartbeat.uptime_ms, 123456U);
-    exo.encodeFault({FaultCode::kOvercurrent, true, 2500}, frame);
+    exo.encodeFault({DeviceFaultCode::kOvercurrent, true, 2500}, frame);
     message = host.decode(frame);
     ASSERT_EQ(message.type, Type::kFault);
-    EXPECT_EQ(message.fault.code, FaultCode::kOvercurrent);
+    EXPECT_EQ(message.fault.code, DeviceFaultCode::kOvercurrent);
     EXPECT_EQ(message.fault.detail, 2500U);
     EXPECT_EQ(host.rejects().total(), 0U);
 }

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "haptic/can/clock.hpp"
+#include "haptic/common/clock.hpp"
 #include "haptic/devices/exoskeleton_driver.hpp"
 #include "haptic/devices/thimble_driver.hpp"
 #include "haptic/emu/device_models.hpp"
@@ -15,7 +15,7 @@
 namespace haptic::testing {
 namespace {
 
-using can::monotonicNowNs;
+using common::monotonicNowNs;
 constexpr std::int64_t kWaitLimitNs = 5'000'000'000;  // a lost reply, not a slow one
 // The emulator's first heartbeat includes its process start, which under ASan inside the
 // TCG guest of the SocketCAN test, on a loaded CI machine, has taken more than 5 s.

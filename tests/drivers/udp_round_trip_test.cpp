@@ -8,8 +8,8 @@
 #include <string>
 
 #include "emulator_process.hpp"
-#include "haptic/can/clock.hpp"
 #include "haptic/can/udp_bus.hpp"
+#include "haptic/common/clock.hpp"
 #include "haptic/config/device.hpp"
 #include "haptic/devices/exoskeleton_driver.hpp"
 #include "round_trip.hpp"
@@ -68,11 +68,11 @@ TEST(UdpRoundTrip, ThimbleDriverAgainstHapticemuProcess) {
 // Runs the driver's 1 kHz-ish loop against the streaming emulator until `done` holds.
 template <typename Done>
 bool loopUntil(can::UdpBus& bus, devices::ExoskeletonDriver& driver, Done done) {
-    const std::int64_t deadline = can::monotonicNowNs() + 5'000'000'000;
-    while (can::monotonicNowNs() < deadline) {
+    const std::int64_t deadline = common::monotonicNowNs() + 5'000'000'000;
+    while (common::monotonicNowNs() < deadline) {
         pollfd fd{bus.pollFd(), POLLIN, 0};
         ::poll(&fd, 1, 1);
-        const std::int64_t now = can::monotonicNowNs();
+        const std::int64_t now = common::monotonicNowNs();
         driver.poll(now);
         const std::uint32_t faults = driver.faults(now);
         (void)driver.sendCommand({2.0, true});
@@ -103,7 +103,7 @@ TEST(UdpEmulator, StreamsStateAndAppliesFaultCommandsFromStdin) {
     ASSERT_TRUE(emulator.sendCommand("fault 2"));
     EXPECT_TRUE(loopUntil(bus, driver, [&](std::uint32_t faults) {
         return (faults & devices::kDeviceFault) != 0 &&
-               driver.state().last_fault.code == protocol::FaultCode::kOvertemperature;
+               driver.state().last_fault.code == protocol::DeviceFaultCode::kOvertemperature;
     }));
     ASSERT_TRUE(emulator.sendCommand("busoff"));
     EXPECT_TRUE(loopUntil(bus, driver, [](std::uint32_t faults) {

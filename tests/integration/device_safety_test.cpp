@@ -262,7 +262,8 @@ std::string waitForOutput(EmulatorProcess& process, const std::string& token) {
 
 bool targetsNear(const msgs::TelemetrySample& a, const msgs::TelemetrySample& b) {
     for (std::size_t k = 0; k < 3; ++k) {
-        if (!(std::abs(a.actuator_force_cmd[k] - b.actuator_force_cmd[k]) < 1e-3)) {
+        if (!(std::abs(a.thimble.servo_angle_cmd_rad[k] - b.thimble.servo_angle_cmd_rad[k]) <
+              1e-3)) {
             return false;
         }
     }
@@ -330,17 +331,17 @@ TEST_F(BadSimInputTest, RejectedCountedAndDoesNotChangeTheOutput) {
     // 5 ms until the next good one, a full servo-rate step (400 deg/s: 6.98 mrad) per tick.
     // Re-solving the same good surface from the warm start creeps by far less per solve.
     ASSERT_GT(thimble.size(), 500U);
-    const auto& pressed = thimble.front().actuator_force_cmd;
-    EXPECT_GT(std::abs(pressed[0] - thimble_idle.back().actuator_force_cmd[0]), 0.05)
+    const auto& pressed = thimble.front().thimble.servo_angle_cmd_rad;
+    EXPECT_GT(std::abs(pressed[0] - thimble_idle.back().thimble.servo_angle_cmd_rad[0]), 0.05)
         << "the plate is not pressing";
     const double half_step = 0.5 * 400.0 * M_PI / 180.0 * 1e-3;
     for (std::size_t i = 1; i < thimble.size(); ++i) {
         for (std::size_t k = 0; k < 3; ++k) {
-            ASSERT_LT(
-                std::abs(thimble[i].actuator_force_cmd[k] - thimble[i - 1].actuator_force_cmd[k]),
-                half_step)
+            ASSERT_LT(std::abs(thimble[i].thimble.servo_angle_cmd_rad[k] -
+                               thimble[i - 1].thimble.servo_angle_cmd_rad[k]),
+                      half_step)
                 << "tick " << thimble[i].tick << " servo " << k;
-            ASSERT_LT(std::abs(thimble[i].actuator_force_cmd[k] - pressed[k]), 0.01)
+            ASSERT_LT(std::abs(thimble[i].thimble.servo_angle_cmd_rad[k] - pressed[k]), 0.01)
                 << "tick " << thimble[i].tick << " servo " << k;
         }
     }
@@ -361,8 +362,8 @@ std::vector<msgs::TelemetrySample> ofDevice(const std::vector<msgs::TelemetrySam
 double fromRetract(const msgs::TelemetrySample& sample, const msgs::TelemetrySample& retract) {
     double largest = 0.0;
     for (std::size_t k = 0; k < 3; ++k) {
-        largest = std::max(largest,
-                           std::abs(sample.actuator_force_cmd[k] - retract.actuator_force_cmd[k]));
+        largest = std::max(largest, std::abs(sample.thimble.servo_angle_cmd_rad[k] -
+                                             retract.thimble.servo_angle_cmd_rad[k]));
     }
     return largest;
 }
@@ -392,7 +393,8 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTime
         exo = ofDevice(window, kExo);
         thimble = ofDevice(window, kThimble);
         const bool pressing = !thimble.empty() && fromRetract(thimble.back(), retract) > 0.05;
-        const bool exo_force = !exo.empty() && std::abs(exo.back().actuator_force_cmd[0]) > 0.5;
+        const bool exo_force =
+            !exo.empty() && std::abs(exo.back().exoskeleton.actuator_force_cmd_n) > 0.5;
         if (pressing && (exo_force || std::chrono::steady_clock::now() - started > 4s)) {
             break;
         }
@@ -412,7 +414,7 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTime
     const auto exo_after = ofDevice(after, kExo);
     std::size_t checked = 0;
     for (std::size_t i = 0; i < exo_after.size(); ++i) {
-        const double force = exo_after[i].actuator_force_cmd[0];
+        const double force = exo_after[i].exoskeleton.actuator_force_cmd_n;
         if (exo_after[i].stamp_ns > zero_from_ns) {
             EXPECT_EQ(force, 0.0) << "tick " << exo_after[i].tick << ", "
                                   << (exo_after[i].stamp_ns - kill_ns) / 1e6
@@ -421,7 +423,8 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroWithinTheTime
         }
         if (i > 0 && exo_after[i].tick == exo_after[i - 1].tick + 1) {
             // Never a step up: at most the rate limit while the finger moves under the fade.
-            EXPECT_LE(std::abs(force) - std::abs(exo_after[i - 1].actuator_force_cmd[0]), kMaxStepN)
+            EXPECT_LE(std::abs(force) - std::abs(exo_after[i - 1].exoskeleton.actuator_force_cmd_n),
+                      kMaxStepN)
                 << "tick " << exo_after[i].tick;
         }
     }
@@ -458,7 +461,8 @@ TEST_F(DeviceSafetyTest, EstopClearHeartbeatLossAndBusOffShowInStatusWithZeroFor
         const auto samples = collectTelemetry(kExo, 300ms);
         ASSERT_GT(samples.size(), 100U) << when;
         for (const auto& sample : samples) {
-            ASSERT_EQ(sample.actuator_force_cmd[0], 0.0) << when << ", tick " << sample.tick;
+            ASSERT_EQ(sample.exoskeleton.actuator_force_cmd_n, 0.0)
+                << when << ", tick " << sample.tick;
         }
     };
 

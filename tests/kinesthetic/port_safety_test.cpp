@@ -28,7 +28,7 @@ TEST(PassivityController, StopsEnergyPumpingInsideTheWall) {
         for (const double beta_deg : {30.0, 45.0, 60.0}) {
             study::PumpingCase pumping;
             pumping.wall.beta_rad = beta_deg * kDeg;
-            pumping.cycles = 1;  // the full study runs 5 (README); 1 keeps ASan quick
+            pumping.cycles = 1;  // the full study runs 5 (docs/kinesthetic.md); 1 keeps ASan quick
             const auto off =
                 study::runEnergyPumping(pumping, method, RhoMode::kClosedForm, 0.0, false);
             const auto on =
@@ -51,7 +51,7 @@ TEST(PassivityController, TheOtherCirculationAbsorbsEnergyAndIsLeftAlone) {
     study::PumpingCase pumping;
     pumping.wall.beta_rad = 45 * kDeg;
     pumping.clockwise = true;
-    pumping.cycles = 1;  // the full study runs 5 (README); 1 keeps ASan quick
+    pumping.cycles = 1;  // the full study runs 5 (docs/kinesthetic.md); 1 keeps ASan quick
     const auto off =
         study::runEnergyPumping(pumping, RenderingMethod::kNaive, RhoMode::kManual, 1.0, false);
     EXPECT_LT(off.generated_energy_j, 0.0);

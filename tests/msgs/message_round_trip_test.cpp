@@ -163,7 +163,7 @@ class Filler {
         fill(l.overruns_write);
         fill(l.period_us);
         fill(l.wakeup_latency_us);
-        fill(l.compute_us);
+        fill(l.tick_work_us);
     }
     void fill(DeviceStatus& d) {
         fill(d.device_id);
@@ -202,12 +202,18 @@ class Filler {
         fill(s.tick);
         fill(s.stamp_ns);
         fill(s.device_index);
-        fill(s.actuator_force_cmd);
-        fill(s.joint_position_rad);
-        fill(s.proxy_position_rad);
-        fill(s.ghost_force_n);
-        fill(s.energy_observer_j);
-        fill(s.compute_us);
+        fill(s.device_kind, DeviceKind::kThimble);
+        fill(s.exoskeleton.actuator_force_cmd_n);
+        fill(s.exoskeleton.joint_position_rad);
+        fill(s.exoskeleton.proxy_position_rad);
+        fill(s.exoskeleton.ghost_force_n);
+        fill(s.exoskeleton.energy_observer_j);
+        fill(s.thimble.servo_angle_cmd_rad);
+        fill(s.thimble.servo_angle_rad);
+        fill(s.thimble.platform_height_m);
+        fill(s.thimble.platform_tilt_x_rad);
+        fill(s.thimble.platform_tilt_y_rad);
+        fill(s.tick_work_us);
         fill(s.read_us);
         fill(s.write_us);
         fill(s.wakeup_latency_us);

@@ -67,7 +67,8 @@ TEST(DeviceRuntime, DevicesComeOnlineAndRenderContactWhileRendering) {
     // The emulated actuator follows the command (first-order lag of 5 ms).
     EXPECT_NEAR(rig.core.deviceReport(kExo).actuator_force[0], rig.exoForce(), 0.5);
     EXPECT_EQ(rig.telemetry.device_index, kThimble);
-    EXPECT_EQ(rig.core.deviceReport(kThimble).commanded[0], rig.thimbleTargets()[0]);
+    EXPECT_EQ(rig.core.deviceReport(kThimble).thimble.servo_angle_cmd_rad[0],
+              rig.thimbleTargets()[0]);
 }
 
 TEST(DeviceRuntime, StaleSimInputFadesToZeroWithinTheTimeoutAndNeverStepsUp) {

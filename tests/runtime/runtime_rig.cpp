@@ -111,11 +111,11 @@ void RuntimeRig::emulatorFault(std::size_t device, const char* line) {
 }
 
 double RuntimeRig::exoForce() const {
-    return core.deviceReport(kExo).commanded[0];
+    return core.deviceReport(kExo).exoskeleton.actuator_force_cmd_n;
 }
 
 std::array<double, 3> RuntimeRig::thimbleTargets() const {
-    const auto& commanded = core.deviceReport(kThimble).commanded;
+    const auto& commanded = core.deviceReport(kThimble).thimble.servo_angle_cmd_rad;
     return {commanded[0], commanded[1], commanded[2]};
 }
 

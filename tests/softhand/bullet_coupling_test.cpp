@@ -1,4 +1,4 @@
-// Bullet as the external engine, coupled through object duplicates (ALGORITHMS §2.5).
+// Bullet as the external engine, coupled through object duplicates (docs/algorithms.md §2.5).
 
 #include "haptic/softhand/bullet_coupling.hpp"
 

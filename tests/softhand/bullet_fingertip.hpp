@@ -52,7 +52,7 @@ class BulletFingertip {
     // the only other thing touching them). Not part of step()'s cost.
     [[nodiscard]] double transmittedForceZ();
     [[nodiscard]] Vec3 bonePosition() const;
-    // The table force is the momentum-balance one (see BULLET_COMPARISON.md for why).
+    // The table force is the momentum-balance one (see docs/benchmarks.md for why).
     [[nodiscard]] Sample sample() { return {transmittedForceZ(), bonePosition()}; }
     // Largest distance of a node from where the bone's rigid motion would put it (m).
     [[nodiscard]] double maxDistortion() const;

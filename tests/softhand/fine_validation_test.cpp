@@ -1,6 +1,6 @@
 // The accuracy targets that need fine meshes: linear tetrahedra converge slowly in bending
 // and under a contact patch. Minutes under ASan, so Release only, labelled softhand_fine:
-//   ctest --test-dir build/rel -L softhand_fine
+//   ctest --test-dir build/release -L softhand_fine
 
 #include <gtest/gtest.h>
 

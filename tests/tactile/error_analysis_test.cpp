@@ -9,7 +9,7 @@
 namespace haptic::tactile {
 namespace {
 
-// Holds the README's error-analysis claims against regressions (stand-in pad model).
+// Holds the error-analysis claims of docs/benchmarks.md against regressions (stand-in pad model).
 class ErrorAnalysisTest : public ::testing::Test {
   protected:
     static constexpr double kIndentationM = 0.0015;

@@ -158,12 +158,10 @@ void DaemonCore::fillTelemetry(std::size_t device, std::uint64_t tick, std::int6
     out.stamp_ns = now_ns;
     out.device_index = static_cast<std::uint16_t>(device);
     const DeviceReport& report = devices_[device].report;
-    out.actuator_force_cmd = report.commanded;
-    out.joint_position_rad = report.joint_position_rad;
-    out.proxy_position_rad = report.proxy_position_rad;
-    out.ghost_force_n = report.ghost_force_n;
-    out.energy_observer_j = report.energy_observer_j;
-    out.compute_us = timing.read_us + timing.compute_us + timing.write_us;
+    out.device_kind = report.kind;
+    out.exoskeleton = report.exoskeleton;
+    out.thimble = report.thimble;
+    out.tick_work_us = timing.read_us + timing.compute_us + timing.write_us;
     out.read_us = timing.read_us;
     out.write_us = timing.write_us;
     out.wakeup_latency_us = timing.wakeup_latency_us;

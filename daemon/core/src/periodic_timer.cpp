@@ -7,6 +7,8 @@
 #include <cerrno>
 #include <cstring>
 
+#include "haptic/common/clock.hpp"
+
 namespace haptic::daemon {
 namespace {
 
@@ -24,12 +26,6 @@ timespec fromNs(std::int64_t ns) noexcept {
 }
 
 }  // namespace
-
-std::int64_t monotonicNowNs() noexcept {
-    timespec now{};
-    ::clock_gettime(CLOCK_MONOTONIC, &now);
-    return toNs(now);
-}
 
 RealtimeSetupResult applyRealtimeSettings(const RealtimeSettings& settings) {
     RealtimeSetupResult result;
@@ -81,7 +77,7 @@ RealtimeSetupResult applyRealtimeSettings(const RealtimeSettings& settings) {
 PeriodicTimer::PeriodicTimer(std::int64_t period_ns) noexcept : period_ns_(period_ns) {}
 
 void PeriodicTimer::start() noexcept {
-    deadline_ = fromNs(monotonicNowNs() + period_ns_);
+    deadline_ = fromNs(common::monotonicNowNs() + period_ns_);
 }
 
 std::int64_t PeriodicTimer::deadlineNs() const noexcept {
@@ -91,7 +87,7 @@ std::int64_t PeriodicTimer::deadlineNs() const noexcept {
 std::int64_t PeriodicTimer::waitNext() noexcept {
     while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &deadline_, nullptr) == EINTR) {
     }
-    const std::int64_t now = monotonicNowNs();
+    const std::int64_t now = common::monotonicNowNs();
     const std::int64_t deadline = toNs(deadline_);
     std::int64_t next = deadline + period_ns_;
     if (now >= next) {

@@ -27,7 +27,7 @@ kinesthetic::PortGuardConfig portGuardConfig(const config::DeviceConfig& device,
 kinesthetic::RenderParameters exoskeletonRenderParameters(const config::ExoskeletonConfig& exo) {
     kinesthetic::RenderParameters parameters;
     parameters.method = exo.rendering.method;
-    // The kinesthetic benchmark's joint-space values (README "Kinesthetic rendering"):
+    // The kinesthetic benchmark's joint-space values (docs/kinesthetic.md):
     // assumptions, like the device geometry, until a lab identifies its finger and linkage.
     parameters.tracking_stiffness = 2.0;  // k_a, N m/rad
     parameters.user_stiffness = 0.6;      // k_u, N m/rad
@@ -45,6 +45,7 @@ ExoskeletonChannel::ExoskeletonChannel(const config::DeviceConfig& device, can::
       q_(kinesthetic::ConfigVector::Zero(model_.dofs())),
       q_dot_(kinesthetic::ConfigVector::Zero(model_.dofs())) {
     applied_method_.assign(config::toString(device.exoskeleton().rendering.method));
+    report_.kind = msgs::DeviceKind::kExoskeleton;
 }
 
 std::uint8_t ExoskeletonChannel::deviceFaultCode() const noexcept {
@@ -123,12 +124,13 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
         const auto k = static_cast<std::size_t>(i);
         report_.joint_position_rad[k] = q_[i];
         report_.joint_velocity_rad_per_s[k] = q_dot_[i];
-        report_.proxy_position_rad[k] = out_.proxy.size() > i ? out_.proxy[i] : q_[i];
+        report_.exoskeleton.joint_position_rad[k] = q_[i];
+        report_.exoskeleton.proxy_position_rad[k] = out_.proxy.size() > i ? out_.proxy[i] : q_[i];
     }
     report_.actuator_position[0] = state.actuator.stroke_m;
     report_.actuator_force[0] = state.actuator.force_n;
-    report_.commanded[0] = force_n;
-    report_.energy_observer_j = guard_.passivity().observedEnergy();
+    report_.exoskeleton.actuator_force_cmd_n = force_n;
+    report_.exoskeleton.energy_observer_j = guard_.passivity().observedEnergy();
 }
 
 }  // namespace haptic::runtime

@@ -25,6 +25,7 @@ ThimbleChannel::ThimbleChannel(const config::DeviceConfig& device, can::CanBus& 
       limiter_(device.thimble().servos, retract_servo_rad_) {
     solved_.dofs = kinematics_.retractPose();
     solved_.servo_rad = retract_servo_rad_;
+    report_.kind = msgs::DeviceKind::kThimble;
     measured_dofs_ = kinematics_.retractPose();
     command_.servo_target_rad = retract_servo_rad_;
 }
@@ -96,11 +97,12 @@ void ThimbleChannel::compute(daemon::DaemonCore& core, std::size_t index,
     for (std::size_t i = 0; i < 3; ++i) {
         report_.joint_position_rad[i] = state.servos.servo_angle_rad[i];
         report_.actuator_position[i] = state.servos.servo_angle_rad[i];
-        report_.commanded[i] = limited.servo_rad[i];
+        report_.thimble.servo_angle_rad[i] = state.servos.servo_angle_rad[i];
+        report_.thimble.servo_angle_cmd_rad[i] = limited.servo_rad[i];
     }
-    report_.proxy_position_rad[0] = solved_.dofs.height_m;
-    report_.proxy_position_rad[1] = solved_.dofs.tilt_x_rad;
-    report_.proxy_position_rad[2] = solved_.dofs.tilt_y_rad;
+    report_.thimble.platform_height_m = solved_.dofs.height_m;
+    report_.thimble.platform_tilt_x_rad = solved_.dofs.tilt_x_rad;
+    report_.thimble.platform_tilt_y_rad = solved_.dofs.tilt_y_rad;
     for (int i = 0; i < 3; ++i) {
         report_.platform_position_m[static_cast<std::size_t>(i)] = measured_pose_.position_m[i];
     }

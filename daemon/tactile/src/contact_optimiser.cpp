@@ -5,8 +5,6 @@
 #include <cmath>
 #include <utility>
 
-#include "haptic/tactile/baselines.hpp"
-
 namespace haptic::tactile {
 
 namespace {

@@ -586,4 +586,25 @@ TiltReach ThimbleKinematics::tiltReach() const noexcept {
     return reach;
 }
 
+PlatformDofs poseForPlane(const ThimbleKinematics& kinematics,
+                          const Eigen::Vector3d& normal_into_finger,
+                          const Eigen::Vector3d& point_m) noexcept {
+    const Eigen::Vector3d normal = normal_into_finger.normalized();
+    const auto tilt = tiltForNormal(normal);
+    PlatformDofs dofs{point_m.z(), tilt[0], tilt[1]};
+    // nu . (q - p(h)) = 0 with dp_z/dh = 1 and a parasitic shift that changes slowly with h.
+    for (int i = 0; i < 20; ++i) {
+        PlatformPose pose;
+        if (kinematics.platformPose(dofs, pose) != KinematicsError::kNone) {
+            break;
+        }
+        const double gap = normal.dot(point_m - pose.position_m);
+        dofs.height_m += gap / normal.z();
+        if (std::fabs(gap) < 1e-12) {
+            break;
+        }
+    }
+    return dofs;
+}
+
 }  // namespace haptic::tactile

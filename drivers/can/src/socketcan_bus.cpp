@@ -13,7 +13,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "haptic/can/clock.hpp"
+#include "haptic/common/clock.hpp"
 
 namespace haptic::can {
 namespace {
@@ -144,7 +144,7 @@ IoResult SocketCanBus::read(CanFrame& frame) noexcept {
     }
     decoded.length = raw.len > kFdMaxLength ? kFdMaxLength : raw.len;
     std::memcpy(decoded.data.data(), raw.data, decoded.length);
-    decoded.receive_time_ns = monotonicNowNs();
+    decoded.receive_time_ns = common::monotonicNowNs();
     if ((raw.can_id & CAN_ERR_FLAG) != 0) {
         decoded.flags |= kFlagError;
         decoded.id = raw.can_id & CAN_ERR_MASK;
@@ -172,7 +172,7 @@ IoResult SocketCanBus::write(const CanFrame& frame) noexcept {
         ++counters_.tx_refused;
         return IoResult::kInvalid;
     }
-    if (!state_.mayTransmit(monotonicNowNs())) {
+    if (!state_.mayTransmit(common::monotonicNowNs())) {
         ++counters_.tx_refused;
         return IoResult::kBusOff;
     }

@@ -11,7 +11,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "haptic/can/clock.hpp"
+#include "haptic/common/clock.hpp"
 
 namespace haptic::can {
 namespace {
@@ -137,7 +137,7 @@ IoResult UdpBus::receiveBatch() noexcept {
             ++counters_.io_errors;
             return IoResult::kError;
         }
-        const std::int64_t now_ns = monotonicNowNs();
+        const std::int64_t now_ns = common::monotonicNowNs();
         last_batch_was_short_ = static_cast<std::size_t>(received) < kReceiveBatch;
         for (int i = 0; i < received; ++i) {
             CanFrame& frame = pending_[pending_count_];
@@ -190,7 +190,7 @@ IoResult UdpBus::write(const CanFrame& frame) noexcept {
         ++counters_.tx_refused;
         return IoResult::kInvalid;
     }
-    if (!frame.isError() && !state_.mayTransmit(monotonicNowNs())) {
+    if (!frame.isError() && !state_.mayTransmit(common::monotonicNowNs())) {
         ++counters_.tx_refused;
         return IoResult::kBusOff;
     }

@@ -18,7 +18,7 @@ void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
     if (faults_.takeFaultChange()) {
         protocol::FaultReport report;
         report.active = faults_.deviceFault() != 0;
-        report.code = static_cast<protocol::FaultCode>(
+        report.code = static_cast<protocol::DeviceFaultCode>(
             report.active ? faults_.deviceFault() : static_cast<std::uint8_t>(1));
         can::CanFrame frame;
         codec_base_.encodeFault(report, frame);

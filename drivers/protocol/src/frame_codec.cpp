@@ -129,7 +129,7 @@ bool decodeHeartbeatPayload(const can::CanFrame& frame, Heartbeat& out,
         return false;
     }
     if (frame.data[2] > static_cast<std::uint8_t>(DeviceMode::kFault) ||
-        frame.data[3] > kMaxFaultCode) {
+        frame.data[3] > kMaxDeviceFaultCode) {
         reason = RejectReason::kOutOfRange;
         return false;
     }
@@ -145,7 +145,7 @@ bool decodeFaultPayload(const can::CanFrame& frame, FaultReport& out,
         reason = RejectReason::kUnknownKind;
         return false;
     }
-    if (frame.data[2] == 0 || frame.data[2] > kMaxFaultCode) {
+    if (frame.data[2] == 0 || frame.data[2] > kMaxDeviceFaultCode) {
         reason = RejectReason::kOutOfRange;
         return false;
     }
@@ -153,7 +153,7 @@ bool decodeFaultPayload(const can::CanFrame& frame, FaultReport& out,
         reason = RejectReason::kReservedNotZero;
         return false;
     }
-    out.code = static_cast<FaultCode>(frame.data[2]);
+    out.code = static_cast<DeviceFaultCode>(frame.data[2]);
     out.active = frame.data[3] == 1;
     out.detail = getU32(frame, 4);
     return true;

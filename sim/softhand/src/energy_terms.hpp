@@ -1,6 +1,6 @@
 #pragma once
 
-// Internal: the potential energy terms of ALGORITHMS.md §2.4, each able to return its energy
+// Internal: the potential energy terms of docs/algorithms.md §2.4, each able to return its energy
 // alone (energy check) or also add its gradient and Gauss-Newton Hessian (Newton step).
 
 #include <array>

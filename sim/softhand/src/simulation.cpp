@@ -259,7 +259,8 @@ void Simulation::updateAnchors() {
             anchor_valid_[slot] = 0;
             continue;
         }
-        // Explicit Coulomb projection of the anchor (ALGORITHMS §2.4.7), in the object frame.
+        // Explicit Coulomb projection of the anchor (docs/algorithms.md §2.4.7), in the object
+        // frame.
         const double normal_force = k_n * -query.phi_m;
         const Vec3 projected = local - query.phi_m * query.normal;
         const Mat3 tangent = Mat3::Identity() - query.normal * query.normal.transpose();

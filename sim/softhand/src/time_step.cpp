@@ -1,4 +1,4 @@
-// Backward Euler with one Newton step, PCG, and the energy check (ALGORITHMS.md §2.6).
+// Backward Euler with one Newton step, PCG, and the energy check (docs/algorithms.md §2.6).
 
 #include <algorithm>
 #include <cmath>

@@ -24,7 +24,7 @@ struct EnumTraits<DeviceType> {
     }};
 };
 
-// Kinesthetic rendering methods (ALGORITHMS §5.1-5.5, §6.5). The names are also what
+// Kinesthetic rendering methods (docs/algorithms.md §5.1-5.5, §6.5). The names are also what
 // haptic/command's set-method argument carries.
 enum class RenderingMethod {
     kStandard,
@@ -87,7 +87,8 @@ struct SafetyLimits {
     int fade_out_ms{0};                  // ramp to zero force on stale input or disable
 };
 
-// --- exoskeleton (ALGORITHMS §5.8) ---------------------------------------------------------
+// --- exoskeleton (docs/algorithms.md §5.8)
+// ---------------------------------------------------------
 
 // YAML: actuator: {...}. The single linear actuator.
 struct ActuatorConfig {
@@ -107,7 +108,7 @@ struct FingerConfig {
 };
 
 // YAML: linkage: {...}. Assumed closure model ell = sigma(q) for the dorsal linkage, used
-// until a lab replaces it with its CAD values or a fitted table (ALGORITHMS §5.8):
+// until a lab replaces it with its CAD values or a fitted table (docs/algorithms.md §5.8):
 //
 //   sigma(q) = |R(theta1) * proximal_attachment_m - actuator_base_m| - rod_length_m
 //              + distal_coupling_m_per_rad[0] * theta2 + distal_coupling_m_per_rad[1] * theta3
@@ -135,7 +136,8 @@ struct ExoskeletonConfig {
     ExoskeletonRenderingConfig rendering;
 };
 
-// --- thimble (ALGORITHMS §3.6) -------------------------------------------------------------
+// --- thimble (docs/algorithms.md §3.6)
+// -------------------------------------------------------------
 
 // YAML: geometry: {...}. 3-RRS platform; base frame origin at the static body centre, z
 // from nail towards pad.

@@ -1,14 +1,16 @@
 #pragma once
 
-#include <stdexcept>
 #include <string>
+
+#include "haptic/process/main_skeleton.hpp"
 
 namespace haptic::config {
 
 // The one exception every loader throws. what() is a single line that starts with
 // "<file>:<line>:<col>: " so editors and CI logs can jump straight to the offending key;
-// the accessors let tests and tools inspect the parts without parsing that line.
-class ConfigError : public std::runtime_error {
+// the accessors let tests and tools inspect the parts without parsing that line. The main
+// skeleton reports it as "<program>: configuration error: <what()>".
+class ConfigError : public process::LabelledError {
   public:
     // line and column are 1-based; 0 means "not known" and is left out of what().
     ConfigError(std::string file, int line, int column, std::string key, std::string message);

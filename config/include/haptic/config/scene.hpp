@@ -164,7 +164,7 @@ struct DeviceBinding {
 // YAML: solver: {newton_iterations, pcg_max_iterations}. handsim's per-step solver budget,
 // chosen per scene because the budget is 1/rate_hz: a 100 Hz finger can afford to
 // re-linearise a stiff contact once more, a 200 Hz fingertip cannot. The trade is measured in
-// sim/softhand/BENCHMARK.md ("handsim's limits"). Omitted keys keep these defaults.
+// docs/benchmarks.md ("handsim's limits"). Omitted keys keep these defaults.
 struct SolverLimits {
     // Newton iterations per step. More re-linearise after the first PCG solve, which halves
     // the steps the energy check refuses on the default scene but doubles the p99.

@@ -29,12 +29,10 @@ struct DeviceReport {
     std::array<double, 3> platform_position_m{};
     std::array<double, 4> platform_orientation_wxyz{1.0, 0.0, 0.0, 0.0};
 
-    // Commanded this tick (telemetry): exoskeleton actuator force in N, thimble servo
-    // targets in rad.
-    std::array<double, msgs::kMaxActuators> commanded{};
-    std::array<double, msgs::kMaxJointDofs> proxy_position_rad{};
-    std::array<double, 3> ghost_force_n{};
-    double energy_observer_j{0.0};
+    // Commanded and rendered this tick (telemetry), in the part of the device's kind.
+    msgs::DeviceKind kind{msgs::DeviceKind::kExoskeleton};
+    msgs::ExoskeletonTelemetry exoskeleton{};
+    msgs::ThimbleTelemetry thimble{};
 };
 
 }  // namespace haptic::daemon

@@ -3,29 +3,17 @@
 #include <array>
 #include <cstdint>
 
+#include "haptic/common/statistics.hpp"
 #include "haptic/msgs/messages.hpp"
 
 namespace haptic::daemon {
 
-// Percentiles over a window of samples without storing them: a 1 us histogram up to 5 ms
-// plus an exact maximum. Fixed size, no allocation, O(1) per sample, so the RT thread can
-// keep it. Values past the last bin count as the last bin and show up in `max`.
-class MicrosecondHistogram {
-  public:
-    static constexpr std::size_t kBins = 5000;
+// Percentiles over a window of loop samples without storing them: the project's RT histogram
+// (1 us bins up to 5 ms plus an exact maximum), so the RT thread can keep it.
+using MicrosecondHistogram = common::FixedBinHistogram<5000>;
 
-    void add(double microseconds) noexcept;
-    void reset() noexcept;
-    [[nodiscard]] msgs::Percentiles percentiles() const noexcept;
-    [[nodiscard]] std::uint64_t count() const noexcept { return count_; }
-
-  private:
-    [[nodiscard]] double quantile(double q) const noexcept;
-
-    std::array<std::uint32_t, kBins> bins_{};
-    std::uint64_t count_{0};
-    double max_{0.0};
-};
+// p50, p99 and max of a window, as haptic/status carries them.
+[[nodiscard]] msgs::Percentiles percentilesOf(const MicrosecondHistogram& histogram) noexcept;
 
 // What one tick spent where. The loop measures these with CLOCK_MONOTONIC.
 struct TickTiming {
@@ -36,9 +24,10 @@ struct TickTiming {
     double write_us{0.0};
 };
 
-// Windowed loop statistics for haptic/status. An overrun is a tick whose read + compute +
-// write ran past the period; its cause is whichever of the three took longest, as
-// ros2_control reports it. Counters are lifetime, percentiles are per window.
+// Windowed loop statistics for haptic/status. "Tick work" is the whole tick, read + compute +
+// write; "compute" is only its middle phase. An overrun is a tick whose work ran past the period;
+// its cause is whichever of the three took longest, as ros2_control reports it. Counters are
+// lifetime, percentiles are per window.
 class LoopStatisticsCollector {
   public:
     explicit LoopStatisticsCollector(double rate_hz) noexcept;
@@ -61,7 +50,7 @@ class LoopStatisticsCollector {
     std::uint64_t overruns_write_{0};
     MicrosecondHistogram period_;
     MicrosecondHistogram wakeup_;
-    MicrosecondHistogram compute_;
+    MicrosecondHistogram tick_work_;
 };
 
 }  // namespace haptic::daemon

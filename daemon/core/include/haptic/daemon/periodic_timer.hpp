@@ -49,6 +49,4 @@ class PeriodicTimer {
     std::uint64_t skipped_{0};
 };
 
-std::int64_t monotonicNowNs() noexcept;
-
 }  // namespace haptic::daemon

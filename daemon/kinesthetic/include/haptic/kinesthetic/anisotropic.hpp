@@ -1,7 +1,7 @@
 #pragma once
 
-// Anisotropic tracking impedance (ALGORITHMS §6.5-6.7): K = k_a P_a + rho k_a P_u, and how to
-// choose rho. All functions are noexcept, allocation-free and bounded, so the 1 kHz loop may
+// Anisotropic tracking impedance (docs/algorithms.md §6.5-6.7): K = k_a P_a + rho k_a P_u, and how
+// to choose rho. All functions are noexcept, allocation-free and bounded, so the 1 kHz loop may
 // call them.
 //
 // Single plane n^T y >= 0 (n any length), user = spring K_u pulling towards an intent x_u
@@ -24,7 +24,7 @@
 
 namespace haptic::kinesthetic {
 
-inline constexpr double kMinRho = 1e-6;  // keeps K SPD (ALGORITHMS §6.8 step 3)
+inline constexpr double kMinRho = 1e-6;  // keeps K SPD (docs/algorithms.md §6.8 step 3)
 inline constexpr double kMaxRho = 1e6;   // "infinity": the subspace-proxy limit
 
 // §6.6: rho* = k_u / (k_u + k_a) for an isotropic user stiffness; clamped to [kMinRho, 1].

@@ -1,7 +1,7 @@
 #pragma once
 
-// Device model of ALGORITHMS §4: configuration q (n), actuator coordinates ell = sigma(q) (m),
-// actuation matrix B(q) = (d sigma / dq)^T (n x m), contact point x = chi(q) (d) and its
+// Device model of docs/algorithms.md §4: configuration q (n), actuator coordinates ell = sigma(q)
+// (m), actuation matrix B(q) = (d sigma / dq)^T (n x m), contact point x = chi(q) (d) and its
 // Jacobian J = d chi / dq (d x n), and the limits of q and of the actuators.
 //
 // Contract: every query is const, noexcept and allocation-free, so the 1 kHz loop may call
@@ -46,7 +46,7 @@ class DeviceModel {
     DeviceModel& operator=(const DeviceModel&) = default;
 };
 
-// The synthetic device of the chapter 6 experiments (ALGORITHMS §6.1, §6.10): q = x in R^d,
+// The synthetic device of the chapter 6 experiments (docs/algorithms.md §6.1, §6.10): q = x in R^d,
 // d = 2 or 3, and the actuators push along the columns of A (d x m, any m <= d), so
 // sigma(q) = A^T q, B = A, chi(q) = q, J = I. A = I gives the fully actuated reference.
 class LinearPointDevice final : public DeviceModel {
@@ -72,7 +72,7 @@ class LinearPointDevice final : public DeviceModel {
     double half_width_m_;
 };
 
-// The underactuated finger exoskeleton of ALGORITHMS §5.8: a planar 3R finger
+// The underactuated finger exoskeleton of docs/algorithms.md §5.8: a planar 3R finger
 // q = (theta_mcp, theta_pip, theta_dip), fingertip x = sum_k L_k (cos phi_k, sin phi_k) with
 // phi_k = theta_1 + ... + theta_k, driven by one linear actuator through the dorsal linkage
 // whose assumed closure is documented in haptic/config/device.hpp (LinkageConfig):

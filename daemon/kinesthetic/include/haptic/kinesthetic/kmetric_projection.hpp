@@ -1,6 +1,6 @@
 #pragma once
 
-// K-metric projection (ALGORITHMS §1.4, §6.5, §6.7):
+// K-metric projection (docs/algorithms.md §1.4, §6.5, §6.7):
 //
 //   y* = argmin_y 1/2 (y - y0)^T K (y - y0)   s.t.   c_j^T y >= d_j,  j = 1..N
 //

@@ -1,7 +1,7 @@
 #pragma once
 
 // Safety stage for one actuator port, applied after the renderer every 1 kHz tick
-// (ALGORITHMS §5.7.3, §6.9), in this order: NaN/Inf rejection, fade to zero on stale input,
+// (docs/algorithms.md §5.7.3, §6.9), in this order: NaN/Inf rejection, fade to zero on stale input,
 // force and force-rate saturation, then the time-domain passivity observer/controller
 // (Hannaford-Ryu) last, so that it observes the force that is really applied.
 // Everything is noexcept, allocation- and lock-free, O(1).

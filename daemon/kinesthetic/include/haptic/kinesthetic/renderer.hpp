@@ -1,7 +1,7 @@
 #pragma once
 
-// Kinesthetic rendering for (under)actuated devices, ALGORITHMS §5 and §6, selectable at run
-// time. One call to tick() per 1 kHz cycle: device configuration q, its rate, and up to
+// Kinesthetic rendering for (under)actuated devices, docs/algorithms.md §5 and §6, selectable at
+// run time. One call to tick() per 1 kHz cycle: device configuration q, its rate, and up to
 // kMaxConstraintCount linear constraints c_j^T q >= d_j in configuration space (what the
 // simulation publishes in msgs::ConstraintSet). Output: actuator forces u (before the port
 // safety stage, see port_safety.hpp) and diagnostics.

@@ -32,7 +32,11 @@
 
 namespace haptic::runtime {
 
-enum FaultCode : std::uint32_t {
+// The daemon's own fault codes in haptic/status (msgs::Fault::code), raised by the channel
+// about a device link. Numbered from 100 so they never meet the codes a device reports in
+// its own fault frames (protocol::DeviceFaultCode, 1-6), which kFaultDeviceReported carries
+// in its message.
+enum DaemonFaultCode : std::uint32_t {
     kFaultHeartbeatLost = 100,
     kFaultBusOff = 101,
     kFaultDeviceReported = 102,

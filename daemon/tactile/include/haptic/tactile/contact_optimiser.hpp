@@ -1,6 +1,6 @@
 #pragma once
 
-// Contact-surface matching for the thimble (ALGORITHMS §3.3-3.5): find the platform DoFs
+// Contact-surface matching for the thimble (docs/algorithms.md §3.3-3.5): find the platform DoFs
 // xi = (height, tilt_x, tilt_y) whose plate best reproduces the virtual contact surface,
 //
 //   E(xi) = sum_{i in C} w_i 2 psi(d(x_i)) + eta sum_{j not in C} w_j 2 psi(min(d(x_j), 0))
@@ -10,10 +10,11 @@
 // p(delta) = p0 (exp(delta / s) - 1) per unit stiffness weight w = A dp/d(delta) (taken at
 // the virtual indentation), so dE/dxi is the mismatch between the generalised pad forces of
 // the plate and of the virtual contact [DER]. psi(d) -> d^2 / 2 as s -> infinity (linear pad:
-// the quadratic matched-point objective of ALGORITHMS §3.3). Here d(y) = nu . (y - p) is the signed
-// distance of y to the plate (positive on the finger side), applied with a smooth weight that fades
-// to zero at the plate rim; S = diag(1, r_d, r_d) puts the tilts in metres at the rim. Contact
-// samples (signed_distance < 0) are matched at their projection onto the virtual object, x_i = p_i
+// the quadratic matched-point objective of docs/algorithms.md §3.3). Here d(y) = nu . (y - p) is
+// the signed distance of y to the plate (positive on the finger side), applied with a smooth weight
+// that fades to zero at the plate rim; S = diag(1, r_d, r_d) puts the tilts in metres at the rim.
+// Contact samples (signed_distance < 0) are matched at their projection onto the virtual object,
+// x_i = p_i
 // - signed_distance_i n_i; non-contact samples are kept on the finger side of the plate.
 //
 // Solver: Gauss-Newton (curvature psi'', analytic Jacobians from

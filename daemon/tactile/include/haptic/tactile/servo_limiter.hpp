@@ -1,6 +1,6 @@
 #pragma once
 
-// Last stage before the thimble's servos (ALGORITHMS §3.6, servo model): clamps each
+// Last stage before the thimble's servos (docs/algorithms.md §3.6, servo model): clamps each
 // commanded angle to the servo range and limits its rate to servos.max_rate_deg_per_s, so a
 // jump of the optimiser (e.g. to the retract pose) becomes a ramp the servo can follow.
 // noexcept, allocation-free: called by the 1 kHz loop.

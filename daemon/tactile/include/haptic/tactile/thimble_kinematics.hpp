@@ -1,6 +1,6 @@
 #pragma once
 
-// Kinematics of the 3-RRS fingertip thimble (ALGORITHMS §3.6, DER): closed-form inverse
+// Kinematics of the 3-RRS fingertip thimble (docs/algorithms.md §3.6, DER): closed-form inverse
 // kinematics per leg, the parasitic-motion solve, forward kinematics by Newton and the
 // workspace constraints c_w(xi) >= 0.
 //
@@ -192,5 +192,12 @@ class ThimbleKinematics {
 
 // The tilt whose plate normal (towards the finger) is `normal`; `normal` need not be unit.
 [[nodiscard]] std::array<double, 2> tiltForNormal(const Eigen::Vector3d& normal) noexcept;
+
+// The warm-start pose of the contact optimiser and of the plane-fit baseline: xi whose plate
+// plane passes through point_m with the given normal towards the finger (not projected into the
+// workspace; fixed-point on the height, the parasitic shift included).
+[[nodiscard]] PlatformDofs poseForPlane(const ThimbleKinematics& kinematics,
+                                        const Eigen::Vector3d& normal_into_finger,
+                                        const Eigen::Vector3d& point_m) noexcept;
 
 }  // namespace haptic::tactile

@@ -1,6 +1,6 @@
 #pragma once
 
-// Exoskeleton frames (README "CAN drivers" has the table). Scaling is fixed by the protocol;
+// Exoskeleton frames (docs/drivers.md has the table). Scaling is fixed by the protocol;
 // ids and value limits come from the device YAML.
 //   command (host->device, command_id), kind 0:
 //     [2-3] force setpoint i16, 0.01 N (|F| <= actuator.max_force_n)

@@ -1,6 +1,6 @@
 #pragma once
 
-// Pieces shared by the exoskeleton and thimble protocols (layouts in README "CAN drivers").
+// Pieces shared by the exoskeleton and thimble protocols (layouts in docs/drivers.md).
 // Every device frame is a classic 8-byte frame:
 //   byte 0   CRC-8/SAE-J1850 over the 11-bit id (2 bytes, little-endian) and bytes 1-7
 //   byte 1   bits 0-3 alive counter (per id, +1 per frame), bits 4-7 frame kind
@@ -124,11 +124,11 @@ enum class DeviceMode : std::uint8_t { kBooting = 0, kOperational = 1, kFault = 
 
 struct Heartbeat {
     DeviceMode mode{DeviceMode::kBooting};
-    std::uint8_t active_fault{0};  // FaultCode, 0 when none
+    std::uint8_t active_fault{0};  // DeviceFaultCode, 0 when none
     std::uint32_t uptime_ms{0};
 };
 
-enum class FaultCode : std::uint8_t {
+enum class DeviceFaultCode : std::uint8_t {
     kNone = 0,
     kOvercurrent = 1,
     kOvertemperature = 2,
@@ -137,17 +137,17 @@ enum class FaultCode : std::uint8_t {
     kEncoder = 5,
     kInternal = 6,
 };
-inline constexpr std::uint8_t kMaxFaultCode = 6;
+inline constexpr std::uint8_t kMaxDeviceFaultCode = 6;
 
 struct FaultReport {
-    FaultCode code{FaultCode::kNone};
+    DeviceFaultCode code{DeviceFaultCode::kNone};
     bool active{false};
     std::uint32_t detail{0};  // code-specific (e.g. measured current in mA)
 };
 
 // Heartbeat and fault frames have the same layout on both devices:
-//   heartbeat kind 0: [2] DeviceMode, [3] active FaultCode, [4-7] uptime ms u32
-//   fault     kind 0: [2] FaultCode (1-6), [3] 1 active / 0 cleared, [4-7] detail u32
+//   heartbeat kind 0: [2] DeviceMode, [3] active DeviceFaultCode, [4-7] uptime ms u32
+//   fault     kind 0: [2] DeviceFaultCode (1-6), [3] 1 active / 0 cleared, [4-7] detail u32
 void encodeHeartbeat(std::uint32_t id, const Heartbeat& heartbeat, std::uint8_t counter,
                      can::CanFrame& frame) noexcept;
 void encodeFault(std::uint32_t id, const FaultReport& fault, std::uint8_t counter,

@@ -1,6 +1,6 @@
 #pragma once
 
-// Thimble frames (README "CAN drivers" has the table). Angles are i16 in 1e-4 rad.
+// Thimble frames (docs/drivers.md has the table). Angles are i16 in 1e-4 rad.
 //   command (host->device, command_id), kind 0: [2-3] [4-5] [6-7] servo targets 1-3,
 //     each inside [servos.min, servos.max] from the device YAML
 //   state (device->host, state_id), kind 0: [2-3] [4-5] [6-7] measured servo angles 1-3,

@@ -1,6 +1,6 @@
 #pragma once
 
-// Coupling with Bullet as the external physics engine (ALGORITHMS §2.5, thesis §3.2.7).
+// Coupling with Bullet as the external physics engine (docs/algorithms.md §2.5, thesis §3.2.7).
 // Bullet owns the objects: gravity, object-object and object-table contact. The hand solve
 // holds a rigid duplicate of each dynamic object (same mass and inertia, no gravity: gravity
 // acts in Bullet only) tied to Bullet's body by the 6-DoF spring U_co, which is part of the

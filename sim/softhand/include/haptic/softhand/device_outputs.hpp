@@ -1,7 +1,7 @@
 #pragma once
 
 // What the soft hand sends to the daemon each simulation step (msgs/idl/ConstraintSet.idl,
-// ContactSurface.idl). Conventions are listed in sim/softhand/README.md, "Device outputs".
+// ContactSurface.idl). Conventions are listed in docs/softhand.md.
 //
 // Kinesthetic (exoskeleton on a finger): q_sim_rad = the simulated finger's flexion
 // [MCP, PIP, DIP] (rad, flexion positive, HandKinematics), and for each (phalanx, object)

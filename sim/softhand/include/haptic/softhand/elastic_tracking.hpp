@@ -1,6 +1,6 @@
 #pragma once
 
-// Elastic tracking through an intermediate skeleton (ALGORITHMS §2.3, thesis §3.2.6).
+// Elastic tracking through an intermediate skeleton (docs/algorithms.md §2.3, thesis §3.2.6).
 // The tracked bone poses may break the joints, jitter, or sit inside objects. Instead of
 // pulling the simulated bones to them directly, a rigid-only copy of the skeleton (same
 // bodies and soft joints, no tissue, no contact) is synchronised with the simulated bones,

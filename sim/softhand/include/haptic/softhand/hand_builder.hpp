@@ -53,7 +53,7 @@ struct HandModel {
 };
 
 // Segment lengths of a finger as fractions of the hand length (index about 43/25/18 mm for a
-// 19 cm hand; ALGORITHMS §5.8 gives 40-45 / 22-26 / 17-20 mm).
+// 19 cm hand; docs/algorithms.md §5.8 gives 40-45 / 22-26 / 17-20 mm).
 [[nodiscard]] std::array<double, 3> phalanxLengths(config::Finger finger, double hand_length_m);
 
 [[nodiscard]] HandModel buildHand(const config::HandConfig& hand, const SolverSettings& settings,

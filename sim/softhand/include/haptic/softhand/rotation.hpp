@@ -1,6 +1,7 @@
 #pragma once
 
-// Small rotation and decomposition helpers shared by the energy terms (ALGORITHMS.md §1.1-1.2).
+// Small rotation and decomposition helpers shared by the energy terms (docs/algorithms.md
+// §1.1-1.2).
 
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>

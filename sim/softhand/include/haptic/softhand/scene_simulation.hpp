@@ -35,7 +35,7 @@ struct SceneSimulationSettings {
 // and 1, bought no accuracy: thimble press p99 1.28 against 0.73 ms, force error 0.115
 // against 0.118, 5.5% against 6.0% steps zeroed; finger flex p99 6.3 against 3.1 ms. At
 // level 2 it does help (21% of the press's steps zeroed with one iteration, 9% with five)
-// (sim/softhand/BENCHMARK.md, "handsim's limits"). A scene's `solver:` block overrides
+// (docs/benchmarks.md, "handsim's limits"). A scene's `solver:` block overrides
 // the Newton and PCG counts: the default scene at 100 Hz takes 2 Newton iterations, because on
 // it one iteration zeroes about twice as many steps (11% against 6%).
 [[nodiscard]] SceneSimulationSettings realtimeSceneSettings(

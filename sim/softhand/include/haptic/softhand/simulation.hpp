@@ -1,6 +1,6 @@
 #pragma once
 
-// Soft hand simulation core (ALGORITHMS.md §2, thesis ch. 3): tissue nodes and rigid bodies
+// Soft hand simulation core (docs/algorithms.md §2, thesis ch. 3): tissue nodes and rigid bodies
 // (bones, object duplicates) advanced together by backward Euler with one Newton step per
 // step, solved by block-Jacobi PCG, guarded by an energy check that backtracks and substeps.
 //
@@ -25,8 +25,8 @@ struct TissueMaterial {
     double youngs_modulus_pa{5.0e4};
     double poisson_ratio{0.45};
     double density_kg_per_m3{1100.0};
-    // Strain limits on the singular values of F as a stiff penalty (ALGORITHMS §2.4.3, DER):
-    // k_sl = ratio * E. Values are a starting point, not fitted to finger data.
+    // Strain limits on the singular values of F as a stiff penalty (docs/algorithms.md §2.4.3,
+    // DER): k_sl = ratio * E. Values are a starting point, not fitted to finger data.
     bool strain_limits{true};
     double strain_min{0.7};
     double strain_max{1.3};
@@ -58,7 +58,7 @@ struct RigidBodyDesc {
 
 enum class JointType { kBall, kHinge, kUniversal };
 
-// Soft joint (ALGORITHMS §2.4.1). Anchors and axes are in each body's local frame at build
+// Soft joint (docs/algorithms.md §2.4.1). Anchors and axes are in each body's local frame at build
 // time; the flexion angle is measured about `axis_a_local` relative to the build-time pose.
 struct JointDesc {
     JointType type{JointType::kBall};
@@ -113,12 +113,12 @@ class Simulation {
     int addTissue(const TetMesh& mesh, const TissueMaterial& material);
     int addBody(const RigidBodyDesc& desc);
     int addJoint(const JointDesc& desc);
-    // Couples a node to a body at the node's current position (ALGORITHMS §2.4.4).
+    // Couples a node to a body at the node's current position (docs/algorithms.md §2.4.4).
     void attachNode(int node, int body, double stiffness_n_per_m);
     // Dirichlet condition on the node's axes (x, y, z): they keep their current position.
     void pinNode(int node, std::array<bool, 3> axes = {true, true, true});
     int addCollider(const ColliderDesc& desc);
-    // Elastic tracking spring of a body towards its target (ALGORITHMS §2.3, U_crb).
+    // Elastic tracking spring of a body towards its target (docs/algorithms.md §2.3, U_crb).
     void setTrackingStiffness(int body, double linear_n_per_m, double angular_nm_per_rad);
 
     // --- inputs between steps ---

@@ -2,7 +2,7 @@
 
 // Tracking input of the soft hand: a hand pose (wrist pose + 15 flexion angles, the
 // HandPose message, msgs/idl/HandPose.idl) turned into tracked poses of the model's bones,
-// from a replay file, or from a scripted motion. Conventions in sim/softhand/README.md,
+// from a replay file, or from a scripted motion. Conventions in docs/softhand.md,
 // "Tracking input".
 //
 // Wrist frame = the palm frame of the hand model at build time: origin at the palm centre,
@@ -65,7 +65,7 @@ class TrackedHand {
                                 // fingertip model: distal build pose relative to reference
 };
 
-// Replay file (CSV, documented in sim/softhand/README.md): per row
+// Replay file (CSV, documented in docs/softhand.md): per row
 //   t_s, wrist_x_m, wrist_y_m, wrist_z_m, qw, qx, qy, qz, 15 joint angles (rad)
 // '#' starts a comment; blank lines are skipped; times strictly increase.
 struct ReplayFrame {

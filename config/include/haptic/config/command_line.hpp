@@ -1,0 +1,53 @@
+#pragma once
+
+// The command-line overrides shared by the executables that read daemon.yaml or sim.yaml
+// (hapticd, handsim): one definition of each flag, its check and how it maps onto the loaded
+// configuration, so the two cannot drift apart. Header only; the executables link CLI11.
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "haptic/config/common.hpp"
+#include "haptic/config/enums.hpp"
+
+namespace haptic::config {
+
+struct CommonOverrides {
+    std::string config_path;  // the default is the caller's
+    std::string log_level;    // empty: the file's log_level
+    int dds_domain{-1};       // negative: the file's dds.domain_id
+    std::string sim_link;     // empty: the file's sim_link.transport
+    double duration_s{0.0};   // 0 = run until SIGINT/SIGTERM
+};
+
+inline void addCommonOptions(CLI::App& app, CommonOverrides& overrides,
+                             const std::string& config_description) {
+    app.add_option("-c,--config", overrides.config_path, config_description)->capture_default_str();
+    app.add_option("--log-level", overrides.log_level, "override log_level")
+        ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
+    app.add_option("--dds-domain", overrides.dds_domain, "override dds.domain_id")
+        ->check(CLI::Range(0, 232));
+    app.add_option("--sim-link", overrides.sim_link,
+                   "override sim_link.transport: iceoryx (same host) or dds (sim on any host)")
+        ->check(CLI::IsMember({"iceoryx", "dds"}));
+    app.add_option("--duration", overrides.duration_s,
+                   "stop after this many seconds (0 = run until signalled)")
+        ->check(CLI::NonNegativeNumber);
+}
+
+// Applies the overrides to a loaded DaemonConfig or SimConfig (both have log_level, dds and
+// sim_link) and returns the log level to set up.
+template <class Config>
+[[nodiscard]] std::string applyCommonOverrides(const CommonOverrides& overrides, Config& config) {
+    if (overrides.dds_domain >= 0) {
+        config.dds.domain_id = overrides.dds_domain;
+    }
+    if (!overrides.sim_link.empty()) {
+        config.sim_link.transport =
+            overrides.sim_link == "dds" ? SimTransport::kDds : SimTransport::kIceoryx;
+    }
+    return overrides.log_level.empty() ? std::string(toString(config.log_level))
+                                       : overrides.log_level;
+}
+
+}  // namespace haptic::config

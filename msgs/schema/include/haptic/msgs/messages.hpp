@@ -1,0 +1,287 @@
+#pragma once
+
+// Fixed-size, trivially copyable twins of the DDS types generated from msgs/idl/*.idl.
+// They are what iceoryx carries between processes on one host (zero copy, no allocation on
+// the RT side). Field names, order and capacities follow the IDL one for one; the
+// round-trip test in tests/msgs/ fails if either side changes alone.
+//
+// Conventions: stamps are CLOCK_MONOTONIC nanoseconds of when the content was computed;
+// units and frames are in the field names; quaternions are (w, x, y, z).
+
+#include <array>
+#include <cstdint>
+#include <type_traits>
+
+#include "haptic/msgs/bounded_array.hpp"
+#include "haptic/msgs/capacities.hpp"
+#include "haptic/msgs/fixed_string.hpp"
+
+namespace haptic::msgs {
+
+using DeviceId = FixedString<kIdCapacity>;
+
+struct MessageHeader {
+    std::uint64_t seq{0};
+    std::int64_t stamp_ns{0};
+    DeviceId source_id{};  // device name or scene name
+    friend bool operator==(const MessageHeader&, const MessageHeader&) = default;
+};
+
+struct Percentiles {
+    double p50{0.0};
+    double p99{0.0};
+    double max{0.0};
+    friend bool operator==(const Percentiles&, const Percentiles&) = default;
+};
+
+// ---- sim -> daemon -------------------------------------------------------------------
+
+// One linearised constraint a^T q >= b in device joint space.
+struct LinearConstraint {
+    std::array<double, kMaxJointDofs> a{};
+    double b{0.0};
+    friend bool operator==(const LinearConstraint&, const LinearConstraint&) = default;
+};
+
+// Per kinesthetic device: the simulated (constrained) configuration and the constraints that
+// let the daemon re-solve the proxy at 1 kHz between sim frames.
+struct ConstraintSet {
+    MessageHeader header{};
+    std::uint16_t dof{0};
+    std::array<double, kMaxJointDofs> q_sim_rad{};
+    BoundedArray<LinearConstraint, kMaxConstraints> constraints{};
+    friend bool operator==(const ConstraintSet&, const ConstraintSet&) = default;
+};
+
+struct ContactSample {
+    std::array<double, 3> p_device_m{};
+    double signed_distance_m{0.0};  // negative = penetrating the virtual object
+    std::array<double, 3> normal_device{};
+    double weight{0.0};
+    friend bool operator==(const ContactSample&, const ContactSample&) = default;
+};
+
+// Per tactile device: finger-pad samples in the device base frame, the matching target of
+// the tactile optimiser.
+struct ContactSurface {
+    MessageHeader header{};
+    BoundedArray<ContactSample, kMaxContactSamples> samples{};
+    friend bool operator==(const ContactSurface&, const ContactSurface&) = default;
+};
+
+// ---- daemon -> sim -------------------------------------------------------------------
+
+enum class DeviceStatusBit : std::uint32_t {
+    kOnline = 1U << 0,
+    kRendering = 1U << 1,
+    kSafeState = 1U << 2,
+    kFault = 1U << 3,
+    kStaleSimInput = 1U << 4,
+};
+
+struct DeviceState {
+    MessageHeader header{};
+    std::uint16_t joint_count{0};
+    std::array<double, kMaxJointDofs> joint_position_rad{};
+    std::array<double, kMaxJointDofs> joint_velocity_rad_per_s{};
+    std::uint16_t actuator_count{0};
+    std::array<double, kMaxActuators> actuator_position{};  // m (linear) or rad (rotary)
+    std::array<double, kMaxActuators> actuator_force{};     // N (linear) or N m (rotary)
+    std::array<double, 3> platform_position_m{};
+    std::array<double, 4> platform_orientation_wxyz{1.0, 0.0, 0.0, 0.0};
+    std::uint32_t status_bits{0};
+    friend bool operator==(const DeviceState&, const DeviceState&) = default;
+};
+
+// ---- tracker -> sim ------------------------------------------------------------------
+
+struct HandPose {
+    MessageHeader header{};
+    std::array<double, 3> wrist_position_m{};
+    std::array<double, 4> wrist_orientation_wxyz{1.0, 0.0, 0.0, 0.0};
+    BoundedArray<double, kMaxHandJointAngles> joint_angles_rad{};
+    double confidence{0.0};
+    friend bool operator==(const HandPose&, const HandPose&) = default;
+};
+
+// ---- daemon status -------------------------------------------------------------------
+
+enum class DaemonState : std::uint32_t { kInit, kIdle, kRendering, kFault, kEstop };
+enum class DeviceKind : std::uint32_t { kExoskeleton, kThimble };
+enum class DeviceRunState : std::uint32_t { kOffline, kReady, kActive, kSafe, kFault };
+enum class BusState : std::uint32_t {
+    kUnknown,
+    kErrorActive,
+    kErrorWarning,
+    kErrorPassive,
+    kBusOff
+};
+enum class SimTransport : std::uint32_t { kIceoryx, kDds };
+
+struct LoopStatistics {
+    double rate_hz{0.0};
+    std::uint64_t ticks{0};
+    std::uint64_t overruns{0};
+    std::uint64_t overruns_read{0};  // overruns whose largest share was the CAN read
+    std::uint64_t overruns_compute{0};
+    std::uint64_t overruns_write{0};
+    Percentiles period_us{};
+    Percentiles wakeup_latency_us{};
+    Percentiles tick_work_us{};  // the whole tick: read + compute + write
+    friend bool operator==(const LoopStatistics&, const LoopStatistics&) = default;
+};
+
+struct CanCounters {
+    BusState bus_state{BusState::kUnknown};
+    std::uint64_t rx_frames{0};
+    std::uint64_t tx_frames{0};
+    std::uint64_t rx_errors{0};
+    std::uint64_t tx_errors{0};
+    std::uint64_t rejected_frames{0};
+    friend bool operator==(const CanCounters&, const CanCounters&) = default;
+};
+
+struct DeviceStatus {
+    DeviceId device_id{};
+    DeviceKind kind{DeviceKind::kExoskeleton};
+    DeviceRunState state{DeviceRunState::kOffline};
+    CanCounters can{};
+    double last_frame_age_ms{0.0};
+    friend bool operator==(const DeviceStatus&, const DeviceStatus&) = default;
+};
+
+struct SimLinkStatus {
+    SimTransport transport{SimTransport::kIceoryx};
+    bool connected{false};
+    double age_ms{0.0};
+    double rate_hz{0.0};
+    std::uint64_t received{0};
+    std::uint64_t rejected{0};
+    // Ticks since start on which some device's input was older than the fade start (3/4 of
+    // sim_timeout_ms) but not yet timed out: the sim is alive but slower than the fade allows.
+    std::uint64_t late_input_ticks{0};
+    friend bool operator==(const SimLinkStatus&, const SimLinkStatus&) = default;
+};
+
+struct Fault {
+    std::uint32_t code{0};
+    DeviceId device_id{};
+    FixedString<kShortTextCapacity> message{};
+    friend bool operator==(const Fault&, const Fault&) = default;
+};
+
+struct HapticStatus {
+    MessageHeader header{};
+    DaemonState state{DaemonState::kInit};
+    DeviceId rendering_method{};
+    double uptime_s{0.0};
+    LoopStatistics loop{};
+    BoundedArray<DeviceStatus, kMaxStatusDevices> devices{};
+    SimLinkStatus sim_link{};
+    BoundedArray<Fault, kMaxStatusFaults> faults{};
+    friend bool operator==(const HapticStatus&, const HapticStatus&) = default;
+};
+
+// ---- daemon telemetry ----------------------------------------------------------------
+
+// The exoskeleton's part of a telemetry sample (zero for a thimble).
+struct ExoskeletonTelemetry {
+    double actuator_force_cmd_n{0.0};  // force commanded to the linear actuator
+    std::array<double, kMaxJointDofs> joint_position_rad{};  // measured finger joints
+    std::array<double, kMaxJointDofs> proxy_position_rad{};  // the proxy the coupling pulls to
+    std::array<double, 3> ghost_force_n{};
+    double energy_observer_j{0.0};  // the port's passivity observer
+    friend bool operator==(const ExoskeletonTelemetry&, const ExoskeletonTelemetry&) = default;
+};
+
+// The thimble's part of a telemetry sample (zero for an exoskeleton).
+struct ThimbleTelemetry {
+    std::array<double, kThimbleServos> servo_angle_cmd_rad{};  // servo targets sent this tick
+    std::array<double, kThimbleServos> servo_angle_rad{};      // measured servo angles
+    double platform_height_m{0.0};                             // the optimiser's platform pose
+    double platform_tilt_x_rad{0.0};
+    double platform_tilt_y_rad{0.0};
+    friend bool operator==(const ThimbleTelemetry&, const ThimbleTelemetry&) = default;
+};
+
+struct TelemetrySample {
+    std::uint64_t tick{0};
+    std::int64_t stamp_ns{0};
+    std::uint16_t device_index{0};
+    DeviceKind device_kind{DeviceKind::kExoskeleton};  // which of the two parts applies
+    ExoskeletonTelemetry exoskeleton{};
+    ThimbleTelemetry thimble{};
+    double tick_work_us{0.0};  // the whole tick: read + compute + write
+    double read_us{0.0};       // of which CAN read, sim inputs, commands
+    double write_us{0.0};      // of which CAN write, DeviceState hand-off
+    double wakeup_latency_us{0.0};
+    friend bool operator==(const TelemetrySample&, const TelemetrySample&) = default;
+};
+
+struct HapticTelemetry {
+    MessageHeader header{};
+    BoundedArray<TelemetrySample, kMaxTelemetrySamples> samples{};
+    friend bool operator==(const HapticTelemetry&, const HapticTelemetry&) = default;
+};
+
+// ---- commands ------------------------------------------------------------------------
+
+enum class CommandKind : std::uint32_t { kEnable, kDisable, kSetMethod, kEstop, kClearFault };
+
+struct HapticCommand {
+    MessageHeader header{};
+    std::uint64_t request_id{0};
+    CommandKind kind{CommandKind::kDisable};
+    DeviceId device_id{};  // empty: every device
+    DeviceId argument{};   // method name for kSetMethod
+    friend bool operator==(const HapticCommand&, const HapticCommand&) = default;
+};
+
+struct HapticCommandReply {
+    MessageHeader header{};
+    std::uint64_t request_id{0};
+    bool accepted{false};
+    FixedString<kLongTextCapacity> message{};
+    friend bool operator==(const HapticCommandReply&, const HapticCommandReply&) = default;
+};
+
+// ---- sim status ----------------------------------------------------------------------
+
+struct SimStatus {
+    MessageHeader header{};
+    double rate_hz{0.0};
+    std::uint64_t steps{0};
+    Percentiles step_time_us{};
+    std::uint32_t node_count{0};
+    std::uint32_t element_count{0};
+    double solver_residual{0.0};
+    std::uint32_t solver_iterations{0};
+    double energy_j{0.0};
+    FixedString<kModelNameCapacity> model{};
+    // Since handsim started: steps the energy check zeroed (positions held, velocities 0),
+    // steps it split into substeps, and refused tracking inputs with the latest reason.
+    std::uint64_t steps_zeroed{0};
+    std::uint64_t steps_substepped{0};
+    std::uint64_t inputs_rejected{0};
+    FixedString<kShortTextCapacity> last_rejection{};
+    friend bool operator==(const SimStatus&, const SimStatus&) = default;
+};
+
+// Every twin must be shareable through RouDi: trivially copyable and within the largest
+// mempool chunk.
+template <typename T>
+inline constexpr bool kIsShmMessage =
+    std::is_trivially_copyable_v<T>&& std::is_standard_layout_v<T> &&
+    sizeof(T) <= kMaxShmPayloadBytes;
+
+static_assert(kIsShmMessage<ConstraintSet>);
+static_assert(kIsShmMessage<ContactSurface>);
+static_assert(kIsShmMessage<DeviceState>);
+static_assert(kIsShmMessage<HandPose>);
+static_assert(kIsShmMessage<HapticStatus>);
+static_assert(kIsShmMessage<HapticTelemetry>);
+static_assert(kIsShmMessage<HapticCommand>);
+static_assert(kIsShmMessage<HapticCommandReply>);
+static_assert(kIsShmMessage<SimStatus>);
+
+}  // namespace haptic::msgs

@@ -1,0 +1,383 @@
+// Step time and accuracy of the soft hand, per resolution level and PCG iteration cap.
+//   ninja -C build/release softhand_benchmark && build/release/tests/bench/softhand_benchmark
+// Scenes at 200 Hz (dt = 5 ms): a fingertip pressing 4 mm into a table and sliding 1 cm (the
+// thimble scene), one finger flexing against a table (the exoskeleton scene), and the whole
+// hand moved up and down by its tracking (no contact).
+// Counters: p50_us / p99_us over the steps of the run; pcg_iters, backtracks, substeps,
+// newton_extra (Newton iterations beyond the first) and zeroed (steps the energy check refused
+// with no substep left, which kept positions and zeroed velocities) per step; force_err = RMS(F -
+// F_ref) / RMS(F_ref) of the normal force on the table over the first second, press_err the same
+// over its first 0.2 s (pressing in, no sliding yet: the fine reference stick-slips while sliding,
+// which dominates force_err); tip_err_mm = RMS distance of the distal bone from the reference
+// (flex). The reference is the same scene one resolution level finer than the finest row, with PCG
+// to a relative tolerance of 1e-8 (up to 2000 iterations), computed once before the rows run.
+
+#include <benchmark/benchmark.h>
+#include <malloc.h>
+#include <time.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "fingertip_press_scene.hpp"
+#include "haptic/common/statistics.hpp"
+#include "haptic/config/scene.hpp"
+#include "haptic/softhand/elastic_tracking.hpp"
+#include "haptic/softhand/hand_builder.hpp"
+#include "haptic/softhand/scene_simulation.hpp"
+#include "provenance.hpp"
+
+namespace haptic::softhand {
+namespace {
+
+// The fingertip press scene, its constants and helpers are shared with the Bullet comparison.
+using bench::FingertipPress;
+using bench::handConfig;
+using bench::kCycleSteps;
+using bench::kDt;
+using bench::kPressReferenceLevel;
+using bench::kPressSteps;
+using bench::Sample;
+using bench::solverSettings;
+constexpr int kFlexReferenceLevel = 3;
+
+// CPU time of this thread: on the shared 2-vCPU machine wall time per step is 1.5-3x the
+// CPU time, so percentiles of both are reported.
+double threadCpuUs() {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return 1e6 * static_cast<double>(t.tv_sec) + 1e-3 * static_cast<double>(t.tv_nsec);
+}
+
+// p50 and p99 of per-step times into the state's counters, with `prefix`.
+void addPercentiles(benchmark::State& state, std::vector<double> us, const char* prefix) {
+    state.counters[std::string(prefix) + "p50_us"] = common::percentile(us, 0.5);
+    state.counters[std::string(prefix) + "p99_us"] = common::percentile(us, 0.99);
+}
+
+// One finger flexing all three joints by up to 0.8 rad and back, 1 s period; the fingertip
+// meets the table at the end of the flexion.
+class FingerFlex {
+  public:
+    FingerFlex(int level, int pcg_cap, double pcg_tolerance)
+        : model_(buildHand(handConfig(config::HandModel::kFinger, level),
+                           solverSettings(pcg_cap, pcg_tolerance))),
+          tracking_(model_) {
+        table_ = model_.simulation.addCollider(
+            {HalfSpace{}, Vec3(0.0, 0.0, -0.03), Mat3::Identity(), 0.6});
+        for (const auto& bone : model_.bones) {
+            build_.push_back({model_.simulation.bodyPosition(bone.body),
+                              model_.simulation.bodyRotation(bone.body)});
+        }
+        poses_ = build_;
+    }
+    void setInput(int step) {
+        const double t = (step % kCycleSteps) * kDt;
+        const double angle = 0.8 * std::sin(3.14159265 * t);
+        Vec3 joint = build_[0].position_m + Vec3(0.5 * 0.45 * 0.19, 0.0, 0.0);
+        Mat3 rotation = Mat3::Identity();
+        for (std::size_t k = 1; k < poses_.size(); ++k) {
+            rotation = rotation * Eigen::AngleAxisd(angle / 3.0, Vec3::UnitY()).toRotationMatrix();
+            const double length = model_.bones[k].length_m;
+            poses_[k] = {joint + rotation * Vec3(0.5 * length, 0.0, 0.0), rotation};
+            joint += rotation * Vec3(length, 0.0, 0.0);
+        }
+        tracking_.setTrackedPoses(poses_, nullptr);
+    }
+    StepReport step() {
+        tracking_.update(model_, kDt);
+        return model_.simulation.step(kDt);
+    }
+    [[nodiscard]] Sample sample() const {
+        return {model_.simulation.forceOnCollider(table_).z(),
+                model_.simulation.bodyPosition(model_.bones.back().body)};
+    }
+    [[nodiscard]] const Simulation& simulation() const { return model_.simulation; }
+    [[nodiscard]] SolverSettings& solver() { return model_.simulation.settings(); }
+
+  private:
+    HandModel model_;
+    ElasticTracking tracking_;
+    int table_{0};
+    std::vector<BonePose> build_;
+    std::vector<BonePose> poses_;
+};
+
+template <typename Scene>
+const std::vector<Sample>& reference(int level) {
+    static std::map<int, std::vector<Sample>> cache;
+    auto found = cache.find(level);
+    if (found == cache.end()) {
+        Scene scene(level, 2000, 1e-8);
+        std::vector<Sample> trace;
+        for (int s = 0; s < kCycleSteps; ++s) {
+            scene.setInput(s);
+            scene.step();
+            trace.push_back(scene.sample());
+        }
+        found = cache.emplace(level, std::move(trace)).first;
+    }
+    return found->second;
+}
+
+// How a row limits the solver's work per step beyond the PCG cap.
+enum class StepLimits {
+    kBenchmark,  // SolverSettings' defaults: 5 Newton iterations, 10 halvings, 8 substeps
+    kHandsim,    // handsim's real-time limits, realtimeSceneSettings()
+};
+
+template <typename Scene>
+void run(benchmark::State& state, int reference_level, StepLimits limits) {
+    const std::vector<Sample>& ref = reference<Scene>(reference_level);
+    Scene scene(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), 1e-4);
+    if (limits == StepLimits::kHandsim) {
+        const SolverSettings realtime = realtimeSceneSettings().solver;
+        SolverSettings& solver = scene.solver();
+        solver.max_newton_iterations = realtime.max_newton_iterations;
+        solver.max_backtracks = realtime.max_backtracks;
+        solver.max_substep_depth = realtime.max_substep_depth;
+    }
+    std::vector<double> step_us;
+    std::vector<double> cpu_us;
+    double pcg_iterations = 0.0;
+    double backtracks = 0.0;
+    double substeps = 0.0;
+    double newton = 0.0;
+    double zeroed = 0.0;
+    double force_error2 = 0.0;
+    double force_ref2 = 0.0;
+    double tip_error2 = 0.0;
+    double press_error2 = 0.0;
+    double press_ref2 = 0.0;
+    int step = 0;
+    for (auto _ : state) {
+        scene.setInput(step);
+        const double c0 = threadCpuUs();
+        const auto t0 = std::chrono::steady_clock::now();
+        const StepReport r = scene.step();
+        const auto t1 = std::chrono::steady_clock::now();
+        cpu_us.push_back(threadCpuUs() - c0);
+        step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+        pcg_iterations += r.pcg_iterations;
+        backtracks += r.backtracks;
+        substeps += r.substeps;
+        newton += r.newton_iterations;
+        zeroed += r.zeroed_steps;
+        if (step < kCycleSteps) {
+            const Sample s = scene.sample();
+            const Sample& expected = ref[static_cast<std::size_t>(step)];
+            force_error2 += std::pow(s.table_force_n - expected.table_force_n, 2);
+            force_ref2 += std::pow(expected.table_force_n, 2);
+            tip_error2 += (s.tip_m - expected.tip_m).squaredNorm();
+            if (step < kPressSteps) {
+                press_error2 += std::pow(s.table_force_n - expected.table_force_n, 2);
+                press_ref2 += std::pow(expected.table_force_n, 2);
+            }
+        }
+        ++step;
+        benchmark::DoNotOptimize(r.energy_j);
+    }
+    const auto steps = static_cast<double>(step_us.size());
+    const double compared = std::min(steps, static_cast<double>(kCycleSteps));
+    state.counters["nodes"] = scene.simulation().nodeCount();
+    state.counters["tets"] = scene.simulation().tetCount();
+    addPercentiles(state, step_us, "");
+    addPercentiles(state, cpu_us, "cpu_");
+    state.counters["pcg_iters"] = pcg_iterations / steps;
+    state.counters["backtracks"] = backtracks / steps;
+    state.counters["substeps"] = substeps / steps;
+    state.counters["newton_extra"] = newton / steps;
+    state.counters["zeroed"] = zeroed / steps;
+    state.counters["force_err"] = std::sqrt(force_error2 / std::max(force_ref2, 1e-30));
+    state.counters["press_err"] = std::sqrt(press_error2 / std::max(press_ref2, 1e-30));
+    state.counters["tip_err_mm"] = 1e3 * std::sqrt(tip_error2 / compared);
+}
+
+void fingertipPress(benchmark::State& state) {
+    run<FingertipPress>(state, kPressReferenceLevel, StepLimits::kBenchmark);
+}
+void fingerFlex(benchmark::State& state) {
+    run<FingerFlex>(state, kFlexReferenceLevel, StepLimits::kBenchmark);
+}
+// The same scenes under handsim's real-time limits (fewer halvings, one substep level): what
+// the thimble scene costs in the running handsim.
+void fingertipPressHandsimLimits(benchmark::State& state) {
+    run<FingertipPress>(state, kPressReferenceLevel, StepLimits::kHandsim);
+}
+void fingerFlexHandsimLimits(benchmark::State& state) {
+    run<FingerFlex>(state, kFlexReferenceLevel, StepLimits::kHandsim);
+}
+
+// Whole hand held by its tracking and moved 1 cm up and down once per second.
+void wholeHand(benchmark::State& state) {
+    HandModel model =
+        buildHand(handConfig(config::HandModel::kHand, static_cast<int>(state.range(0))),
+                  solverSettings(static_cast<int>(state.range(1)), 1e-4));
+    std::vector<std::pair<Vec3, Mat3>> build;
+    for (const auto& bone : model.bones) {
+        build.emplace_back(model.simulation.bodyPosition(bone.body),
+                           model.simulation.bodyRotation(bone.body));
+    }
+    std::vector<double> step_us;
+    std::vector<double> cpu_us;
+    double pcg_iterations = 0.0;
+    double substeps = 0.0;
+    double newton = 0.0;
+    int step = 0;
+    for (auto _ : state) {
+        const double lift = 0.01 * std::sin(2.0 * 3.14159265 * (step++ % kCycleSteps) * kDt);
+        for (std::size_t k = 0; k < build.size(); ++k) {
+            model.simulation.setTrackingTarget(
+                model.bones[k].body, build[k].first + Vec3(0.0, 0.0, lift), build[k].second);
+        }
+        const double c0 = threadCpuUs();
+        const auto t0 = std::chrono::steady_clock::now();
+        const StepReport r = model.simulation.step(kDt);
+        const auto t1 = std::chrono::steady_clock::now();
+        cpu_us.push_back(threadCpuUs() - c0);
+        step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+        pcg_iterations += r.pcg_iterations;
+        substeps += r.substeps;
+        newton += r.newton_iterations;
+        benchmark::DoNotOptimize(r.energy_j);
+    }
+    const auto steps = static_cast<double>(step_us.size());
+    state.counters["nodes"] = model.simulation.nodeCount();
+    state.counters["tets"] = model.simulation.tetCount();
+    addPercentiles(state, step_us, "");
+    addPercentiles(state, cpu_us, "cpu_");
+    state.counters["pcg_iters"] = pcg_iterations / steps;
+    state.counters["substeps"] = substeps / steps;
+    state.counters["newton_extra"] = newton / steps;
+}
+
+// handsim's physics for the shipped default scene (config/scenes/default.yaml: index finger,
+// table and block, scripted press_slide_edge) at the scene's rate, with both device outputs
+// filled each step: args = resolution, PCG cap, backtracks, substep depth. 1200 steps cover two
+// script periods at 100 Hz.
+void runDefaultScene(benchmark::State& state, int resolution,
+                     const SceneSimulationSettings& settings) {
+    config::SceneConfig scene =
+        config::loadSceneConfig(HAPTIC_SOURCE_DIR "/config/scenes/default.yaml");
+    scene.hand.resolution = resolution;
+    DeviceRequest exo{"exo", config::Finger::kIndex, true, {}, 64};
+    DeviceRequest thimble{"thimble", config::Finger::kIndex, false, {{0.0, 0.0, -0.012}, {}}, 64};
+    SceneSimulation sim(scene, {exo, thimble}, settings);
+    const TrackedHand& hand = sim.trackedHand();
+    const PressSlideEdgeScript script(hand, scene.hand, *scene.findObject("block"), true);
+    sim.reset(script.at(0.0));
+    const double dt = 1.0 / scene.rate_hz;
+    std::vector<double> step_us;
+    double pcg_iterations = 0.0;
+    int step = 0;
+    msgs::ConstraintSet constraints;
+    msgs::ContactSurface surface;
+    double substeps = 0.0;
+    double backtracks = 0.0;
+    double zeroed = 0.0;
+    double newton = 0.0;
+    double substepped_us = 0.0;
+    int substepped = 0;
+    int contacts = 0;
+    for (auto _ : state) {
+        const auto t0 = std::chrono::steady_clock::now();
+        (void)sim.setHandPose(script.at(++step * dt));
+        const StepReport r = sim.step(dt);
+        sim.fill(0, constraints);
+        sim.fill(1, surface);
+        const auto t1 = std::chrono::steady_clock::now();
+        step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+        pcg_iterations += r.pcg_iterations;
+        substeps += r.substeps;
+        backtracks += r.backtracks;
+        zeroed += r.zeroed_steps;
+        newton += r.newton_iterations;
+        if (r.substeps > 1) {
+            substepped_us += step_us.back();
+            ++substepped;
+        }
+        contacts = std::max(contacts, r.active_contacts);
+        benchmark::DoNotOptimize(surface.samples.count);
+    }
+    state.counters["nodes"] = sim.model().simulation.nodeCount();
+    state.counters["tets"] = sim.model().simulation.tetCount();
+    state.counters["substeps"] = substeps / static_cast<double>(step_us.size());
+    state.counters["max_contacts"] = contacts;
+    state.counters["backtracks"] = backtracks / static_cast<double>(step_us.size());
+    state.counters["zeroed"] = zeroed / static_cast<double>(step_us.size());
+    state.counters["substepped_mean_us"] = substepped > 0 ? substepped_us / substepped : 0.0;
+    state.counters["p50_us"] = common::percentile(step_us, 0.5);
+    state.counters["p99_us"] = common::percentile(step_us, 0.99);
+    state.counters["pcg_iters"] = pcg_iterations / static_cast<double>(step_us.size());
+    state.counters["newton_extra"] = newton / static_cast<double>(step_us.size());
+}
+
+// The grid: <resolution>/<PCG cap>/<backtracks>/<substep depth>, 5 Newton iterations.
+void defaultScene(benchmark::State& state) {
+    SceneSimulationSettings settings;
+    settings.solver.pcg_max_iterations = static_cast<int>(state.range(1));
+    settings.solver.max_backtracks = static_cast<int>(state.range(2));
+    settings.solver.max_substep_depth = static_cast<int>(state.range(3));
+    runDefaultScene(state, static_cast<int>(state.range(0)), settings);
+}
+
+// What handsim runs: realtimeSceneSettings() at <resolution>/<Newton iterations>. The
+// shipped scene (solver: block in default.yaml) is 1/2; 1/1 is handsim's default budget.
+void defaultSceneHandsimLimits(benchmark::State& state) {
+    config::SolverLimits limits;
+    limits.newton_iterations = static_cast<int>(state.range(1));
+    runDefaultScene(state, static_cast<int>(state.range(0)), realtimeSceneSettings(limits));
+}
+
+BENCHMARK(fingertipPress)
+    ->ArgsProduct({{0, 1, 2, 3}, {10, 30, 100}})
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(400);
+BENCHMARK(fingerFlex)
+    ->ArgsProduct({{0, 1, 2}, {10, 30, 100}})
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(400);
+BENCHMARK(fingertipPressHandsimLimits)
+    ->ArgsProduct({{0, 1, 2}, {30}})
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(400);
+BENCHMARK(fingerFlexHandsimLimits)
+    ->ArgsProduct({{0, 1}, {30}})
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(400);
+BENCHMARK(defaultScene)
+    ->ArgsProduct({{1, 2}, {10, 30}, {0, 2, 10}, {0, 1, 3}})
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(1200);
+BENCHMARK(defaultSceneHandsimLimits)
+    ->ArgsProduct({{1, 2}, {1, 2, 5}})
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(1200);
+BENCHMARK(wholeHand)
+    ->ArgsProduct({{0, 1, 2}, {10, 30}})
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(200);
+
+}  // namespace
+}  // namespace haptic::softhand
+
+// The same heap settings as handsim's main (see there): without them the page faults of the
+// per-step matrices double the step time.
+int main(int argc, char** argv) {
+    haptic::bench::printProvenance(argc, argv);
+    mallopt(M_MMAP_THRESHOLD, 256 << 20);
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+    mallopt(M_TOP_PAD, 64 << 20);
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) {
+        return 1;
+    }
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}
