@@ -28,9 +28,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& path) {
     out.log_level = detail::readLogLevel(root);
     out.loop = readLoop(root.requiredMap("loop"));
     out.devices = detail::readDeviceList(detail::requiredDeviceList(root));
-    out.sim_link = detail::readSimLink(root);
-    out.dds = detail::readDds(root);
-    out.iceoryx = detail::readIceoryx(root);
+    detail::readTransports(root, out);
     root.finish();
     return out;
 }

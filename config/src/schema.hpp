@@ -25,6 +25,15 @@ SimLinkConfig readSimLink(MapReader& root);
 DdsConfig readDds(MapReader& root);
 std::optional<IceoryxConfig> readIceoryx(MapReader& root);
 
+// The transport keys daemon.yaml and sim.yaml share (sim_link, dds, iceoryx), read in that
+// order into a DaemonConfig or a SimConfig.
+template <class ProcessConfig>
+void readTransports(MapReader& root, ProcessConfig& out) {
+    out.sim_link = readSimLink(root);
+    out.dds = readDds(root);
+    out.iceoryx = readIceoryx(root);
+}
+
 // {position_m: [x, y, z], rpy_deg: [r, p, y]}; rpy_deg is optional and defaults to zero.
 Pose readPose(MapReader map);
 // {translation_m: [x, y, z], rpy_deg: [r, p, y]}; both required.

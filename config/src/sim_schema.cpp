@@ -37,9 +37,7 @@ SimConfig loadSimConfig(const std::filesystem::path& path) {
     out.source = path;
     out.log_level = detail::readLogLevel(root);
     out.scene = loadSceneConfig(root.required("scene", spec::File{}));
-    out.sim_link = detail::readSimLink(root);
-    out.dds = detail::readDds(root);
-    out.iceoryx = detail::readIceoryx(root);
+    detail::readTransports(root, out);
     const ListReader device_list = detail::requiredDeviceList(root);
     out.devices = detail::readDeviceList(device_list);
     checkBindings(out.scene, out.devices, device_list);

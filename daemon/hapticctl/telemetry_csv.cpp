@@ -57,15 +57,15 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
         "plot {csv} every ::1 using (strcol(4) eq 'exoskeleton' ? $2 : 1/0):5 with points pt 7 "
         "ps 0.3 title 'actuator force'\n",
         fmt::arg("csv", csv));
-    script += fmt::format(
-        "set ylabel 'thimble servo angle command [rad]'\n"
-        "plot {csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):6 with points pt 7 ps "
-        "0.3 title 'servo 0', "
-        "{csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):7 with points pt 7 ps 0.3 "
-        "title 'servo 1', "
-        "{csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):8 with points pt 7 ps 0.3 "
-        "title 'servo 2'\n",
-        fmt::arg("csv", csv));
+    script += "set ylabel 'thimble servo angle command [rad]'\nplot ";
+    for (int servo = 0; servo < 3; ++servo) {
+        script += fmt::format(
+            "{sep}{csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):{column} with points "
+            "pt 7 ps 0.3 title 'servo {servo}'",
+            fmt::arg("sep", servo == 0 ? "" : ", "), fmt::arg("csv", csv),
+            fmt::arg("column", 6 + servo), fmt::arg("servo", servo));
+    }
+    script += "\n";
     script += fmt::format(
         "set ylabel 'loop timing [us, log scale]'\n"
         "set logscale y\n"

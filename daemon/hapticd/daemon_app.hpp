@@ -2,15 +2,13 @@
 
 #include <optional>
 
+#include "haptic/config/command_line.hpp"
 #include "haptic/config/daemon.hpp"
 #include "haptic/daemon/periodic_timer.hpp"
 
 namespace haptic::hapticd {
 
-struct DaemonOptions {
-    config::DaemonConfig config;
-    double duration_s{0.0};  // 0 = until SIGINT/SIGTERM
-};
+using DaemonOptions = config::RunOptions<config::DaemonConfig>;
 
 // Runs hapticd until shutdown: the 1 kHz RT thread plus the non-RT status/watchdog thread
 // (this one). Returns the process exit code. Throws ipc::IpcError when a transport cannot be

@@ -1,13 +1,11 @@
 #pragma once
 
+#include "haptic/config/command_line.hpp"
 #include "haptic/config/sim.hpp"
 
 namespace haptic::handsim {
 
-struct SimOptions {
-    config::SimConfig config;
-    double duration_s{0.0};  // 0 = until SIGINT/SIGTERM
-};
+using SimOptions = config::RunOptions<config::SimConfig>;
 
 // Steps the scene at its rate and publishes each device's targets. Returns the exit code;
 // throws ipc::IpcError when a transport cannot be set up.

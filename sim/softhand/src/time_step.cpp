@@ -395,7 +395,7 @@ int Simulation::relax(double dt_s, int max_steps, double displacement_tolerance_
     return max_steps;
 }
 
-double Simulation::totalEnergy() const {
+double Simulation::kineticEnergy() const noexcept {
     double kinetic = 0.0;
     for (int i = 0; i < nodeCount(); ++i) {
         kinetic += 0.5 * node_mass_[i] * v_[i].squaredNorm();
@@ -407,23 +407,17 @@ double Simulation::totalEnergy() const {
         const Mat3 inertia = b.rotation * b.inertia_body * b.rotation.transpose();
         kinetic += 0.5 * b.mass * b.v.squaredNorm() + 0.5 * b.w.dot(inertia * b.w);
     }
-    return kinetic + EnergyTerms::potential(*this, currentConfiguration(), nullptr, nullptr);
+    return kinetic;
+}
+
+double Simulation::totalEnergy() const {
+    return kineticEnergy() +
+           EnergyTerms::potential(*this, currentConfiguration(), nullptr, nullptr);
 }
 
 double Simulation::energyNow() {
-    double kinetic = 0.0;
-    for (int i = 0; i < nodeCount(); ++i) {
-        kinetic += 0.5 * node_mass_[i] * v_[i].squaredNorm();
-    }
-    for (const auto& b : bodies_) {
-        if (b.kinematic) {
-            continue;
-        }
-        const Mat3 inertia = b.rotation * b.inertia_body * b.rotation.transpose();
-        kinetic += 0.5 * b.mass * b.v.squaredNorm() + 0.5 * b.w.dot(inertia * b.w);
-    }
     currentConfiguration(work_.start);
-    return kinetic + potentialNow(work_.start);
+    return kineticEnergy() + potentialNow(work_.start);
 }
 
 double Simulation::potentialNow(const Configuration& q) {

@@ -35,6 +35,13 @@ inline void addCommonOptions(CLI::App& app, CommonOverrides& overrides,
         ->check(CLI::NonNegativeNumber);
 }
 
+// What hapticd and handsim run with: the loaded configuration, overrides applied.
+template <class Config>
+struct RunOptions {
+    Config config;
+    double duration_s{0.0};  // 0 = until SIGINT/SIGTERM
+};
+
 // Applies the overrides to a loaded DaemonConfig or SimConfig (both have log_level, dds and
 // sim_link) and returns the log level to set up.
 template <class Config>

@@ -266,6 +266,8 @@ class Simulation {
     }
     [[nodiscard]] Configuration currentConfiguration() const;
     void currentConfiguration(Configuration& out) const;
+    // Kinetic energy of the nodes and the dynamic bodies at the current velocities.
+    [[nodiscard]] double kineticEnergy() const noexcept;
     [[nodiscard]] double energyNow();
     // Potential of the current state q (= x_ and the bodies), with the tissue term cached.
     [[nodiscard]] double potentialNow(const Configuration& q);
