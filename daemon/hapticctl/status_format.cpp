@@ -2,75 +2,9 @@
 
 #include <fmt/format.h>
 
+#include "haptic/msgs/names.hpp"
+
 namespace haptic::ctl {
-
-std::string_view toString(msgs::DaemonState state) noexcept {
-    switch (state) {
-        case msgs::DaemonState::kInit:
-            return "INIT";
-        case msgs::DaemonState::kIdle:
-            return "IDLE";
-        case msgs::DaemonState::kRendering:
-            return "RENDERING";
-        case msgs::DaemonState::kFault:
-            return "FAULT";
-        case msgs::DaemonState::kEstop:
-            return "E-STOP";
-    }
-    return "?";
-}
-
-std::string_view toString(msgs::DeviceRunState state) noexcept {
-    switch (state) {
-        case msgs::DeviceRunState::kOffline:
-            return "OFFLINE";
-        case msgs::DeviceRunState::kReady:
-            return "READY";
-        case msgs::DeviceRunState::kActive:
-            return "ACTIVE";
-        case msgs::DeviceRunState::kSafe:
-            return "SAFE";
-        case msgs::DeviceRunState::kFault:
-            return "FAULT";
-    }
-    return "?";
-}
-
-std::string_view toString(msgs::DeviceKind kind) noexcept {
-    switch (kind) {
-        case msgs::DeviceKind::kExoskeleton:
-            return "exoskeleton";
-        case msgs::DeviceKind::kThimble:
-            return "thimble";
-    }
-    return "?";
-}
-
-std::string_view toString(msgs::BusState state) noexcept {
-    switch (state) {
-        case msgs::BusState::kUnknown:
-            return "unknown";
-        case msgs::BusState::kErrorActive:
-            return "error-active";
-        case msgs::BusState::kErrorWarning:
-            return "error-warning";
-        case msgs::BusState::kErrorPassive:
-            return "error-passive";
-        case msgs::BusState::kBusOff:
-            return "bus-off";
-    }
-    return "?";
-}
-
-std::string_view toString(msgs::SimTransport transport) noexcept {
-    switch (transport) {
-        case msgs::SimTransport::kIceoryx:
-            return "iceoryx";
-        case msgs::SimTransport::kDds:
-            return "dds";
-    }
-    return "?";
-}
 
 namespace {
 

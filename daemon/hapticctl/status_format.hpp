@@ -8,12 +8,6 @@
 
 namespace haptic::ctl {
 
-std::string_view toString(msgs::DaemonState state) noexcept;
-std::string_view toString(msgs::DeviceRunState state) noexcept;
-std::string_view toString(msgs::DeviceKind kind) noexcept;
-std::string_view toString(msgs::BusState state) noexcept;
-std::string_view toString(msgs::SimTransport transport) noexcept;
-
 // One screen in the style of `systemctl status`: state, loop statistics, sim link, devices
 // and faults. `sample_age_s` is the snapshot's age (negative: unknown, not shown).
 std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s);

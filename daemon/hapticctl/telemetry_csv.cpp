@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "haptic/msgs/names.hpp"
+
 namespace haptic::ctl {
 namespace {
 // Quotes a path for a gnuplot single-quoted string (a quote is written twice).
@@ -26,11 +28,10 @@ std::string telemetryCsvHeader() {
 }
 
 std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t origin_ns) {
-    const bool thimble = sample.device_kind == msgs::DeviceKind::kThimble;
     std::string row =
         fmt::format("{},{:.6f},{},{},{:.4f}", sample.tick,
                     static_cast<double>(sample.stamp_ns - origin_ns) * 1e-9, sample.device_index,
-                    thimble ? "thimble" : "exoskeleton", sample.exoskeleton.actuator_force_cmd_n);
+                    msgs::toString(sample.device_kind), sample.exoskeleton.actuator_force_cmd_n);
     for (const double angle : sample.thimble.servo_angle_cmd_rad) {
         row += fmt::format(",{:.4f}", angle);
     }

@@ -6,26 +6,12 @@
 
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
+#include "haptic/msgs/names.hpp"
 
 namespace haptic::hapticd {
 namespace {
 constexpr std::size_t kRecordedReplies = 32;
 
-const char* commandName(msgs::CommandKind kind) {
-    switch (kind) {
-        case msgs::CommandKind::kEnable:
-            return "enable";
-        case msgs::CommandKind::kDisable:
-            return "disable";
-        case msgs::CommandKind::kSetMethod:
-            return "method";
-        case msgs::CommandKind::kEstop:
-            return "estop";
-        case msgs::CommandKind::kClearFault:
-            return "clear";
-    }
-    return "unknown";
-}
 }  // namespace
 
 CommandRelay::CommandRelay(ipc::DdsParticipant& participant, daemon::CommandChannel& channel)
@@ -81,7 +67,7 @@ void CommandRelay::poll() {
             continue;
         }
         in_flight_.push_back(command.request_id);
-        spdlog::info("command {} '{}' {}", command.request_id, commandName(command.kind),
+        spdlog::info("command {} '{}' {}", command.request_id, msgs::toString(command.kind),
                      command.argument.view());
     }
     msgs::HapticCommandReply answer;

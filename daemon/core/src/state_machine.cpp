@@ -94,20 +94,4 @@ void DaemonStateMachine::raiseFault(std::uint32_t code, std::string_view device_
     }
 }
 
-const char* toString(msgs::DaemonState state) noexcept {
-    switch (state) {
-        case DaemonState::kInit:
-            return "INIT";
-        case DaemonState::kIdle:
-            return "IDLE";
-        case DaemonState::kRendering:
-            return "RENDERING";
-        case DaemonState::kFault:
-            return "FAULT";
-        case DaemonState::kEstop:
-            return "E-STOP";
-    }
-    return "UNKNOWN";
-}
-
 }  // namespace haptic::daemon

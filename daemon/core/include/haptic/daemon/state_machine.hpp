@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "haptic/msgs/messages.hpp"
+#include "haptic/msgs/names.hpp"  // toString(DaemonState), the name the journal and status use
 
 namespace haptic::daemon {
 
@@ -77,7 +78,5 @@ class DaemonStateMachine {
     std::size_t fault_count_{0};
     std::uint64_t dropped_faults_{0};
 };
-
-[[nodiscard]] const char* toString(msgs::DaemonState state) noexcept;
 
 }  // namespace haptic::daemon
