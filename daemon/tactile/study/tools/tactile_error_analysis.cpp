@@ -4,8 +4,8 @@
 //
 //   tactile_error_analysis [--config config/devices/thimble.yaml] [--out DIR]
 //
-// Writes DIR/error_analysis.md (the table in docs/benchmarks.md) and DIR/error_analysis.dat
-// (gnuplot input, rendered by error_analysis.gp next to this file). Prints the table too.
+// Prints the markdown table that docs/benchmarks.md records (the project's one results file)
+// and writes DIR/error_analysis.dat, the gnuplot input that error_analysis.gp renders.
 
 #include <CLI/CLI.hpp>
 #include <cmath>
@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
     std::string config_path = HAPTIC_DEFAULT_THIMBLE_CONFIG;
     std::string out_dir = ".";
     app.add_option("--config", config_path, "thimble device YAML")->check(CLI::ExistingFile);
-    app.add_option("--out", out_dir, "folder for error_analysis.md and .dat");
+    app.add_option("--out", out_dir, "folder for error_analysis.dat (the gnuplot input)");
     std::string weighting_name = "stiffness";
     int sample_override = 0;
     app.add_option("--samples", sample_override, "pad samples (default optimiser.pad_samples)")
@@ -120,7 +120,6 @@ int main(int argc, char** argv) {
               << " samples.\n";
         std::printf("%s", table.str().c_str());
         std::filesystem::create_directories(out_dir);
-        std::ofstream(std::filesystem::path(out_dir) / "error_analysis.md") << table.str();
         std::ofstream(std::filesystem::path(out_dir) / "error_analysis.dat") << data.str();
     } catch (const std::exception& e) {
         std::fprintf(stderr, "tactile_error_analysis: %s\n", e.what());
