@@ -139,6 +139,10 @@ class RealtimeLoop {
     }
 
   private:
+    // Ticks of safe commands written after the loop ends: more than one, so a single frame
+    // lost on the bus cannot leave a device holding its force.
+    static constexpr int kSafeStopTicks = 5;
+
     void run() {
         const auto setup = daemon::applyRealtimeSettings(realtime_);
         setup_report_ = setup.report;
@@ -183,6 +187,15 @@ class RealtimeLoop {
             timing.write_us = static_cast<double>(write_done - compute_done) * 1e-3;
             queueTelemetry(ticks_.load(std::memory_order_relaxed), wake, timing);
             ticks_.fetch_add(1, std::memory_order_relaxed);
+        }
+        // Fail-stop: whatever ended the loop (SIGTERM, --duration, RouDi loss, an exception on
+        // the non-RT side unwinding this object), every device gets its safe command on the
+        // next kSafeStopTicks ticks before the buses close, so none is left holding the last
+        // force. A SIGKILL skips this; only the device's own command timeout covers it.
+        for (int i = 0; i < kSafeStopTicks; ++i) {
+            (void)timer.waitNext();
+            devices_.read(monotonicNowNs());
+            devices_.writeSafe();
         }
     }
 

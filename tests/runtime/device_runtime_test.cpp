@@ -71,6 +71,48 @@ TEST(DeviceRuntime, DevicesComeOnlineAndRenderContactWhileRendering) {
               rig.thimbleTargets()[0]);
 }
 
+// One tick of hapticd's way out (daemon_app.cpp, after the loop): the emulators run, the
+// buses are drained, and every device gets its safe command instead of the rendered one.
+void safeStopTick(RuntimeRig& rig) {
+    rig.now += kMs;
+    rig.host.setTime(rig.now);
+    rig.target.setTime(rig.now);
+    can::CanFrame frame;
+    while (rig.target.read(frame) == can::IoResult::kOk) {
+        for (auto& emulator : rig.emulators) {
+            emulator->handleFrame(frame, rig.now);
+        }
+    }
+    for (auto& emulator : rig.emulators) {
+        emulator->tick(rig.now);
+    }
+    rig.runtime.read(rig.now);
+    rig.runtime.writeSafe();
+}
+
+TEST(DeviceRuntime, WriteSafeDisablesTheExoskeletonAndRetractsTheThimbleWhileRendering) {
+    RuntimeRig rig;
+    renderWithContact(rig);
+    ASSERT_NEAR(std::abs(rig.exoForce()), 10.0, 1e-9);
+    ASSERT_GT(distance(rig.thimbleTargets(), retract(rig)), 0.05);
+    const auto& exo = static_cast<runtime::ExoskeletonChannel&>(rig.runtime.channel(kExo));
+    const auto& thimble = static_cast<runtime::ThimbleChannel&>(rig.runtime.channel(kThimble));
+    ASSERT_NE(exo.driver().state().actuator.status & protocol::kExoEnabled, 0) << "rendering";
+    const double rendered_n = exo.driver().state().actuator.force_n;
+    ASSERT_GT(std::abs(rendered_n), 5.0) << "the emulated actuator pushes before the stop";
+
+    for (int i = 0; i < 5; ++i) {
+        safeStopTick(rig);
+    }
+    EXPECT_EQ(exo.command().force_n, 0.0);
+    EXPECT_FALSE(exo.command().enable);
+    EXPECT_LT(distance(thimble.command().servo_target_rad, retract(rig)), 1e-12);
+    // The device's own state frames, not hapticd's view: the emulated actuator reports itself
+    // disabled and its force decays with its 5 ms lag (5 ticks: to under half).
+    EXPECT_EQ(exo.driver().state().actuator.status & protocol::kExoEnabled, 0);
+    EXPECT_LT(std::abs(exo.driver().state().actuator.force_n), 0.5 * std::abs(rendered_n));
+}
+
 TEST(DeviceRuntime, StaleSimInputFadesToZeroWithinTheTimeoutAndNeverStepsUp) {
     RuntimeRig rig;
     renderWithContact(rig);

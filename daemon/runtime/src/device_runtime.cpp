@@ -72,6 +72,12 @@ void DeviceRuntime::write() noexcept {
     }
 }
 
+void DeviceRuntime::writeSafe() noexcept {
+    for (auto& channel : channels_) {
+        channel->writeSafe();
+    }
+}
+
 OpenedBuses openBuses(const std::vector<config::DeviceConfig>& devices) {
     OpenedBuses out;
     out.per_device.resize(devices.size(), nullptr);

@@ -10,6 +10,8 @@
 //   supervise()    link faults -> DaemonCore::raiseFault, once per occurrence (latched)
 //   compute()      renderer -> safety -> x DaemonCore::outputGain -> next command
 //   write()        command to the bus
+// writeSafe() replaces write() on the way out: it sends the device's safe command (exoskeleton
+// disabled at 0 N, thimble at its retract pose) whatever the renderer last computed.
 //
 // Faults (haptic/status "Faults:", code in brackets) latch the device in its safe state:
 //   100 heartbeat lost   no heartbeat for can.heartbeat_timeout_ms after one was heard
@@ -65,6 +67,11 @@ class DeviceChannel {
     virtual void compute(daemon::DaemonCore& core, std::size_t index,
                          std::int64_t now_ns) noexcept = 0;
     void write() noexcept;
+    // The safe command (exoskeleton disabled at 0 N, thimble retracted), written at once.
+    void writeSafe() noexcept {
+        commandSafe();
+        write();
+    }
 
     [[nodiscard]] const daemon::DeviceReport& report() const noexcept { return report_; }
     // LinkFault bits of the last supervise().
@@ -81,6 +88,8 @@ class DeviceChannel {
     virtual bool driverHandleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept = 0;
     virtual std::uint32_t driverFaults(std::int64_t now_ns) noexcept = 0;
     virtual can::IoResult sendCommand() noexcept = 0;
+    // Sets the command the next write() sends to the device's safe state.
+    virtual void commandSafe() noexcept = 0;
     [[nodiscard]] virtual const devices::LinkMonitor& link() const noexcept = 0;
     [[nodiscard]] virtual std::uint64_t rejectedFrames() const noexcept = 0;
     // The code the device reports (fault frame or heartbeat), 0 if none.

@@ -11,6 +11,7 @@
 //                      device's report goes into DaemonCore (status, DeviceState, telemetry).
 //                      Call it after DaemonCore::update() so the fade gain is this tick's.
 //   write()            one command per device
+//   writeSafe()        instead of write() when the loop ends: every device's safe command
 // All three are noexcept, allocation- and lock-free after construction.
 
 #include <array>
@@ -38,6 +39,7 @@ class DeviceRuntime {
     void read(std::int64_t now_ns) noexcept;
     void compute(daemon::DaemonCore& core, std::int64_t now_ns) noexcept;
     void write() noexcept;
+    void writeSafe() noexcept;
 
     [[nodiscard]] std::size_t size() const noexcept { return channels_.size(); }
     [[nodiscard]] DeviceChannel& channel(std::size_t index) noexcept { return *channels_[index]; }

@@ -42,6 +42,10 @@ class ExoskeletonChannel final
 
   protected:
     [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
+    void commandSafe() noexcept override {
+        command_.force_n = 0.0;
+        command_.enable = false;
+    }
 
   private:
     void followMethod(const msgs::DeviceId& method) noexcept;

@@ -41,6 +41,7 @@ class ThimbleChannel final
 
   protected:
     [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
+    void commandSafe() noexcept override { command_.servo_target_rad = retract_servo_rad_; }
 
   private:
     void measure() noexcept;
