@@ -1,16 +1,6 @@
-// main() of the Google Benchmark programs: the provenance lines first (provenance.hpp), then
-// Google Benchmark's own flags and run, as BENCHMARK_MAIN() would.
-#include <benchmark/benchmark.h>
-
-#include "provenance.hpp"
+// main() of the Google Benchmark programs without start-up work of their own.
+#include "benchmark_runner.hpp"
 
 int main(int argc, char** argv) {
-    haptic::bench::printProvenance(argc, argv);
-    benchmark::Initialize(&argc, argv);
-    if (benchmark::ReportUnrecognizedArguments(argc, argv)) {
-        return 1;
-    }
-    benchmark::RunSpecifiedBenchmarks();
-    benchmark::Shutdown();
-    return 0;
+    return haptic::bench::runGoogleBenchmarks(argc, argv);
 }

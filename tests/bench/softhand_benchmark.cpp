@@ -24,13 +24,13 @@
 #include <utility>
 #include <vector>
 
+#include "benchmark_runner.hpp"
 #include "fingertip_press_scene.hpp"
 #include "haptic/common/statistics.hpp"
 #include "haptic/config/scene.hpp"
 #include "haptic/softhand/elastic_tracking.hpp"
 #include "haptic/softhand/hand_builder.hpp"
 #include "haptic/softhand/scene_simulation.hpp"
-#include "provenance.hpp"
 
 namespace haptic::softhand {
 namespace {
@@ -369,15 +369,8 @@ BENCHMARK(wholeHand)
 // The same heap settings as handsim's main (see there): without them the page faults of the
 // per-step matrices double the step time.
 int main(int argc, char** argv) {
-    haptic::bench::printProvenance(argc, argv);
     mallopt(M_MMAP_THRESHOLD, 256 << 20);
     mallopt(M_TRIM_THRESHOLD, 512 << 20);
     mallopt(M_TOP_PAD, 64 << 20);
-    benchmark::Initialize(&argc, argv);
-    if (benchmark::ReportUnrecognizedArguments(argc, argv)) {
-        return 1;
-    }
-    benchmark::RunSpecifiedBenchmarks();
-    benchmark::Shutdown();
-    return 0;
+    return haptic::bench::runGoogleBenchmarks(argc, argv);
 }
