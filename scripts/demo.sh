@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The README's main command: builds if needed, starts the real iox-roudi with our memory
-# pools, `hapticemu` for the exoskeleton and the thimble on the UDP CAN bus (the shipped device
-# files say can.transport: udp), then hapticd and handsim, and shows `hapticctl status` live.
+# pools, `hapticemu --user` (the virtual user wearing the exoskeleton and the thimble on the UDP
+# CAN bus, whose hand the tracker sees on tracking/hand), then hapticd and handsim tracking
+# that hand, and shows `hapticctl status` live.
 # Stops everything on Ctrl-C or after --duration and checks that no shared memory is left
 # behind. Once both devices are up it enables rendering, records haptic/telemetry for the
 # first RECORD seconds (the scripted press / slide / edge motion loops every 6 s) and writes
@@ -65,8 +66,7 @@ cleanup() {
   [[ -n "${RECORD_PID:-}" ]] && stop "$RECORD_PID" "hapticctl record"
   [[ -n "${SIM_PID:-}" ]] && stop "$SIM_PID" handsim
   [[ -n "${DAEMON_PID:-}" ]] && stop "$DAEMON_PID" hapticd
-  [[ -n "${THIMBLE_EMU_PID:-}" ]] && stop "$THIMBLE_EMU_PID" hapticemu-thimble
-  [[ -n "${EXO_EMU_PID:-}" ]] && stop "$EXO_EMU_PID" hapticemu-exo
+  [[ -n "${EMU_PID:-}" ]] && stop "$EMU_PID" hapticemu
   [[ -n "${ROUDI_PID:-}" ]] && stop "$ROUDI_PID" iox-roudi
   local stale
   stale=$(ls /dev/shm/iceoryx_mgmt /dev/shm/"$(id -gn)" /tmp/roudi /tmp/roudi.lock \
@@ -96,7 +96,7 @@ for _ in $(seq 200); do
   sleep 0.05
 done
 
-echo "demo: starting hapticemu for both devices on the UDP CAN bus"
+echo "demo: starting hapticemu: the virtual user wearing both devices on the UDP CAN bus"
 # stdin from /dev/null: no fault commands; the emulators run until stopped. They stand in for
 # devices with their own controllers: a stalled emulator misses heartbeats (50 ms timeout) and
 # hapticd rightly latches FAULT. A real device's controller is not starved by the host's other
@@ -105,17 +105,17 @@ echo "demo: starting hapticemu for both devices on the UDP CAN bus"
 EMU_NICE=()
 if chrt -f 40 true 2>/dev/null; then EMU_NICE=(chrt -f 40);
 elif nice -n -5 true 2>/dev/null; then EMU_NICE=(nice -n -5); fi
-setsid "${EMU_NICE[@]}" "$HAPTICEMU" -d "$ROOT/config/devices/exoskeleton.yaml" --bus udp </dev/null \
-  >"$LOGS/hapticemu-exo.log" 2>&1 &
-EXO_EMU_PID=$!
-setsid "${EMU_NICE[@]}" "$HAPTICEMU" -d "$ROOT/config/devices/thimble.yaml" --bus udp </dev/null \
-  >"$LOGS/hapticemu-thimble.log" 2>&1 &
-THIMBLE_EMU_PID=$!
+# The user's intent is the default scene's press / slide / edge script (config/user.yaml);
+# handsim follows the user's tracked hand, not the script, so both devices and the simulated
+# hand agree on one finger.
+setsid "${EMU_NICE[@]}" "$HAPTICEMU" --user "$ROOT/config/user.yaml" </dev/null \
+  >"$LOGS/hapticemu.log" 2>&1 &
+EMU_PID=$!
 
 echo "demo: starting hapticd (--realtime $REALTIME) and handsim"
 setsid "$HAPTICD" --realtime "$REALTIME" >"$LOGS/hapticd.log" 2>&1 &
 DAEMON_PID=$!
-setsid "$HANDSIM" >"$LOGS/handsim.log" 2>&1 &
+setsid "$HANDSIM" --tracking-topic tracking/hand >"$LOGS/handsim.log" 2>&1 &
 SIM_PID=$!
 
 # Rendering starts once the daemon answers and both devices report in (hapticd refuses
@@ -152,8 +152,7 @@ plot_recording() {
 start=$SECONDS
 while :; do
   sleep 2
-  for pid_name in "$DAEMON_PID:hapticd" "$SIM_PID:handsim" "$EXO_EMU_PID:hapticemu-exo" \
-      "$THIMBLE_EMU_PID:hapticemu-thimble"; do
+  for pid_name in "$DAEMON_PID:hapticd" "$SIM_PID:handsim" "$EMU_PID:hapticemu"; do
     if ! kill -0 "${pid_name%%:*}" 2>/dev/null; then
       echo "demo: ${pid_name#*:} exited; its log:" >&2
       tail -n 20 "$LOGS/${pid_name#*:}.log" >&2

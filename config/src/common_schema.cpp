@@ -110,6 +110,27 @@ Transform readTransform(MapReader map) {
     return out;
 }
 
+void checkDeviceBindings(const SceneConfig& scene, const std::vector<DeviceConfig>& devices,
+                         const ListReader& device_list) {
+    for (std::size_t i = 0; i < devices.size(); ++i) {
+        const DeviceConfig& device = devices[i];
+        const Field entry = device_list.at(i);
+        if (!scene.devices.contains(device.name)) {
+            std::string bound;
+            for (const auto& [name, binding] : scene.devices) {
+                bound += (bound.empty() ? "" : ", ") + name;
+            }
+            entry.fail("a device bound in scene '" + scene.name +
+                           "' (bound: " + (bound.empty() ? std::string("none") : bound) + ")",
+                       "'" + device.name + "'");
+        }
+        if (device.isExoskeleton() && scene.hand.model == HandModel::kFingertip) {
+            entry.fail("a device the scene's hand model can drive",
+                       "exoskeleton '" + device.name + "' with hand.model fingertip (no joints)");
+        }
+    }
+}
+
 ListReader requiredDeviceList(MapReader& root) {
     return root.requiredList("devices", 1, kMaxDevices, "a path to a device file");
 }

@@ -10,6 +10,7 @@
 #include "haptic/config/common.hpp"
 #include "haptic/config/device.hpp"
 #include "haptic/config/reader.hpp"
+#include "haptic/config/scene.hpp"
 #include "haptic/config/types.hpp"
 
 namespace haptic::config::detail {
@@ -46,5 +47,11 @@ DeviceConfig readDevice(MapReader root, const std::filesystem::path& source);
 ListReader requiredDeviceList(MapReader& root);
 // Loads every listed file and checks names and CAN ids across devices.
 std::vector<DeviceConfig> readDeviceList(const ListReader& list);
+
+// Every listed device needs a simulated finger of the scene to take its targets from (a
+// binding in the scene's `devices`), and an exoskeleton needs finger joints, which the
+// fingertip-only model does not have. `device_list` points the errors at the list entries.
+void checkDeviceBindings(const SceneConfig& scene, const std::vector<DeviceConfig>& devices,
+                         const ListReader& device_list);
 
 }  // namespace haptic::config::detail

@@ -17,12 +17,14 @@
 #include <exception>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 #include <thread>
 
 #include "HapticCommandPubSubTypes.h"
 #include "HapticStatusPubSubTypes.h"
 #include "HapticTelemetryPubSubTypes.h"
 #include "SimStatusPubSubTypes.h"
+#include "contact_quality.hpp"
 #include "haptic/common/clock.hpp"
 #include "haptic/config/daemon.hpp"
 #include "haptic/config/error.hpp"
@@ -205,7 +207,27 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
 }
 
 // Renders a recorded CSV to PNG with gnuplot (Debian's gnuplot-nox), script on its stdin.
-int plotTelemetry(const std::string& csv_path, std::string png_path) {
+// Prints, per exoskeleton in the recording, what the finger felt of its force: time at the
+// clamp while in contact and chatter (contact_quality.hpp).
+void printContactQuality(const std::string& csv_path, double clamp_n) {
+    std::ifstream file(csv_path);
+    std::stringstream text;
+    text << file.rdbuf();
+    haptic::ctl::ContactQualitySettings settings;
+    settings.clamp_n = clamp_n;
+    for (const auto& [device, forces] : haptic::ctl::exoskeletonForcesFromCsv(text.str())) {
+        const auto quality = haptic::ctl::contactQuality(forces, settings);
+        std::printf(
+            "exoskeleton (device %d): %zu ticks, %zu in contact (|F| > %.2f N), mean |F| %.2f N; "
+            "at the %.1f N clamp %.1f%% of contact ticks; chatter %.3f N RMS = %.1f%% of the "
+            "mean\n",
+            device, quality.ticks, quality.contact_ticks, settings.contact_threshold_n,
+            quality.mean_contact_force_n, clamp_n, 100.0 * quality.clampFraction(),
+            quality.chatter_rms_n, 100.0 * quality.chatterFraction());
+    }
+}
+
+int plotTelemetry(const std::string& csv_path, std::string png_path, double clamp_n) {
     if (png_path.empty()) {
         png_path = csv_path + ".png";
     }
@@ -245,6 +267,7 @@ int plotTelemetry(const std::string& csv_path, std::string png_path) {
         return kExitError;
     }
     std::printf("%s\n", png_path.c_str());
+    printContactQuality(csv_path, clamp_n);
     return EXIT_SUCCESS;
 }
 
@@ -361,6 +384,11 @@ int main(int argc, char** argv) {
     auto* plot = app.add_subcommand("plot", "PNG of forces and loop timing from a recorded CSV");
     plot->add_option("file", plot_path, "CSV written by 'record'")->required();
     plot->add_option("-o,--output", plot_output, "PNG to write (default: <file>.png)");
+    double plot_clamp_n = 10.0;
+    plot->add_option("--exo-clamp-n", plot_clamp_n,
+                     "the exoskeleton's force clamp (safety.max_force_n) for the clamp figure")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
 
     using haptic::msgs::CommandKind;
     struct Simple {
@@ -414,7 +442,7 @@ int main(int argc, char** argv) {
             return recordTelemetry(cfg, record_path, record_duration_s, timeout_s);
         }
         if (plot->parsed()) {
-            return plotTelemetry(plot_path, plot_output);
+            return plotTelemetry(plot_path, plot_output, plot_clamp_n);
         }
         if (method->parsed()) {
             return sendCommand(cfg, CommandKind::kSetMethod, method_name, timeout_s);

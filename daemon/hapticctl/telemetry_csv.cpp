@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <charconv>
+
 #include "haptic/msgs/names.hpp"
 
 namespace haptic::ctl {
@@ -24,7 +26,19 @@ std::string telemetryCsvHeader() {
     for (std::size_t i = 0; i < msgs::kThimbleServos; ++i) {
         header += fmt::format(",servo_angle_cmd_{}_rad", i);
     }
-    return header + ",tick_work_us,wakeup_latency_us,read_us,write_us\n";
+    header += ",tick_work_us,wakeup_latency_us,read_us,write_us";
+    // Appended later: the columns above keep their numbers for the plot script.
+    for (std::size_t i = 0; i < 3; ++i) {
+        header += fmt::format(",exo_joint_{}_rad", i);
+    }
+    for (std::size_t i = 0; i < 3; ++i) {
+        header += fmt::format(",exo_proxy_{}_rad", i);
+    }
+    header += ",exo_ghost_force_x_n,exo_ghost_force_y_n,exo_ghost_force_z_n,exo_energy_observer_j";
+    for (std::size_t i = 0; i < msgs::kThimbleServos; ++i) {
+        header += fmt::format(",servo_angle_{}_rad", i);
+    }
+    return header + "\n";
 }
 
 std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t origin_ns) {
@@ -35,8 +49,57 @@ std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t or
     for (const double angle : sample.thimble.servo_angle_cmd_rad) {
         row += fmt::format(",{:.4f}", angle);
     }
-    return row + fmt::format(",{:.2f},{:.2f},{:.2f},{:.2f}\n", sample.tick_work_us,
-                             sample.wakeup_latency_us, sample.read_us, sample.write_us);
+    row += fmt::format(",{:.2f},{:.2f},{:.2f},{:.2f}", sample.tick_work_us,
+                       sample.wakeup_latency_us, sample.read_us, sample.write_us);
+    const msgs::ExoskeletonTelemetry& exo = sample.exoskeleton;
+    for (std::size_t i = 0; i < 3; ++i) {
+        row += fmt::format(",{:.6f}", exo.joint_position_rad[i]);
+    }
+    for (std::size_t i = 0; i < 3; ++i) {
+        row += fmt::format(",{:.6f}", exo.proxy_position_rad[i]);
+    }
+    for (const double force : exo.ghost_force_n) {
+        row += fmt::format(",{:.4f}", force);
+    }
+    row += fmt::format(",{:.6f}", exo.energy_observer_j);
+    for (const double angle : sample.thimble.servo_angle_rad) {
+        row += fmt::format(",{:.4f}", angle);
+    }
+    return row + "\n";
+}
+
+std::map<int, std::vector<double>> exoskeletonForcesFromCsv(std::string_view csv) {
+    std::map<int, std::vector<double>> out;
+    const std::string_view kind = msgs::toString(msgs::DeviceKind::kExoskeleton);
+    while (!csv.empty()) {
+        const std::size_t end = csv.find('\n');
+        std::string_view line = csv.substr(0, end);
+        csv.remove_prefix(end == std::string_view::npos ? csv.size() : end + 1);
+        // tick, time_s, device, device_kind, actuator_force_cmd_n, ...
+        std::string_view fields[5];
+        std::size_t count = 0;
+        while (count < 5) {
+            const std::size_t comma = line.find(',');
+            fields[count++] = line.substr(0, comma);
+            if (comma == std::string_view::npos) {
+                break;
+            }
+            line.remove_prefix(comma + 1);
+        }
+        if (count < 5 || fields[3] != kind) {
+            continue;
+        }
+        int device = 0;
+        double force = 0.0;
+        const auto [device_end, device_error] =
+            std::from_chars(fields[2].data(), fields[2].data() + fields[2].size(), device);
+        const auto [force_end, force_error] =
+            std::from_chars(fields[4].data(), fields[4].data() + fields[4].size(), force);
+        if (device_error == std::errc() && force_error == std::errc()) {
+            out[device].push_back(force);
+        }
+    }
+    return out;
 }
 
 std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path) {

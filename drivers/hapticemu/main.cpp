@@ -1,12 +1,16 @@
-// hapticemu: emulates the exoskeleton or the thimble on a CAN bus: the real frames, device
-// dynamics and a user model, with fault injection from stdin (see fault_injector.hpp for the
-// commands). It plays the part libfranka's mock server plays for the robot.
+// hapticemu: emulates the exoskeleton and the thimble on a CAN bus: the real frames, device
+// dynamics, and either a built-in user motion or the virtual user, with fault injection from
+// stdin (see fault_injector.hpp for the commands). It plays the part libfranka's mock server
+// plays for the robot.
 //
 //   hapticemu -d config/devices/exoskeleton.yaml --bus udp [--udp-port 47000]
 //   hapticemu -d config/devices/thimble.yaml --bus socketcan --interface vcan0
+//   hapticemu --user config/user.yaml     every device the user wears, one hand, and the
+//                                         tracker publishing that hand on tracking/hand
 //
 // It prints "ready" on stdout once the bus is open, and each fault command's result
-// ("ok" or "error: ...") on stdout, so a test driving it through pipes can synchronise.
+// ("ok" or "error: ...") on stdout, so a test driving it through pipes can synchronise. With
+// several devices a fault command starts with the device's name ("thimble stop-heartbeat").
 
 #include <poll.h>
 #include <spdlog/spdlog.h>
@@ -17,15 +21,24 @@
 #include <cstdlib>
 #include <ctime>
 #include <exception>
+#include <fstream>
 #include <memory>
+#include <optional>
+#include <sstream>
 #include <string>
+#include <vector>
 
+#include "HandPosePubSubTypes.h"
 #include "haptic/can/socketcan_bus.hpp"
 #include "haptic/can/udp_bus.hpp"
 #include "haptic/common/clock.hpp"
 #include "haptic/config/device.hpp"
 #include "haptic/config/error.hpp"
+#include "haptic/config/virtual_user.hpp"
 #include "haptic/emu/device_emulator.hpp"
+#include "haptic/emu/virtual_user.hpp"
+#include "haptic/ipc/dds_participant.hpp"
+#include "haptic/msgs/conversions.hpp"
 #include "haptic/process/logging.hpp"
 #include "haptic/process/main_skeleton.hpp"
 #include "haptic/process/shutdown.hpp"
@@ -33,10 +46,35 @@
 namespace {
 
 // Splits what stdin delivered into lines and applies each as a fault command.
+struct EmulatedDevice {
+    haptic::config::DeviceConfig config;
+    std::unique_ptr<haptic::emu::DeviceEmulator> emulator;
+};
+
+// A fault command for one of several devices names it first; a lone device needs no name.
+bool applyFaultCommand(std::vector<EmulatedDevice>& devices, const std::string& line,
+                       std::string& error) {
+    if (devices.size() == 1) {
+        return devices.front().emulator->faults().command(line, error);
+    }
+    const std::size_t space = line.find(' ');
+    const std::string name = line.substr(0, space);
+    std::string names;
+    for (EmulatedDevice& device : devices) {
+        if (device.config.name == name) {
+            return device.emulator->faults().command(
+                space == std::string::npos ? std::string() : line.substr(space + 1), error);
+        }
+        names += (names.empty() ? "" : ", ") + device.config.name;
+    }
+    error = "start the command with a device name (" + names + ")";
+    return false;
+}
+
 class CommandReader {
   public:
     // Returns false at end of input.
-    bool readAvailable(haptic::emu::FaultInjector& faults) {
+    bool readAvailable(std::vector<EmulatedDevice>& devices) {
         char buffer[512];
         const ssize_t count = ::read(STDIN_FILENO, buffer, sizeof(buffer));
         if (count <= 0) {
@@ -51,7 +89,7 @@ class CommandReader {
                 continue;
             }
             std::string error;
-            if (faults.command(line, error)) {
+            if (applyFaultCommand(devices, line, error)) {
                 std::printf("ok %s\n", line.c_str());
             } else {
                 std::printf("error: %s\n", error.c_str());
@@ -65,11 +103,22 @@ class CommandReader {
     std::string pending_;
 };
 
+std::string readFile(const std::filesystem::path& path) {
+    std::ifstream file(path);
+    if (!file) {
+        throw std::runtime_error(path.string() + ": cannot open the replay file");
+    }
+    std::stringstream text;
+    text << file.rdbuf();
+    return text.str();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     CLI::App app{"hapticemu - CAN device emulator for the exoskeleton and the thimble"};
-    std::string device_path;
+    std::vector<std::string> device_paths;
+    std::string user_path;
     bool check_only = false;
     std::string bus_kind = "udp";
     std::string interface;
@@ -77,9 +126,17 @@ int main(int argc, char** argv) {
     int udp_slots = 8;
     std::string mode = "stream";
     double duration_s = 0.0;
+    int dds_domain = -1;
     std::string log_level = "info";
-    app.add_option("-d,--device", device_path, "device configuration file")->required();
-    app.add_flag("--check", check_only, "validate the device file, print a summary and exit");
+    auto* device_option =
+        app.add_option("-d,--device", device_paths,
+                       "device configuration file; repeat it for several devices on one bus");
+    auto* user_option = app.add_option(
+        "--user", user_path,
+        "virtual user file (config/user.yaml): emulates every device it lists, worn by one "
+        "hand, and publishes that hand on the tracker topic");
+    device_option->excludes(user_option);
+    app.add_flag("--check", check_only, "validate the files, print a summary and exit");
     app.add_option("--bus", bus_kind, "udp or socketcan")
         ->check(CLI::IsMember({"udp", "socketcan"}));
     app.add_option("--interface", interface, "SocketCAN interface (default: the device file's)");
@@ -97,28 +154,73 @@ int main(int argc, char** argv) {
                    "command, for tests)")
         ->check(CLI::IsMember({"stream", "lockstep"}));
     app.add_option("--duration", duration_s, "stop after this many seconds (0: until signalled)");
+    app.add_option("--dds-domain", dds_domain, "with --user: override dds.domain_id")
+        ->check(CLI::Range(0, 232));
     app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
     CLI11_PARSE(app, argc, argv);
+    if (device_paths.empty() && user_path.empty()) {
+        std::fprintf(stderr, "hapticemu: give --device FILE (one or more) or --user FILE\n");
+        return 2;
+    }
 
     return haptic::process::runMain("hapticemu", [&] {
-        const auto device = haptic::config::loadDeviceConfig(device_path);
+        std::optional<haptic::config::VirtualUserConfig> user_config;
+        std::vector<EmulatedDevice> devices;
+        if (!user_path.empty()) {
+            user_config = haptic::config::loadVirtualUserConfig(user_path);
+            if (dds_domain >= 0) {
+                user_config->dds.domain_id = dds_domain;
+            }
+            for (const auto& device : user_config->devices) {
+                devices.push_back({device, nullptr});
+            }
+        } else {
+            for (const auto& path : device_paths) {
+                devices.push_back({haptic::config::loadDeviceConfig(path), nullptr});
+            }
+        }
         haptic::process::setupLogging("hapticemu", log_level);
-        // The emulator joins the bus the device file describes, as hapticd does, unless told
+        const haptic::config::DeviceConfig& first = devices.front().config;
+        // The emulator joins the bus the device files describe, as hapticd does, unless told
         // otherwise.
         if (udp_port_option->count() == 0) {
-            udp_port = device.can.udp_port;
+            udp_port = first.can.udp_port;
         }
         if (udp_slots_option->count() == 0) {
-            udp_slots = device.can.udp_slots;
+            udp_slots = first.can.udp_slots;
         }
         if (interface.empty()) {
-            interface = device.can.interface;
+            interface = first.can.interface;
         }
-        spdlog::info(
-            "device '{}' ({}): command 0x{:03x}, state 0x{:03x}, heartbeat 0x{:03x}, fault "
-            "0x{:03x}",
-            device.name, device.isExoskeleton() ? "exoskeleton" : "thimble", device.can.command_id,
-            device.can.state_id, device.can.heartbeat_id, device.can.fault_id);
+        std::vector<std::uint32_t> command_ids;
+        for (const EmulatedDevice& device : devices) {
+            const auto& can = device.config.can;
+            if (user_path.empty() &&
+                (can.udp_port != first.can.udp_port || can.interface != first.can.interface)) {
+                throw std::runtime_error("device '" + device.config.name +
+                                         "' is on another bus than '" + first.name +
+                                         "'; one hapticemu emulates one bus");
+            }
+            spdlog::info(
+                "device '{}' ({}): command 0x{:03x}, state 0x{:03x}, heartbeat 0x{:03x}, fault "
+                "0x{:03x}",
+                device.config.name, device.config.isExoskeleton() ? "exoskeleton" : "thimble",
+                can.command_id, can.state_id, can.heartbeat_id, can.fault_id);
+            command_ids.push_back(can.command_id);
+        }
+        std::unique_ptr<haptic::emu::VirtualUser> user;
+        if (user_config) {
+            const auto& scene = user_config->scene;
+            const std::string replay =
+                scene.tracking.source == haptic::config::TrackingSource::kReplay
+                    ? readFile(scene.tracking.replay_file)
+                    : std::string();
+            user = std::make_unique<haptic::emu::VirtualUser>(*user_config, replay);
+            spdlog::info(
+                "virtual user: intent from scene '{}', tracker on '{}' at {} Hz, {} ms latency",
+                scene.name, user_config->tracker.topic, user_config->tracker.rate_hz,
+                user_config->tracker.latency_ms);
+        }
         if (check_only) {
             return EXIT_SUCCESS;
         }
@@ -132,15 +234,31 @@ int main(int argc, char** argv) {
         } else {
             haptic::can::SocketCanConfig socketcan;
             socketcan.interface = interface;
-            socketcan.fd = device.can.fd;
-            socketcan.receive_ids = {device.can.command_id};
+            socketcan.fd = first.can.fd;
+            socketcan.receive_ids = command_ids;
             bus = std::make_unique<haptic::can::SocketCanBus>(socketcan);
             spdlog::info("on SocketCAN {}", interface);
         }
         haptic::emu::EmulatorOptions options;
         options.mode = mode == "lockstep" ? haptic::emu::EmulatorMode::kLockstep
                                           : haptic::emu::EmulatorMode::kStream;
-        auto emulator = haptic::emu::makeEmulator(device, *bus, options);
+        for (EmulatedDevice& device : devices) {
+            device.emulator = haptic::emu::makeEmulator(device.config, *bus, options);
+            if (user) {
+                user->wear(device.config, *device.emulator);
+            }
+        }
+        std::unique_ptr<haptic::ipc::DdsParticipant> participant;
+        haptic::ipc::DdsWriter<haptic::idl::HandPose> tracker_writer;
+        if (user) {
+            const auto& dds = user_config->dds;
+            participant = std::make_unique<haptic::ipc::DdsParticipant>(
+                haptic::ipc::DdsSettings{static_cast<std::uint32_t>(dds.domain_id),
+                                         dds.profiles_file.string(), dds.participant_profile},
+                "hapticemu");
+            tracker_writer = participant->createWriter<haptic::idl::HandPosePubSubType>(
+                user_config->tracker.topic, haptic::ipc::TopicKind::kStream);
+        }
 
         haptic::process::installShutdownHandlers();
         std::printf("ready\n");
@@ -157,12 +275,26 @@ int main(int argc, char** argv) {
         const bool clocked = options.mode == haptic::emu::EmulatorMode::kStream;
         constexpr std::int64_t kTickNs = 1'000'000;
         std::int64_t next_tick_ns = start_ns;
+        std::uint64_t tracker_dropped = 0;
         while (!haptic::process::shutdownRequested()) {
             std::int64_t now_ns = haptic::common::monotonicNowNs();
             if (duration_ns > 0 && now_ns - start_ns >= duration_ns) {
                 break;
             }
-            emulator->tick(now_ns);
+            const double t_s = 1e-9 * static_cast<double>(now_ns - start_ns);
+            if (user) {
+                user->drive(t_s);
+            }
+            for (EmulatedDevice& device : devices) {
+                device.emulator->tick(now_ns);
+            }
+            if (user) {
+                if (const auto pose = user->track(now_ns, t_s)) {
+                    if (!tracker_writer.write(haptic::msgs::toIdl(*pose))) {
+                        ++tracker_dropped;
+                    }
+                }
+            }
             pollfd fds[2] = {{clocked ? -1 : bus->pollFd(), POLLIN, 0},
                              {stdin_open ? 0 : -1, POLLIN, 0}};
             if (clocked) {
@@ -180,17 +312,27 @@ int main(int argc, char** argv) {
                 throw std::runtime_error(std::string("poll: ") + std::strerror(errno));
             }
             if ((fds[1].revents & (POLLIN | POLLHUP)) != 0) {
-                stdin_open = commands.readAvailable(emulator->faults());
+                stdin_open = commands.readAvailable(devices);
             }
             haptic::can::CanFrame frame;
             for (int i = 0; i < 256 && bus->read(frame) == haptic::can::IoResult::kOk; ++i) {
                 now_ns = haptic::common::monotonicNowNs();
-                emulator->handleFrame(frame, now_ns);
+                for (std::size_t d = 0; d < devices.size(); ++d) {
+                    // Each device listens to its own command id, as on a real bus.
+                    if (devices.size() == 1 || frame.id == command_ids[d]) {
+                        devices[d].emulator->handleFrame(frame, now_ns);
+                    }
+                }
             }
         }
-        const auto& rejects = emulator->rejects();
-        spdlog::info("stopping: {} commands accepted, {} rejected", emulator->commandsAccepted(),
-                     rejects.total());
+        for (const EmulatedDevice& device : devices) {
+            spdlog::info("stopping '{}': {} commands accepted, {} rejected", device.config.name,
+                         device.emulator->commandsAccepted(), device.emulator->rejects().total());
+        }
+        if (user) {
+            spdlog::info("tracker: {} poses published, {} not written", user->samplesPublished(),
+                         tracker_dropped);
+        }
         return EXIT_SUCCESS;
     });
 }

@@ -24,12 +24,20 @@ int main(int argc, char** argv) {
     haptic::config::CommonOverrides overrides;
     overrides.config_path = HAPTIC_DEFAULT_CONFIG_DIR "/sim.yaml";
     haptic::config::addCommonOptions(app, overrides, "sim configuration file");
+    std::string tracking_topic;
+    app.add_option("--tracking-topic", tracking_topic,
+                   "track the hand from this HandPose topic instead of the scene's tracking "
+                   "source (the virtual user of 'hapticemu --user' publishes on tracking/hand)");
     CLI11_PARSE(app, argc, argv);
 
     return haptic::process::runMain("handsim", [&] {
         haptic::handsim::SimOptions options;
         options.config = haptic::config::loadSimConfig(overrides.config_path);
         options.duration_s = overrides.duration_s;
+        if (!tracking_topic.empty()) {
+            options.config.scene.tracking.source = haptic::config::TrackingSource::kTopic;
+            options.config.scene.tracking.topic = tracking_topic;
+        }
         const std::string log_level = applyCommonOverrides(overrides, options.config);
         haptic::process::setupLogging("handsim", log_level);
         haptic::process::installShutdownHandlers();

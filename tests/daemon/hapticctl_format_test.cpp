@@ -119,9 +119,15 @@ TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
     EXPECT_EQ(telemetryCsvHeader(),
               "tick,time_s,device,device_kind,actuator_force_cmd_n,servo_angle_cmd_0_rad,"
               "servo_angle_cmd_1_rad,servo_angle_cmd_2_rad,"
-              "tick_work_us,wakeup_latency_us,read_us,write_us\n");
+              "tick_work_us,wakeup_latency_us,read_us,write_us,"
+              "exo_joint_0_rad,exo_joint_1_rad,exo_joint_2_rad,"
+              "exo_proxy_0_rad,exo_proxy_1_rad,exo_proxy_2_rad,"
+              "exo_ghost_force_x_n,exo_ghost_force_y_n,exo_ghost_force_z_n,exo_energy_observer_j,"
+              "servo_angle_0_rad,servo_angle_1_rad,servo_angle_2_rad\n");
     EXPECT_EQ(telemetryCsvRow(sample, 1'000'000'000),
-              "1234,2.500000,1,thimble,2.0000,1.5000,-0.2500,0.0000,7.30,55.50,3.25,2.50\n");
+              "1234,2.500000,1,thimble,2.0000,1.5000,-0.2500,0.0000,7.30,55.50,3.25,2.50,"
+              "0.000000,0.000000,0.000000,0.000000,0.000000,0.000000,0.0000,0.0000,0.0000,"
+              "0.000000,0.0000,0.0000,0.0000\n");
 }
 
 TEST(TelemetryCsv, PlotScriptQuotesPathsForGnuplot) {

@@ -94,6 +94,7 @@ class ExoskeletonEmulator final : private CodecOwner<protocol::ExoskeletonCodec>
         last_command_counter_ = message.counter;
         onCommandAccepted(now_ns);
     }
+    [[nodiscard]] ExoskeletonModel* exoskeletonModel() noexcept override { return &model_; }
 
   private:
     void stepModel(double dt_s) noexcept override {
@@ -140,6 +141,7 @@ class ThimbleEmulator final : private CodecOwner<protocol::ThimbleCodec>, public
         target_ = message.command;
         onCommandAccepted(now_ns);
     }
+    [[nodiscard]] const ThimbleModel* thimbleModel() const noexcept override { return &model_; }
 
   private:
     void stepModel(double dt_s) noexcept override {

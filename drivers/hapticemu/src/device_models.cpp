@@ -60,6 +60,25 @@ bool ExoskeletonModel::atStrokeMax() const noexcept {
     return linkageStrokeM(q_rad_, nullptr) >= actuator_.stroke_max_m;
 }
 
+void ExoskeletonModel::setIntent(const std::array<double, 3>& intent_rad) noexcept {
+    for (std::size_t j = 0; j < 3; ++j) {
+        if (std::isfinite(intent_rad[j])) {
+            user_intent_rad_[j] = intent_rad[j];
+        }
+    }
+    user_intent_ = true;
+}
+
+void ExoskeletonModel::placeFinger(const std::array<double, 3>& q_rad) noexcept {
+    for (std::size_t j = 0; j < 3; ++j) {
+        const config::Interval& limits = finger_.joint_limits_rad[j];
+        if (std::isfinite(q_rad[j])) {
+            q_rad_[j] = std::clamp(q_rad[j], limits.min, limits.max);
+        }
+        qd_rad_per_s_[j] = 0.0;
+    }
+}
+
 void ExoskeletonModel::step(double dt_s, double force_command_n, bool enable) noexcept {
     if (!(dt_s > 0.0)) {
         return;
@@ -80,7 +99,8 @@ void ExoskeletonModel::step(double dt_s, double force_command_n, bool enable) no
         const config::Interval& limits = finger_.joint_limits_rad[j];
         const double mid = 0.5 * (limits.min + limits.max);
         const double intent_rad =
-            mid + intent_.amplitude_fraction * (limits.max - limits.min) * phase;
+            user_intent_ ? user_intent_rad_[j]
+                         : mid + intent_.amplitude_fraction * (limits.max - limits.min) * phase;
         // Spring and actuator explicitly, damping implicitly: stable for stiff fingers.
         const double torque =
             hand_.stiffness_nm_per_rad[j] * (intent_rad - q_rad_[j]) + jacobian[j] * force_n_;

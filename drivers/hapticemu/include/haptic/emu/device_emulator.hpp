@@ -21,6 +21,9 @@
 
 namespace haptic::emu {
 
+class ExoskeletonModel;
+class ThimbleModel;
+
 enum class EmulatorMode : std::uint8_t { kLockstep, kStream };
 
 struct EmulatorOptions {
@@ -40,6 +43,9 @@ class DeviceEmulator {
     void tick(std::int64_t now_ns) noexcept;
 
     FaultInjector& faults() noexcept { return faults_; }
+    // The device's model, for the virtual user who wears it (nullptr: another kind).
+    [[nodiscard]] virtual ExoskeletonModel* exoskeletonModel() noexcept { return nullptr; }
+    [[nodiscard]] virtual const ThimbleModel* thimbleModel() const noexcept { return nullptr; }
     [[nodiscard]] std::uint64_t commandsAccepted() const noexcept { return commands_; }
     [[nodiscard]] const protocol::RejectCounters& rejects() const noexcept {
         return codec_base_.rejects();

@@ -7,6 +7,7 @@
 #include <array>
 
 #include "haptic/config/device.hpp"
+#include "haptic/config/virtual_user.hpp"
 
 namespace haptic::emu {
 
@@ -15,13 +16,11 @@ namespace haptic::emu {
 // follows the user's intent through a hand impedance (per-joint inertia, stiffness, damping)
 // and feels the actuator through the linkage: tau = J^T F with J = d(stroke)/dq, so a
 // positive force (extending the actuator) flexes the finger. Joints stop at their limits.
+// The intent is the virtual user's (setIntent) once it wears the device; until then, and for
+// an emulator without a user, a built-in open-close sine.
 class ExoskeletonModel {
   public:
-    struct HandImpedance {
-        std::array<double, 3> inertia_kg_m2{2.0e-5, 8.0e-6, 3.0e-6};
-        std::array<double, 3> stiffness_nm_per_rad{0.30, 0.15, 0.08};
-        std::array<double, 3> damping_nms_per_rad{0.004, 0.0015, 0.0008};
-    };
+    using HandImpedance = config::HandImpedanceConfig;
     // Intent: joint_mid + amplitude * sin(2 pi f t), a slow open-close movement.
     struct Intent {
         double frequency_hz{0.5};
@@ -32,6 +31,11 @@ class ExoskeletonModel {
     ExoskeletonModel(const config::DeviceConfig& device, HandImpedance hand, Intent intent);
 
     void step(double dt_s, double force_command_n, bool enable) noexcept;
+    // The joint angles the user's finger aims for from now on (non-finite values are ignored).
+    void setIntent(const std::array<double, 3>& intent_rad) noexcept;
+    void setHandImpedance(const HandImpedance& hand) noexcept { hand_ = hand; }
+    // Places the finger at rest at `q_rad` (clamped to the joint limits).
+    void placeFinger(const std::array<double, 3>& q_rad) noexcept;
 
     [[nodiscard]] double forceN() const noexcept { return force_n_; }
     [[nodiscard]] double strokeM() const noexcept;
@@ -50,6 +54,8 @@ class ExoskeletonModel {
     config::LinkageConfig linkage_;
     HandImpedance hand_;
     Intent intent_;
+    bool user_intent_{false};
+    std::array<double, 3> user_intent_rad_{};
     double force_n_{0.0};
     bool enabled_{false};
     double time_s_{0.0};

@@ -1,0 +1,82 @@
+#pragma once
+
+// The virtual user: one model of the user's hand that is the single truth for the tracker and
+// for the devices (docs/drivers.md, "Virtual user"). Its intent is a scene's tracking script
+// or replay; the finger an exoskeleton is worn on follows that intent through the hand
+// impedance and the exoskeleton's actuator force (ExoskeletonModel), so the device moves the
+// finger away from its intent. The thimble pushes its plate against the pad and reacts on the
+// nail side of the same phalanx: an internal force that moves no joint. The tracker sees the
+// actual pose, sampled at its rate and delivered after its latency, with noise.
+// No I/O: hapticemu's main publishes what track() returns.
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "haptic/config/virtual_user.hpp"
+#include "haptic/emu/device_emulator.hpp"
+#include "haptic/msgs/messages.hpp"
+#include "haptic/softhand/hand_builder.hpp"
+#include "haptic/softhand/tracking_input.hpp"
+
+namespace haptic::emu {
+
+class VirtualUser {
+  public:
+    // `replay_text`: the content of the scene's replay file when its tracking source is
+    // replay (this library reads no files). Throws std::invalid_argument when the scene's
+    // tracking block gives no intent (a topic source) or a device's finger is not simulated.
+    explicit VirtualUser(const config::VirtualUserConfig& config,
+                         std::string_view replay_text = {});
+    ~VirtualUser();
+    VirtualUser(const VirtualUser&) = delete;
+    VirtualUser& operator=(const VirtualUser&) = delete;
+
+    // Puts `device` on the hand. An exoskeleton's finger joints become the user's: the
+    // finger is placed at the intent of t = 0 and follows it through the hand impedance.
+    void wear(const config::DeviceConfig& device, DeviceEmulator& emulator);
+
+    // Before the devices' models step at t_s (seconds since start): the worn exoskeletons'
+    // fingers aim for the intent of that instant.
+    void drive(double t_s);
+
+    [[nodiscard]] softhand::HandPoseInput intent(double t_s) const;
+    // The pose the hand has: the intent, with each worn exoskeleton's finger where the
+    // device's model has it.
+    [[nodiscard]] softhand::HandPoseInput actualPose(double t_s) const;
+
+    // The tracker. Call at least once per millisecond with the monotonic clock and t_s of the
+    // same instant; returns the messages that are due (at most one per call in steady state).
+    // Each carries the stamp of the instant it was sampled at.
+    [[nodiscard]] std::optional<msgs::HandPose> track(std::int64_t now_ns, double t_s);
+    [[nodiscard]] std::uint64_t samplesPublished() const noexcept { return seq_; }
+
+  private:
+    struct WornExoskeleton {
+        config::Finger finger;
+        ExoskeletonModel* model;
+    };
+    using Script = std::variant<softhand::PressSlideEdgeScript, softhand::GraspLiftPlacePushScript,
+                                softhand::ReplayTrack>;
+
+    config::TrackerConfig tracker_;
+    config::HandImpedanceConfig impedance_;
+    config::SceneConfig scene_;
+    std::unique_ptr<softhand::HandModel> model_;
+    std::unique_ptr<softhand::TrackedHand> hand_;
+    std::unique_ptr<Script> script_;
+    std::vector<WornExoskeleton> exoskeletons_;
+
+    std::mt19937 noise_engine_;
+    std::normal_distribution<double> unit_normal_{0.0, 1.0};
+    std::int64_t next_sample_ns_{-1};
+    std::deque<msgs::HandPose> in_flight_;  // sampled, waiting out the latency
+    std::uint64_t seq_{0};
+};
+
+}  // namespace haptic::emu
