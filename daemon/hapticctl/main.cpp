@@ -407,7 +407,8 @@ int main(int argc, char** argv) {
         entry.sub = app.add_subcommand(entry.name, entry.help);
     }
     std::string method_name;
-    auto* method = app.add_subcommand("method", "choose the rendering method (only in IDLE)");
+    auto* method =
+        app.add_subcommand("method", "choose the rendering method (IDLE, or live while RENDERING)");
     method->add_option("name", method_name, "rendering method, as in the device YAML")->required();
     try {
         app.parse(argc, argv);

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "haptic/config/config.hpp"
+#include "haptic/config/virtual_user.hpp"
 #include "test_support.hpp"
 
 namespace haptic::config {
@@ -471,6 +472,47 @@ TEST(ConfigReferences, SimDeviceNotBoundInScene) {
                 {file.string(), lineOf(file, "exo_on_can1"), 5, "devices[1]",
                  "expected a device bound in scene 'test_scene' (bound: exo, thimble), got "
                  "'exo_two'"});
+}
+
+std::optional<ConfigError> userError(const std::string& name) {
+    return configErrorOf([&] { (void)loadVirtualUserConfig(kDataDir / name); });
+}
+
+TEST(VirtualUserConfig, ReadsEveryKey) {
+    const VirtualUserConfig user = loadVirtualUserConfig(kDataDir / "user_ok.yaml");
+    EXPECT_EQ(user.scene.name, "test_scene");
+    EXPECT_EQ(user.hand_impedance.stiffness_nm_per_rad[1], 0.5);
+    EXPECT_EQ(user.hand_impedance.inertia_kg_m2[0], 4.5e-5);
+    EXPECT_EQ(user.hand_impedance.damping_nms_per_rad[2], 0.002);
+    EXPECT_EQ(user.tracker.topic, "tracking/hand");  // the default
+    EXPECT_EQ(user.tracker.rate_hz, 60);
+    EXPECT_EQ(user.tracker.latency_ms, 35.0);
+    EXPECT_EQ(user.tracker.position_noise_m, 0.0005);
+    EXPECT_EQ(user.tracker.angle_noise_rad, 0.0);
+    EXPECT_EQ(user.dds.domain_id, 7);
+    ASSERT_EQ(user.devices.size(), 2U);
+    EXPECT_EQ(user.devices[1].name, "thimble");
+}
+
+TEST(VirtualUserConfig, TheIntentNeedsAScriptOrAReplayNotATopic) {
+    const auto file = kDataDir / "user_topic_scene.yaml";
+    expectError(userError("user_topic_scene.yaml"),
+                {file.string(), lineOf(file, "scene:"), 8, "scene",
+                 "expected a scene whose tracking source is scripted or replay"});
+}
+
+TEST(VirtualUserConfig, AllWornDevicesShareOneBus) {
+    const auto file = kDataDir / "user_two_buses.yaml";
+    expectError(userError("user_two_buses.yaml"),
+                {file.string(), lineOf(file, "thimble_on_can1"), 5, "devices[1]",
+                 "got 'thimble' on another bus"});
+}
+
+TEST(VirtualUserConfig, AJointWithoutStiffnessIsRefused) {
+    const auto file = kDataDir / "user_zero_stiffness.yaml";
+    expectError(userError("user_zero_stiffness.yaml"),
+                {file.string(), lineOf(file, "stiffness_nm_per_rad"), -1,
+                 "hand_impedance.stiffness_nm_per_rad[1]", "got 0"});
 }
 
 TEST(ConfigReferences, ExoskeletonNeedsFingerJoints) {

@@ -1,6 +1,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "contact_quality.hpp"
 #include "status_format.hpp"
 #include "telemetry_csv.hpp"
 
@@ -134,6 +139,58 @@ TEST(TelemetryCsv, PlotScriptQuotesPathsForGnuplot) {
     const auto script = telemetryPlotScript("/tmp/it's.csv", "/tmp/out.png");
     EXPECT_NE(script.find("set output '/tmp/out.png'"), std::string::npos) << script;
     EXPECT_NE(script.find("plot '/tmp/it''s.csv'"), std::string::npos) << script;
+}
+
+TEST(TelemetryCsv, ExoskeletonForcesAreReadBackPerDevice) {
+    std::string csv = telemetryCsvHeader();
+    msgs::TelemetrySample sample;
+    sample.stamp_ns = 0;
+    for (int i = 0; i < 3; ++i) {
+        sample.device_index = 0;
+        sample.device_kind = msgs::DeviceKind::kExoskeleton;
+        sample.exoskeleton.actuator_force_cmd_n = -1.5 * i;
+        csv += telemetryCsvRow(sample, 0);
+        sample.device_index = 1;
+        sample.device_kind = msgs::DeviceKind::kThimble;
+        csv += telemetryCsvRow(sample, 0);
+    }
+    const auto forces = exoskeletonForcesFromCsv(csv);
+    ASSERT_EQ(forces.size(), 1U);
+    EXPECT_THAT(forces.at(0), testing::ElementsAre(0.0, -1.5, -3.0));
+}
+
+TEST(ContactQuality, AHeldContactForceHasNoChatterAndIsNotAtTheClamp) {
+    const std::vector<double> held(3000, -2.0);
+    const ContactQuality quality = contactQuality(held);
+    EXPECT_EQ(quality.ticks, 3000U);
+    EXPECT_EQ(quality.contact_ticks, 3000U);
+    EXPECT_EQ(quality.clamp_ticks, 0U);
+    EXPECT_DOUBLE_EQ(quality.mean_contact_force_n, 2.0);
+    EXPECT_LT(quality.chatter_rms_n, 1e-12);
+    // A contact that builds up and releases smoothly over a second is not chatter either;
+    // only ticks in contact count.
+    std::vector<double> press(3000, 0.0);
+    for (std::size_t i = 1000; i < 2000; ++i) {
+        press[i] = -2.0 * std::pow(std::sin(std::numbers::pi * (i - 1000.0) / 1000.0), 2);
+    }
+    const ContactQuality smooth = contactQuality(press);
+    EXPECT_NEAR(static_cast<double>(smooth.contact_ticks), 900.0, 20.0);  // |F| > 0.05 N
+    EXPECT_LT(smooth.chatterFraction(), 0.01);
+}
+
+TEST(ContactQuality, BangBangBetweenZeroAndTheClampIsChatterAtTheClamp) {
+    // The demo's old failure: the force jumps between 0 and the 10 N clamp every few ticks.
+    std::vector<double> force(3000, 0.0);
+    for (std::size_t i = 0; i < force.size(); ++i) {
+        force[i] = (i / 4) % 2 == 0 ? -10.0 : -0.5;
+    }
+    const ContactQuality quality = contactQuality(force);
+    EXPECT_EQ(quality.contact_ticks, 3000U);
+    EXPECT_NEAR(quality.clampFraction(), 0.5, 0.01);
+    EXPECT_GT(quality.chatterFraction(), 0.5);
+    ContactQualitySettings looser;
+    looser.clamp_n = 20.0;
+    EXPECT_EQ(contactQuality(force, looser).clamp_ticks, 0U);
 }
 
 }  // namespace

@@ -71,6 +71,57 @@ TEST(DeviceRuntime, DevicesComeOnlineAndRenderContactWhileRendering) {
               rig.thimbleTargets()[0]);
 }
 
+TEST(DeviceRuntime, SwitchingAmongAllSixMethodsWhileRenderingNeverStepsTheForce) {
+    RuntimeRig rig;
+    // A wall across MCP and PIP that the sim moves with the finger (the emulated user flexes
+    // on its own), a little inside it: the strategies ask for different forces below the clamp.
+    auto place_wall = [&rig] {
+        const auto& q = rig.core.deviceReport(kExo).joint_position_rad;
+        msgs::LinearConstraint& wall = rig.constraint_set.constraints[0];
+        wall.a = {-1.0, -0.5, 0.0};
+        wall.b = -(q[0] + 0.5 * q[1]) + 0.01;
+        rig.offerContact();
+    };
+    rig.ticks(20);
+    place_wall();
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
+    for (int i = 0; i < 300; ++i) {
+        if (i % 10 == 0) {
+            place_wall();
+        }
+        rig.tick();
+    }
+    const std::array<const char*, 6> methods{"standard", "naive",       "nullspace",
+                                             "subspace", "anisotropic", "linearized_subspace"};
+    const auto& exo = static_cast<runtime::ExoskeletonChannel&>(rig.runtime.channel(kExo));
+    const double rate_step_n = 500.0 * 1e-3;  // safety.max_force_rate_n_per_s over one tick
+    double previous_n = rig.exoForce();
+    double largest_step_n = 0.0;
+    int pushing_ticks = 0;
+    int clamped_ticks = 0;
+    int ticks = 0;
+    for (int round = 0; round < 3; ++round) {
+        for (const char* method : methods) {
+            ASSERT_TRUE(rig.command(msgs::CommandKind::kSetMethod, method)) << method;
+            for (int i = 0; i < 100; ++i, ++ticks) {
+                if (i % 10 == 0) {
+                    place_wall();
+                }
+                rig.tick();
+                largest_step_n = std::max(largest_step_n, std::abs(rig.exoForce() - previous_n));
+                previous_n = rig.exoForce();
+                pushing_ticks += std::abs(previous_n) > 0.5 ? 1 : 0;
+                clamped_ticks += std::abs(previous_n) > 9.99 ? 1 : 0;
+            }
+            EXPECT_EQ(config::toString(exo.method()), std::string(method)) << "switched live";
+            EXPECT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
+        }
+    }
+    EXPECT_LE(largest_step_n, rate_step_n + 1e-9);
+    EXPECT_GT(pushing_ticks, ticks / 2) << "the wall is felt while the methods change";
+    EXPECT_LT(clamped_ticks, ticks / 10) << "below the clamp, where the methods differ";
+}
+
 // One tick of hapticd's way out (daemon_app.cpp, after the loop): the emulators run, the
 // buses are drained, and every device gets its safe command instead of the rendered one.
 void safeStopTick(RuntimeRig& rig) {

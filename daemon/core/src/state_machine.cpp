@@ -20,8 +20,10 @@ void DaemonStateMachine::started() noexcept {
 }
 
 CommandOutcome DaemonStateMachine::setMethod(std::string_view name) noexcept {
-    if (state_ != DaemonState::kIdle) {
-        return {false, "the rendering method can change only in IDLE; disable first"};
+    // While RENDERING the exoskeleton's channel blends into the new method within the force
+    // rate limit (exoskeleton_channel.hpp); in FAULT or E-STOP nothing renders to switch.
+    if (state_ != DaemonState::kIdle && state_ != DaemonState::kRendering) {
+        return {false, "the rendering method can change only in IDLE or RENDERING"};
     }
     const bool known = std::any_of(known_methods_.begin(), known_methods_.end(),
                                    [&](const std::string& method) { return method == name; });

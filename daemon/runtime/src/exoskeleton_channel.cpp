@@ -42,6 +42,7 @@ ExoskeletonChannel::ExoskeletonChannel(const config::DeviceConfig& device, can::
       renderer_(model_, exoskeletonRenderParameters(device.exoskeleton())),
       guard_(portGuardConfig(device, settings)),
       max_constraints_(static_cast<std::size_t>(device.exoskeleton().rendering.max_constraints)),
+      max_force_step_n_(device.safety.max_force_rate_n_per_s * settings.period_s),
       q_(kinesthetic::ConfigVector::Zero(model_.dofs())),
       q_dot_(kinesthetic::ConfigVector::Zero(model_.dofs())) {
     applied_method_.assign(config::toString(device.exoskeleton().rendering.method));
@@ -65,6 +66,7 @@ void ExoskeletonChannel::followMethod(const msgs::DeviceId& method) noexcept {
     if (const auto parsed = config::enumFromString<config::RenderingMethod>(method.view())) {
         renderer_.setMethod(*parsed);
         applied_method_ = method;
+        transition_ticks_left_ = kMethodTransitionTicks;
     }
 }
 
@@ -114,6 +116,13 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     // controller see the force really sent (the gain rises during a fade-in, falls to 0 at
     // once on E-stop, FAULT or a dead sim).
     const double gain = heldSafe() ? 0.0 : core.outputGain(index);
+    if (transition_ticks_left_ > 0) {
+        --transition_ticks_left_;
+        if (gain >= 1.0) {
+            desired_n = std::clamp(desired_n, command_.force_n - max_force_step_n_,
+                                   command_.force_n + max_force_step_n_);
+        }
+    }
     const kinesthetic::PortCommand port = guard_.apply(desired_n, stroke_m_, state_fresh, gain);
     const double force_n = port.force_n;
     command_.force_n = force_n;

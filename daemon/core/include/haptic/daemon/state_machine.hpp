@@ -16,8 +16,9 @@
 //   RENDERING: rendering always needs an explicit enable.
 // - E-STOP wins over everything and is left only by clear (then IDLE). A fault raised during
 //   E-STOP is recorded but does not leave E-STOP.
-// - The rendering method may change only in IDLE, so a running coupling is never swapped
-//   under the user's finger.
+// - The rendering method may change in IDLE and while RENDERING (the exoskeleton's channel
+//   then blends into the new coupling within the force rate limit, so the finger feels no
+//   step); not in FAULT or E-STOP.
 // - Idempotent commands (enable while RENDERING, disable while IDLE, estop while E-STOP) are
 //   accepted and change nothing. Every refusal carries a reason for the operator.
 

@@ -9,6 +9,11 @@
 // Renderer stiffnesses are the kinesthetic benchmark's joint-space values (N m/rad, assumed,
 // like the device geometry); the port guard uses min(safety.max_force_n, actuator.max_force_n),
 // safety.max_force_rate_n_per_s and safety.fade_out_ms.
+//
+// A method switch (allowed while RENDERING) is bumpless: for kMethodTransitionTicks after it,
+// the new strategy's force may move from the force last sent by at most the rate limit per
+// tick in either direction. (Otherwise the guard lets a force drop to zero at once, the safe
+// direction; a switch must not make the finger feel a step either way.)
 
 #include <cstdint>
 
@@ -47,6 +52,8 @@ class ExoskeletonChannel final
         command_.enable = false;
     }
 
+    static constexpr int kMethodTransitionTicks = 200;
+
   private:
     void followMethod(const msgs::DeviceId& method) noexcept;
     void measure() noexcept;
@@ -56,6 +63,8 @@ class ExoskeletonChannel final
     kinesthetic::ActuatorPortGuard guard_;
     std::size_t max_constraints_;
     msgs::DeviceId applied_method_{};
+    int transition_ticks_left_{0};
+    double max_force_step_n_{0.0};  // the rate limit over one period
     kinesthetic::ConfigVector q_;
     kinesthetic::ConfigVector q_dot_;
     double stroke_m_{0.0};

@@ -1,0 +1,183 @@
+// The virtual user (hapticemu --user): one hand for the tracker and the devices. Loads the
+// shipped config/user.yaml, as hapticemu does.
+
+#include "haptic/config/virtual_user.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "haptic/can/loopback_bus.hpp"
+#include "haptic/emu/device_emulator.hpp"
+#include "haptic/emu/device_models.hpp"
+#include "haptic/emu/virtual_user.hpp"
+
+namespace haptic::emu {
+namespace {
+
+constexpr std::size_t kIndexMcp = 3;  // thumb 0..2, index 3..5 in HandPoseInput::flexion_rad
+
+config::VirtualUserConfig shippedUser() {
+    return config::loadVirtualUserConfig(std::string(HAPTIC_CONFIG_DIR) + "/user.yaml");
+}
+
+// The user wearing every device of the file on a loopback bus, stepped as hapticemu does.
+struct WornDevices {
+    explicit WornDevices(const config::VirtualUserConfig& config) : user(config) {
+        EmulatorOptions options;
+        options.mode = EmulatorMode::kLockstep;  // the models step only when the test says so
+        for (const auto& device : config.devices) {
+            emulators.push_back(makeEmulator(device, bus, options));
+            user.wear(device, *emulators.back());
+            if (auto* model = emulators.back()->exoskeletonModel()) {
+                exoskeleton = model;
+            }
+        }
+    }
+    // One millisecond: the user aims for the intent of t, the exoskeleton's model steps with
+    // `force_n` enabled.
+    void step(double t_s, double force_n) {
+        user.drive(t_s);
+        exoskeleton->step(1e-3, force_n, true);
+    }
+
+    can::LoopbackBus bus;
+    VirtualUser user;
+    std::vector<std::unique_ptr<DeviceEmulator>> emulators;
+    ExoskeletonModel* exoskeleton{nullptr};
+};
+
+TEST(VirtualUser, ShippedFileWearsBothDevicesAndTracksTheDefaultScene) {
+    const auto config = shippedUser();
+    ASSERT_EQ(config.devices.size(), 2U);
+    EXPECT_EQ(config.scene.name, "default");
+    EXPECT_EQ(config.tracker.topic, "tracking/hand");
+    WornDevices worn(config);
+    ASSERT_NE(worn.exoskeleton, nullptr);
+    // The intent is the scene's script: the wrist descends onto the block and moves along x.
+    const auto start = worn.user.intent(0.0);
+    const auto pressed = worn.user.intent(1.0);
+    const auto slid = worn.user.intent(3.5);
+    EXPECT_LT(pressed.wrist.position_m.z(), start.wrist.position_m.z() - 0.005);
+    EXPECT_GT(slid.wrist.position_m.x(), pressed.wrist.position_m.x() + 0.02);
+}
+
+TEST(VirtualUser, WithoutForceTheFingerFollowsItsIntent) {
+    WornDevices worn(shippedUser());
+    double worst_rad = 0.0;
+    for (int tick = 0; tick < 6000; ++tick) {  // one period of the script
+        const double t = 1e-3 * tick;
+        worn.step(t, 0.0);
+        const auto intent = worn.user.intent(t);
+        const auto actual = worn.user.actualPose(t);
+        for (std::size_t j = 0; j < 3; ++j) {
+            worst_rad = std::max(worst_rad, std::abs(actual.flexion_rad[kIndexMcp + j] -
+                                                     intent.flexion_rad[kIndexMcp + j]));
+        }
+        // Only the worn finger can differ from the intent, and the wrist never does.
+        EXPECT_EQ(actual.wrist.position_m, intent.wrist.position_m);
+        EXPECT_EQ(actual.flexion_rad[0], intent.flexion_rad[0]);
+        EXPECT_EQ(actual.flexion_rad[6], intent.flexion_rad[6]);
+    }
+    // The script flexes the finger slowly; the impedance lags it by well under a degree.
+    EXPECT_LT(worst_rad, 0.01);
+}
+
+TEST(VirtualUser, TheExoskeletonsForceMovesTheFingerAwayFromItsIntent) {
+    const auto config = shippedUser();
+    WornDevices free_user(config), pushed_user(config), pulled_user(config);
+    for (int tick = 0; tick < 1000; ++tick) {
+        const double t = 1e-3 * tick;
+        free_user.step(t, 0.0);
+        pushed_user.step(t, 3.0);   // extends the actuator: flexes the finger
+        pulled_user.step(t, -3.0);  // retracts it: extends the finger
+    }
+    const double free_mcp = free_user.user.actualPose(1.0).flexion_rad[kIndexMcp];
+    EXPECT_GT(pushed_user.user.actualPose(1.0).flexion_rad[kIndexMcp], free_mcp + 0.01);
+    EXPECT_LT(pulled_user.user.actualPose(1.0).flexion_rad[kIndexMcp], free_mcp - 0.01);
+    // The finger settles where the hand impedance balances the force: tau = J^T F.
+    std::array<double, 3> jacobian{};
+    (void)pushed_user.exoskeleton->linkageStrokeM(pushed_user.exoskeleton->jointRad(), &jacobian);
+    const double k_mcp = config.hand_impedance.stiffness_nm_per_rad[0];
+    const double deflection = pushed_user.user.actualPose(1.0).flexion_rad[kIndexMcp] -
+                              pushed_user.user.intent(1.0).flexion_rad[kIndexMcp];
+    EXPECT_NEAR(deflection, jacobian[0] * pushed_user.exoskeleton->forceN() / k_mcp,
+                0.2 * std::abs(deflection));
+}
+
+TEST(VirtualUser, TheTrackerSamplesAtItsRateAndDeliversAfterItsLatency) {
+    auto config = shippedUser();
+    config.tracker.rate_hz = 90;
+    config.tracker.latency_ms = 20.0;
+    config.tracker.position_noise_m = 0.0;
+    config.tracker.angle_noise_rad = 0.0;
+    WornDevices worn(config);
+    const std::int64_t origin_ns = 5'000'000'000;
+    std::vector<msgs::HandPose> delivered;
+    std::vector<std::int64_t> delivered_at_ns;
+    for (int tick = 0; tick < 2000; ++tick) {
+        const double t = 1e-3 * tick;
+        const std::int64_t now_ns = origin_ns + 1'000'000LL * tick;
+        worn.step(t, 0.0);
+        if (auto pose = worn.user.track(now_ns, t)) {
+            delivered.push_back(*pose);
+            delivered_at_ns.push_back(now_ns);
+        }
+    }
+    // 2 s at 90 Hz, less the samples still waiting out the 20 ms.
+    EXPECT_NEAR(static_cast<double>(delivered.size()), 2.0 * 90.0 - 2.0, 2.0);
+    for (std::size_t i = 0; i < delivered.size(); ++i) {
+        const auto& pose = delivered[i];
+        EXPECT_EQ(pose.header.seq, i + 1);
+        EXPECT_EQ(pose.header.source_id.view(), "virtual_user");
+        const std::int64_t age_ns = delivered_at_ns[i] - pose.header.stamp_ns;
+        EXPECT_GE(age_ns, 20'000'000);
+        EXPECT_LT(age_ns, 21'000'000);  // within a tick of the latency
+        if (i > 0) {
+            const std::int64_t period_ns = pose.header.stamp_ns - delivered[i - 1].header.stamp_ns;
+            EXPECT_NEAR(static_cast<double>(period_ns), 1e9 / 90.0, 1e6);
+        }
+        // Without noise the message is the actual pose at its stamp.
+        const double t_sample = 1e-9 * static_cast<double>(pose.header.stamp_ns - origin_ns);
+        const auto intent = worn.user.intent(t_sample);
+        EXPECT_NEAR(pose.wrist_position_m[2], intent.wrist.position_m.z(), 1e-12);
+        ASSERT_EQ(pose.joint_angles_rad.size(), 15U);
+    }
+}
+
+TEST(VirtualUser, TrackerNoiseHasTheConfiguredSpreadAndIsRepeatable) {
+    auto config = shippedUser();
+    config.tracker.rate_hz = 1000;
+    config.tracker.latency_ms = 0.0;
+    config.tracker.position_noise_m = 0.001;
+    config.tracker.angle_noise_rad = 0.01;
+    WornDevices a(config), b(config);
+    double sum_squared_m = 0.0, sum_squared_rad = 0.0;
+    int samples = 0;
+    for (int tick = 0; tick < 3000; ++tick) {
+        const double t = 1e-3 * tick;
+        const std::int64_t now_ns = 1'000'000LL * tick;
+        a.step(t, 0.0);
+        b.step(t, 0.0);
+        const auto pose_a = a.user.track(now_ns, t);
+        const auto pose_b = b.user.track(now_ns, t);
+        ASSERT_EQ(pose_a.has_value(), pose_b.has_value());
+        if (!pose_a) {
+            continue;
+        }
+        EXPECT_EQ(pose_a->wrist_position_m, pose_b->wrist_position_m) << "same seed, same noise";
+        const auto actual = a.user.actualPose(t);
+        sum_squared_m += std::pow(pose_a->wrist_position_m[0] - actual.wrist.position_m.x(), 2);
+        sum_squared_rad += std::pow(pose_a->joint_angles_rad[0] - actual.flexion_rad[0], 2);
+        ++samples;
+    }
+    ASSERT_GT(samples, 2900);
+    EXPECT_NEAR(std::sqrt(sum_squared_m / samples), 0.001, 0.0001);
+    EXPECT_NEAR(std::sqrt(sum_squared_rad / samples), 0.01, 0.001);
+}
+
+}  // namespace
+}  // namespace haptic::emu
