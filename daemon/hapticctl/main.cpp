@@ -24,7 +24,7 @@
 #include "HapticStatusPubSubTypes.h"
 #include "HapticTelemetryPubSubTypes.h"
 #include "SimStatusPubSubTypes.h"
-#include "contact_quality.hpp"
+#include "closed_loop_report.hpp"
 #include "haptic/common/clock.hpp"
 #include "haptic/config/daemon.hpp"
 #include "haptic/config/error.hpp"
@@ -207,24 +207,16 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
 }
 
 // Renders a recorded CSV to PNG with gnuplot (Debian's gnuplot-nox), script on its stdin.
-// Prints, per exoskeleton in the recording, what the finger felt of its force: time at the
-// clamp while in contact and chatter (contact_quality.hpp).
-void printContactQuality(const std::string& csv_path, double clamp_n) {
+// Prints the end-to-end figures of the recording (closed_loop_report.hpp).
+void printReport(const std::string& csv_path, double clamp_n) {
     std::ifstream file(csv_path);
     std::stringstream text;
     text << file.rdbuf();
     haptic::ctl::ContactQualitySettings settings;
     settings.clamp_n = clamp_n;
-    for (const auto& [device, forces] : haptic::ctl::exoskeletonForcesFromCsv(text.str())) {
-        const auto quality = haptic::ctl::contactQuality(forces, settings);
-        std::printf(
-            "exoskeleton (device %d): %zu ticks, %zu in contact (|F| > %.2f N), mean |F| %.2f N; "
-            "at the %.1f N clamp %.1f%% of contact ticks; chatter %.3f N RMS = %.1f%% of the "
-            "mean\n",
-            device, quality.ticks, quality.contact_ticks, settings.contact_threshold_n,
-            quality.mean_contact_force_n, clamp_n, 100.0 * quality.clampFraction(),
-            quality.chatter_rms_n, 100.0 * quality.chatterFraction());
-    }
+    std::fputs(
+        haptic::ctl::formatReport(haptic::ctl::readTelemetryCsv(text.str()), settings).c_str(),
+        stdout);
 }
 
 int plotTelemetry(const std::string& csv_path, std::string png_path, double clamp_n) {
@@ -256,7 +248,7 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
                      std::strerror(spawned));
         return kExitError;
     }
-    const std::string script = haptic::ctl::telemetryPlotScript(csv_path, png_path);
+    const std::string script = haptic::ctl::telemetryPlotScript(csv_path, png_path, clamp_n);
     const bool written =
         ::write(pipe_fds[1], script.data(), script.size()) == static_cast<ssize_t>(script.size());
     ::close(pipe_fds[1]);
@@ -267,7 +259,7 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
         return kExitError;
     }
     std::printf("%s\n", png_path.c_str());
-    printContactQuality(csv_path, clamp_n);
+    printReport(csv_path, clamp_n);
     return EXIT_SUCCESS;
 }
 

@@ -2,8 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <charconv>
-
 #include "haptic/msgs/names.hpp"
 
 namespace haptic::ctl {
@@ -34,10 +32,21 @@ std::string telemetryCsvHeader() {
     for (std::size_t i = 0; i < 3; ++i) {
         header += fmt::format(",exo_proxy_{}_rad", i);
     }
-    header += ",exo_ghost_force_x_n,exo_ghost_force_y_n,exo_ghost_force_z_n,exo_energy_observer_j";
+    header += ",exo_actuator_force_n";
+    for (std::size_t i = 0; i < 3; ++i) {
+        header += fmt::format(",exo_reference_torque_{}_nm", i);
+    }
+    header += ",exo_reference_actuator_force_n";
+    for (std::size_t i = 0; i < 3; ++i) {
+        header += fmt::format(",exo_ghost_torque_{}_nm", i);
+    }
+    header += ",exo_energy_observer_j";
     for (std::size_t i = 0; i < msgs::kThimbleServos; ++i) {
         header += fmt::format(",servo_angle_{}_rad", i);
     }
+    header += ",thimble_reference_force_x_n,thimble_reference_force_y_n,thimble_reference_force_z_n";
+    header += ",thimble_reference_moment_x_nm,thimble_reference_moment_y_nm,"
+              "thimble_reference_moment_z_nm";
     return header + "\n";
 }
 
@@ -58,51 +67,29 @@ std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t or
     for (std::size_t i = 0; i < 3; ++i) {
         row += fmt::format(",{:.6f}", exo.proxy_position_rad[i]);
     }
-    for (const double force : exo.ghost_force_n) {
-        row += fmt::format(",{:.4f}", force);
+    row += fmt::format(",{:.4f}", exo.actuator_force_n);
+    for (std::size_t i = 0; i < 3; ++i) {
+        row += fmt::format(",{:.6f}", exo.reference_torque_nm[i]);
+    }
+    row += fmt::format(",{:.4f}", exo.reference_actuator_force_n);
+    for (std::size_t i = 0; i < 3; ++i) {
+        row += fmt::format(",{:.6f}", exo.ghost_torque_nm[i]);
     }
     row += fmt::format(",{:.6f}", exo.energy_observer_j);
     for (const double angle : sample.thimble.servo_angle_rad) {
         row += fmt::format(",{:.4f}", angle);
     }
+    for (const double force : sample.thimble.reference_force_device_n) {
+        row += fmt::format(",{:.4f}", force);
+    }
+    for (const double moment : sample.thimble.reference_moment_device_nm) {
+        row += fmt::format(",{:.6f}", moment);
+    }
     return row + "\n";
 }
 
-std::map<int, std::vector<double>> exoskeletonForcesFromCsv(std::string_view csv) {
-    std::map<int, std::vector<double>> out;
-    const std::string_view kind = msgs::toString(msgs::DeviceKind::kExoskeleton);
-    while (!csv.empty()) {
-        const std::size_t end = csv.find('\n');
-        std::string_view line = csv.substr(0, end);
-        csv.remove_prefix(end == std::string_view::npos ? csv.size() : end + 1);
-        // tick, time_s, device, device_kind, actuator_force_cmd_n, ...
-        std::string_view fields[5];
-        std::size_t count = 0;
-        while (count < 5) {
-            const std::size_t comma = line.find(',');
-            fields[count++] = line.substr(0, comma);
-            if (comma == std::string_view::npos) {
-                break;
-            }
-            line.remove_prefix(comma + 1);
-        }
-        if (count < 5 || fields[3] != kind) {
-            continue;
-        }
-        int device = 0;
-        double force = 0.0;
-        const auto [device_end, device_error] =
-            std::from_chars(fields[2].data(), fields[2].data() + fields[2].size(), device);
-        const auto [force_end, force_error] =
-            std::from_chars(fields[4].data(), fields[4].data() + fields[4].size(), force);
-        if (device_error == std::errc() && force_error == std::errc()) {
-            out[device].push_back(force);
-        }
-    }
-    return out;
-}
-
-std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path) {
+std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path,
+                                double exo_clamp_n) {
     // Columns: 1 tick, 2 time, 3 device, 4 device kind, 5 exoskeleton force command [N],
     // 6-8 thimble servo commands [rad], 9 tick work (read + compute + write), 10 wake-up
     // latency, 11 read, 12 write. One panel per device kind, each in its own unit.
@@ -116,12 +103,22 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
         "set xlabel 'time [s]'\n",
         fmt::arg("png", quoted(png_path)),
         fmt::arg("title", quoted("hapticd telemetry: " + csv_path)));
+    // Columns 19 and 23: the force the actuator reports (felt) and the sim's reference.
     script += fmt::format(
-        "set ylabel 'exoskeleton actuator force command [N]'\n"
-        "plot {csv} every ::1 using (strcol(4) eq 'exoskeleton' ? $2 : 1/0):5 with points pt 7 "
-        "ps 0.3 title 'actuator force'\n",
-        fmt::arg("csv", csv));
-    script += "set ylabel 'thimble servo angle command [rad]'\nplot ";
+        "set ylabel 'exoskeleton actuator force [N]'\n"
+        "set yrange [{low}:{high}]\n"
+        "plot {csv} every ::1 using (strcol(4) eq 'exoskeleton' ? $2 : 1/0):23 with points pt 7 "
+        "ps 0.3 title 'reference (sim, B^+ tau_ref)', "
+        "{csv} every ::1 using (strcol(4) eq 'exoskeleton' ? $2 : 1/0):5 with points pt 7 "
+        "ps 0.3 title 'commanded', "
+        "{csv} every ::1 using (strcol(4) eq 'exoskeleton' ? $2 : 1/0):19 with points pt 7 "
+        "ps 0.3 title 'felt (the actuator reports)'\n"
+        "set yrange [*:*]\n",
+        fmt::arg("csv", csv), fmt::arg("low", -2.0 * exo_clamp_n),
+        fmt::arg("high", 2.0 * exo_clamp_n));
+    // Columns 31-33: the sim's reference force on the pad, on the right axis.
+    script += "set ylabel 'thimble servo angle command [rad]'\n"
+              "set y2label 'thimble reference pad force [N]'\nset y2tics\nplot ";
     for (int servo = 0; servo < 3; ++servo) {
         script += fmt::format(
             "{sep}{csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):{column} with points "
@@ -129,7 +126,12 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
             fmt::arg("sep", servo == 0 ? "" : ", "), fmt::arg("csv", csv),
             fmt::arg("column", 6 + servo), fmt::arg("servo", servo));
     }
-    script += "\n";
+    script += fmt::format(
+        ", {csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):"
+        "(sqrt($31**2 + $32**2 + $33**2)) axes x1y2 with points pt 7 ps 0.3 "
+        "title '|reference pad force|'"
+        "\nunset y2label\nunset y2tics\n",
+        fmt::arg("csv", csv));
     script += fmt::format(
         "set ylabel 'loop timing [us, log scale]'\n"
         "set logscale y\n"

@@ -4,10 +4,7 @@
 // script that turns such a file into a PNG of commanded forces and loop timing.
 
 #include <cstdint>
-#include <map>
 #include <string>
-#include <string_view>
-#include <vector>
 
 #include "haptic/msgs/messages.hpp"
 
@@ -17,11 +14,10 @@ std::string telemetryCsvHeader();
 // `origin_ns`: the stamp shown as t = 0 (the first recorded sample).
 std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t origin_ns);
 
-// The exoskeleton force commands of a recorded CSV, per device index, in row order. Rows
-// that are not exoskeleton rows or do not parse are skipped.
-std::map<int, std::vector<double>> exoskeletonForcesFromCsv(std::string_view csv);
-
 // A gnuplot script reading `csv_path` and writing `png_path`.
-std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path);
+// `exo_clamp_n`: the exoskeleton's force clamp; its panel shows twice that either way (the
+// sim's reference can spike far beyond it on contact impacts).
+std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path,
+                                double exo_clamp_n = 10.0);
 
 }  // namespace haptic::ctl

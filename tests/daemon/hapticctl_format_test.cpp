@@ -5,6 +5,7 @@
 #include <numbers>
 #include <vector>
 
+#include "closed_loop_report.hpp"
 #include "contact_quality.hpp"
 #include "status_format.hpp"
 #include "telemetry_csv.hpp"
@@ -117,6 +118,8 @@ TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
     sample.device_kind = msgs::DeviceKind::kThimble;
     sample.exoskeleton.actuator_force_cmd_n = 2.0;
     sample.thimble.servo_angle_cmd_rad = {1.5, -0.25, 0.0};
+    sample.thimble.reference_force_device_n = {0.25, 0.0, -1.0};
+    sample.thimble.reference_moment_device_nm = {0.0, 0.001, 0.0};
     sample.tick_work_us = 7.3;
     sample.wakeup_latency_us = 55.5;
     sample.read_us = 3.25;
@@ -126,13 +129,19 @@ TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
               "servo_angle_cmd_1_rad,servo_angle_cmd_2_rad,"
               "tick_work_us,wakeup_latency_us,read_us,write_us,"
               "exo_joint_0_rad,exo_joint_1_rad,exo_joint_2_rad,"
-              "exo_proxy_0_rad,exo_proxy_1_rad,exo_proxy_2_rad,"
-              "exo_ghost_force_x_n,exo_ghost_force_y_n,exo_ghost_force_z_n,exo_energy_observer_j,"
-              "servo_angle_0_rad,servo_angle_1_rad,servo_angle_2_rad\n");
+              "exo_proxy_0_rad,exo_proxy_1_rad,exo_proxy_2_rad,exo_actuator_force_n,"
+              "exo_reference_torque_0_nm,exo_reference_torque_1_nm,exo_reference_torque_2_nm,"
+              "exo_reference_actuator_force_n,"
+              "exo_ghost_torque_0_nm,exo_ghost_torque_1_nm,exo_ghost_torque_2_nm,"
+              "exo_energy_observer_j,servo_angle_0_rad,servo_angle_1_rad,servo_angle_2_rad,"
+              "thimble_reference_force_x_n,thimble_reference_force_y_n,"
+              "thimble_reference_force_z_n,thimble_reference_moment_x_nm,"
+              "thimble_reference_moment_y_nm,thimble_reference_moment_z_nm\n");
     EXPECT_EQ(telemetryCsvRow(sample, 1'000'000'000),
               "1234,2.500000,1,thimble,2.0000,1.5000,-0.2500,0.0000,7.30,55.50,3.25,2.50,"
-              "0.000000,0.000000,0.000000,0.000000,0.000000,0.000000,0.0000,0.0000,0.0000,"
-              "0.000000,0.0000,0.0000,0.0000\n");
+              "0.000000,0.000000,0.000000,0.000000,0.000000,0.000000,0.0000,"
+              "0.000000,0.000000,0.000000,0.0000,0.000000,0.000000,0.000000,0.000000,"
+              "0.0000,0.0000,0.0000,0.2500,0.0000,-1.0000,0.000000,0.001000,0.000000\n");
 }
 
 TEST(TelemetryCsv, PlotScriptQuotesPathsForGnuplot) {
@@ -141,22 +150,48 @@ TEST(TelemetryCsv, PlotScriptQuotesPathsForGnuplot) {
     EXPECT_NE(script.find("plot '/tmp/it''s.csv'"), std::string::npos) << script;
 }
 
-TEST(TelemetryCsv, ExoskeletonForcesAreReadBackPerDevice) {
+TEST(ClosedLoopReport, ReadsTheRecordingBackAndComparesFeltWithReference) {
     std::string csv = telemetryCsvHeader();
     msgs::TelemetrySample sample;
-    sample.stamp_ns = 0;
-    for (int i = 0; i < 3; ++i) {
+    for (int i = 0; i < 100; ++i) {
+        sample.tick = static_cast<std::uint64_t>(i);
+        sample.stamp_ns = 1'000'000LL * i;
         sample.device_index = 0;
         sample.device_kind = msgs::DeviceKind::kExoskeleton;
-        sample.exoskeleton.actuator_force_cmd_n = -1.5 * i;
+        const bool contact = i >= 50;
+        sample.exoskeleton.reference_actuator_force_n = contact ? -2.0 : 0.0;
+        sample.exoskeleton.actuator_force_n = contact ? -1.5 : 0.0;  // 0.5 N short
+        sample.exoskeleton.actuator_force_cmd_n = contact ? -1.6 : 0.0;
+        sample.exoskeleton.ghost_torque_nm = {contact ? 0.003 : 0.0, contact ? 0.004 : 0.0, 0.0};
+        sample.exoskeleton.energy_observer_j = -0.01 * i;  // the device gives energy
         csv += telemetryCsvRow(sample, 0);
         sample.device_index = 1;
         sample.device_kind = msgs::DeviceKind::kThimble;
+        sample.thimble.reference_force_device_n = {0.0, contact ? 0.6 : 0.0, contact ? 0.8 : 0.0};
         csv += telemetryCsvRow(sample, 0);
     }
-    const auto forces = exoskeletonForcesFromCsv(csv);
-    ASSERT_EQ(forces.size(), 1U);
-    EXPECT_THAT(forces.at(0), testing::ElementsAre(0.0, -1.5, -3.0));
+    csv += "12,0.5,0,exo";  // a truncated last line is skipped
+    const auto devices = readTelemetryCsv(csv);
+    ASSERT_EQ(devices.size(), 2U);
+    EXPECT_EQ(devices.at(0).kind, "exoskeleton");
+    ASSERT_EQ(devices.at(0).column("time_s").size(), 100U);
+
+    const ExoskeletonReport exo = exoskeletonReport(devices.at(0), {});
+    EXPECT_EQ(exo.contact_ticks, 50U);
+    EXPECT_NEAR(exo.mean_reference_n, 2.0, 1e-9);
+    EXPECT_NEAR(exo.rms_error_n, 0.5, 1e-9);
+    EXPECT_NEAR(exo.peak_error_n, 0.5, 1e-9);
+    EXPECT_NEAR(exo.errorFraction(), 0.25, 1e-9);
+    EXPECT_NEAR(exo.rms_ghost_torque_nm, 0.005, 1e-6);
+    EXPECT_NEAR(exo.delivered_energy_j, 0.99, 1e-6);
+    EXPECT_EQ(exo.clamp_below_reference_ticks, 0U);
+
+    const ThimbleReport thimble = thimbleReport(devices.at(1), {});
+    EXPECT_EQ(thimble.contact_ticks, 50U);
+    EXPECT_NEAR(thimble.mean_reference_force_n, 1.0, 1e-4);
+    const std::string text = formatReport(devices, {});
+    EXPECT_NE(text.find("error RMS 0.500 N (25.0% of it)"), std::string::npos) << text;
+    EXPECT_THROW((void)readTelemetryCsv("time,tick\n1,2\n"), std::runtime_error);
 }
 
 TEST(ContactQuality, AHeldContactForceHasNoChatterAndIsNotAtTheClamp) {

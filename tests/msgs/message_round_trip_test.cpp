@@ -124,6 +124,7 @@ class Filler {
         fill(m.dof);
         fill(m.q_sim_rad);
         fill(m.constraints);
+        fill(m.reference_torque_nm);
     }
     void fill(ContactSample& s) {
         fill(s.p_device_m);
@@ -134,6 +135,8 @@ class Filler {
     void fill(ContactSurface& m) {
         fill(m.header);
         fill(m.samples);
+        fill(m.reference_force_device_n);
+        fill(m.reference_moment_device_nm);
     }
     void fill(DeviceState& m) {
         fill(m.header);
@@ -204,15 +207,20 @@ class Filler {
         fill(s.device_index);
         fill(s.device_kind, DeviceKind::kThimble);
         fill(s.exoskeleton.actuator_force_cmd_n);
+        fill(s.exoskeleton.actuator_force_n);
         fill(s.exoskeleton.joint_position_rad);
         fill(s.exoskeleton.proxy_position_rad);
-        fill(s.exoskeleton.ghost_force_n);
+        fill(s.exoskeleton.reference_torque_nm);
+        fill(s.exoskeleton.reference_actuator_force_n);
+        fill(s.exoskeleton.ghost_torque_nm);
         fill(s.exoskeleton.energy_observer_j);
         fill(s.thimble.servo_angle_cmd_rad);
         fill(s.thimble.servo_angle_rad);
         fill(s.thimble.platform_height_m);
         fill(s.thimble.platform_tilt_x_rad);
         fill(s.thimble.platform_tilt_y_rad);
+        fill(s.thimble.reference_force_device_n);
+        fill(s.thimble.reference_moment_device_nm);
         fill(s.tick_work_us);
         fill(s.read_us);
         fill(s.write_us);

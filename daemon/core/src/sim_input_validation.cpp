@@ -56,7 +56,8 @@ InputRejection validate(const msgs::ConstraintSet& message, std::string_view dev
     if (message.dof != joint_count || message.dof > msgs::kMaxJointDofs) {
         return InputRejection::kDofMismatch;
     }
-    if (!allFinite(message.q_sim_rad, message.dof)) {
+    if (!allFinite(message.q_sim_rad, message.dof) ||
+        !allFinite(message.reference_torque_nm, message.dof)) {
         return InputRejection::kNonFinite;
     }
     for (const auto& constraint : message.constraints) {
@@ -80,6 +81,10 @@ InputRejection validate(const msgs::ContactSurface& message, std::string_view de
     }
     if (message.samples.count > msgs::kMaxContactSamples) {
         return InputRejection::kCountOverCapacity;
+    }
+    if (!allFinite(message.reference_force_device_n) ||
+        !allFinite(message.reference_moment_device_nm)) {
+        return InputRejection::kNonFinite;
     }
     for (const auto& sample : message.samples) {
         if (!allFinite(sample.p_device_m) || !allFinite(sample.normal_device) ||

@@ -101,10 +101,11 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
                              state.encoder_updates > 0 && state.actuator_updates > 0;
 
     double desired_n = 0.0;
+    const msgs::ConstraintSet* set = core.latestConstraintSet(index);
     if (state_fresh) {
         measure();
         std::span<const msgs::LinearConstraint> constraints;
-        if (const msgs::ConstraintSet* set = core.latestConstraintSet(index)) {
+        if (set != nullptr) {
             const auto used = set->constraints.used();
             constraints = used.first(std::min(used.size(), max_constraints_));
         }
@@ -140,6 +141,45 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     report_.actuator_force[0] = state.actuator.force_n;
     report_.exoskeleton.actuator_force_cmd_n = force_n;
     report_.exoskeleton.energy_observer_j = guard_.passivity().observedEnergy();
+    reportFeltAgainstReference(set, state.actuator.force_n);
+}
+
+void ExoskeletonChannel::reportFeltAgainstReference(const msgs::ConstraintSet* set,
+                                                    double felt_force_n) noexcept {
+    auto& exo = report_.exoskeleton;
+    exo.actuator_force_n = felt_force_n;
+    exo.reference_torque_nm.fill(0.0);
+    exo.ghost_torque_nm.fill(0.0);
+    const auto n = static_cast<std::size_t>(q_.size());
+    if (set != nullptr) {
+        for (std::size_t i = 0; i < n; ++i) {
+            exo.reference_torque_nm[i] = set->reference_torque_nm[i];
+        }
+    }
+    model_.actuationMatrix(q_, felt_actuation_);
+    double reference_squared = 0.0;
+    double felt_along_reference = 0.0;
+    double actuation_squared = 0.0;
+    double actuation_along_reference = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double b = felt_actuation_(static_cast<Eigen::Index>(i), 0);
+        actuation_squared += b * b;
+        actuation_along_reference += b * exo.reference_torque_nm[i];
+        const double felt = b * felt_force_n;
+        exo.ghost_torque_nm[i] = felt;
+        reference_squared += exo.reference_torque_nm[i] * exo.reference_torque_nm[i];
+        felt_along_reference += felt * exo.reference_torque_nm[i];
+    }
+    // The one actuator's best share of the reference: B^+ tau_ref.
+    exo.reference_actuator_force_n =
+        actuation_squared > 0.0 ? actuation_along_reference / actuation_squared : 0.0;
+    // With no reference at all, everything felt is ghost.
+    if (reference_squared > 1e-18) {
+        const double scale = felt_along_reference / reference_squared;
+        for (std::size_t i = 0; i < n; ++i) {
+            exo.ghost_torque_nm[i] -= scale * exo.reference_torque_nm[i];
+        }
+    }
 }
 
 }  // namespace haptic::runtime

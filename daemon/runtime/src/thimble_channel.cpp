@@ -103,6 +103,10 @@ void ThimbleChannel::compute(daemon::DaemonCore& core, std::size_t index,
     report_.thimble.platform_height_m = solved_.dofs.height_m;
     report_.thimble.platform_tilt_x_rad = solved_.dofs.tilt_x_rad;
     report_.thimble.platform_tilt_y_rad = solved_.dofs.tilt_y_rad;
+    if (surface != nullptr) {
+        report_.thimble.reference_force_device_n = surface->reference_force_device_n;
+        report_.thimble.reference_moment_device_nm = surface->reference_moment_device_nm;
+    }
     for (int i = 0; i < 3; ++i) {
         report_.platform_position_m[static_cast<std::size_t>(i)] = measured_pose_.position_m[i];
     }

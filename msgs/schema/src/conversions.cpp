@@ -22,6 +22,12 @@ static_assert(kArraySize<Member<decltype(idl::ExoskeletonTelemetry{}.joint_posit
               kMaxJointDofs);
 static_assert(kArraySize<Member<decltype(idl::ExoskeletonTelemetry{}.proxy_position_rad())>> ==
               kMaxJointDofs);
+static_assert(kArraySize<Member<decltype(idl::ConstraintSet{}.reference_torque_nm())>> ==
+              kMaxJointDofs);
+static_assert(kArraySize<Member<decltype(idl::ExoskeletonTelemetry{}.reference_torque_nm())>> ==
+              kMaxJointDofs);
+static_assert(kArraySize<Member<decltype(idl::ExoskeletonTelemetry{}.ghost_torque_nm())>> ==
+              kMaxJointDofs);
 static_assert(kArraySize<Member<decltype(idl::ThimbleTelemetry{}.servo_angle_cmd_rad())>> ==
               kThimbleServos);
 static_assert(kArraySize<Member<decltype(idl::ThimbleTelemetry{}.servo_angle_rad())>> ==
@@ -146,6 +152,7 @@ idl::ConstraintSet toIdl(const ConstraintSet& in) {
         item.b(c.b);
         out.constraints().push_back(item);
     }
+    out.reference_torque_nm(in.reference_torque_nm);
     return out;
 }
 
@@ -162,6 +169,7 @@ ConversionResult fromIdl(const idl::ConstraintSet& in, ConstraintSet& out) {
     for (const auto& c : in.constraints()) {
         out.constraints.push_back(LinearConstraint{c.a(), c.b()});
     }
+    out.reference_torque_nm = in.reference_torque_nm();
     return result;
 }
 
@@ -179,6 +187,8 @@ idl::ContactSurface toIdl(const ContactSurface& in) {
         item.weight(s.weight);
         out.samples().push_back(item);
     }
+    out.reference_force_device_n(in.reference_force_device_n);
+    out.reference_moment_device_nm(in.reference_moment_device_nm);
     return out;
 }
 
@@ -193,6 +203,8 @@ ConversionResult fromIdl(const idl::ContactSurface& in, ContactSurface& out) {
         out.samples.push_back(
             ContactSample{s.p_device_m(), s.signed_distance_m(), s.normal_device(), s.weight()});
     }
+    out.reference_force_device_n = in.reference_force_device_n();
+    out.reference_moment_device_nm = in.reference_moment_device_nm();
     return result;
 }
 
@@ -391,9 +403,12 @@ idl::HapticTelemetry toIdl(const HapticTelemetry& in) {
         item.device_kind(toIdlEnum<idl::DeviceKind>(s.device_kind));
         idl::ExoskeletonTelemetry exoskeleton;
         exoskeleton.actuator_force_cmd_n(s.exoskeleton.actuator_force_cmd_n);
+        exoskeleton.actuator_force_n(s.exoskeleton.actuator_force_n);
         exoskeleton.joint_position_rad(s.exoskeleton.joint_position_rad);
         exoskeleton.proxy_position_rad(s.exoskeleton.proxy_position_rad);
-        exoskeleton.ghost_force_n(s.exoskeleton.ghost_force_n);
+        exoskeleton.reference_torque_nm(s.exoskeleton.reference_torque_nm);
+        exoskeleton.reference_actuator_force_n(s.exoskeleton.reference_actuator_force_n);
+        exoskeleton.ghost_torque_nm(s.exoskeleton.ghost_torque_nm);
         exoskeleton.energy_observer_j(s.exoskeleton.energy_observer_j);
         item.exoskeleton(exoskeleton);
         idl::ThimbleTelemetry thimble;
@@ -402,6 +417,8 @@ idl::HapticTelemetry toIdl(const HapticTelemetry& in) {
         thimble.platform_height_m(s.thimble.platform_height_m);
         thimble.platform_tilt_x_rad(s.thimble.platform_tilt_x_rad);
         thimble.platform_tilt_y_rad(s.thimble.platform_tilt_y_rad);
+        thimble.reference_force_device_n(s.thimble.reference_force_device_n);
+        thimble.reference_moment_device_nm(s.thimble.reference_moment_device_nm);
         item.thimble(thimble);
         item.tick_work_us(s.tick_work_us);
         item.read_us(s.read_us);
@@ -429,15 +446,20 @@ ConversionResult fromIdl(const idl::HapticTelemetry& in, HapticTelemetry& out) {
             return result;
         }
         item.exoskeleton.actuator_force_cmd_n = s.exoskeleton().actuator_force_cmd_n();
+        item.exoskeleton.actuator_force_n = s.exoskeleton().actuator_force_n();
         item.exoskeleton.joint_position_rad = s.exoskeleton().joint_position_rad();
         item.exoskeleton.proxy_position_rad = s.exoskeleton().proxy_position_rad();
-        item.exoskeleton.ghost_force_n = s.exoskeleton().ghost_force_n();
+        item.exoskeleton.reference_torque_nm = s.exoskeleton().reference_torque_nm();
+        item.exoskeleton.reference_actuator_force_n = s.exoskeleton().reference_actuator_force_n();
+        item.exoskeleton.ghost_torque_nm = s.exoskeleton().ghost_torque_nm();
         item.exoskeleton.energy_observer_j = s.exoskeleton().energy_observer_j();
         item.thimble.servo_angle_cmd_rad = s.thimble().servo_angle_cmd_rad();
         item.thimble.servo_angle_rad = s.thimble().servo_angle_rad();
         item.thimble.platform_height_m = s.thimble().platform_height_m();
         item.thimble.platform_tilt_x_rad = s.thimble().platform_tilt_x_rad();
         item.thimble.platform_tilt_y_rad = s.thimble().platform_tilt_y_rad();
+        item.thimble.reference_force_device_n = s.thimble().reference_force_device_n();
+        item.thimble.reference_moment_device_nm = s.thimble().reference_moment_device_nm();
         item.tick_work_us = s.tick_work_us();
         item.read_us = s.read_us();
         item.write_us = s.write_us();

@@ -55,7 +55,9 @@ KinestheticOutput::KinestheticOutput(const HandModel& model, const HandKinematic
     }
     chain_ = *chain;
     for (std::size_t s = 0; s < 3; ++s) {
-        skin_[s] = skinOf(model.simulation, model.bones[static_cast<std::size_t>(chain_.bones[s])]);
+        const BoneInfo& bone = model.bones[static_cast<std::size_t>(chain_.bones[s])];
+        skin_[s] = skinOf(model.simulation, bone);
+        nodes_[s] = {bone.first_node, bone.first_node + bone.node_count};
     }
 }
 
@@ -111,6 +113,20 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) co
             out.constraints.push_back(constraint);
         }
     }
+    // The fully actuated reference: the generalised force of every contact force on the
+    // finger, tau_j = u_j . ((p - anchor_j) x f), a node on phalanx s moving with joints 0..s.
+    out.reference_torque_nm.fill(0.0);
+    for (const Simulation::ContactForce& contact : sim.contactForces()) {
+        for (std::size_t s = 0; s < 3; ++s) {
+            if (contact.node < nodes_[s].first || contact.node >= nodes_[s].second) {
+                continue;
+            }
+            const Vec3 p = sim.nodePosition(contact.node);
+            for (std::size_t j = 0; j <= s; ++j) {
+                out.reference_torque_nm[j] += axes[j].dot((p - anchors[j]).cross(contact.force_n));
+            }
+        }
+    }
 }
 
 TactileOutput::TactileOutput(const HandModel& model, config::Finger finger,
@@ -119,6 +135,7 @@ TactileOutput::TactileOutput(const HandModel& model, config::Finger finger,
     const BoneInfo& bone = distalBone(model, finger);
     const Simulation& sim = model.simulation;
     body_ = bone.body;
+    nodes_ = {bone.first_node, bone.first_node + bone.node_count};
     const Mat3 finger_rotation_device = rotationFromRpy(finger_from_device.rpy_rad);
     const Vec3 finger_translation_device(finger_from_device.translation_m[0],
                                          finger_from_device.translation_m[1],
@@ -199,6 +216,21 @@ void TactileOutput::fill(const Simulation& sim, msgs::ContactSurface& out) const
         out_sample.signed_distance_m = std::isfinite(nearest.phi_m) ? nearest.phi_m : 1.0;
         out_sample.weight = sample.area_m2 * pad_stiffness_pa_per_m_;
         out.samples.push_back(out_sample);
+    }
+    // The reference: net force and moment of the contacts on the distal phalanx.
+    Vec3 force = Vec3::Zero();
+    Vec3 moment = Vec3::Zero();
+    for (const Simulation::ContactForce& contact : sim.contactForces()) {
+        if (contact.node >= nodes_.first && contact.node < nodes_.second) {
+            force += contact.force_n;
+            moment += (sim.nodePosition(contact.node) - device.position_m).cross(contact.force_n);
+        }
+    }
+    const Vec3 force_device = device.rotation.transpose() * force;
+    const Vec3 moment_device = device.rotation.transpose() * moment;
+    for (int i = 0; i < 3; ++i) {
+        out.reference_force_device_n[static_cast<std::size_t>(i)] = force_device[i];
+        out.reference_moment_device_nm[static_cast<std::size_t>(i)] = moment_device[i];
     }
 }
 

@@ -57,6 +57,10 @@ class ExoskeletonChannel final
   private:
     void followMethod(const msgs::DeviceId& method) noexcept;
     void measure() noexcept;
+    // Telemetry's yardstick: the sim's fully actuated reference torque, and the felt torque
+    // B(q) F of the force the actuator reports, split into its part along the reference and
+    // the rest, the ghost torque (docs/hapticd.md, "Reference and ghost torque").
+    void reportFeltAgainstReference(const msgs::ConstraintSet* set, double felt_force_n) noexcept;
 
     kinesthetic::ExoskeletonDevice model_;  // before renderer_, which keeps a reference
     kinesthetic::KinestheticRenderer renderer_;
@@ -71,6 +75,7 @@ class ExoskeletonChannel final
     std::uint64_t encoder_updates_{0};
     std::int64_t encoder_time_ns_{0};
     kinesthetic::RenderOutput out_;
+    kinesthetic::ActuationMatrix felt_actuation_;  // B(q) for the felt joint torque
 };
 
 }  // namespace haptic::runtime

@@ -50,6 +50,9 @@ struct ConstraintSet {
     std::uint16_t dof{0};
     std::array<double, kMaxJointDofs> q_sim_rad{};
     BoundedArray<LinearConstraint, kMaxConstraints> constraints{};
+    // The fully actuated reference: joint torques the object's contact applies to the
+    // simulated finger (sum of J^T f); what the user should feel.
+    std::array<double, kMaxJointDofs> reference_torque_nm{};
     friend bool operator==(const ConstraintSet&, const ConstraintSet&) = default;
 };
 
@@ -66,6 +69,10 @@ struct ContactSample {
 struct ContactSurface {
     MessageHeader header{};
     BoundedArray<ContactSample, kMaxContactSamples> samples{};
+    // The reference: net contact force and moment (about the device origin) the object applies
+    // to the simulated pad, device frame.
+    std::array<double, 3> reference_force_device_n{};
+    std::array<double, 3> reference_moment_device_nm{};
     friend bool operator==(const ContactSurface&, const ContactSurface&) = default;
 };
 
@@ -187,9 +194,13 @@ struct HapticStatus {
 // The exoskeleton's part of a telemetry sample (zero for a thimble).
 struct ExoskeletonTelemetry {
     double actuator_force_cmd_n{0.0};  // force commanded to the linear actuator
+    double actuator_force_n{0.0};      // force the actuator reports: what the finger feels
     std::array<double, kMaxJointDofs> joint_position_rad{};  // measured finger joints
     std::array<double, kMaxJointDofs> proxy_position_rad{};  // the proxy the coupling pulls to
-    std::array<double, 3> ghost_force_n{};
+    std::array<double, kMaxJointDofs> reference_torque_nm{};  // the sim's reference
+    double reference_actuator_force_n{0.0};  // B^+ reference_torque_nm: the force to compare
+    // The felt joint torque (J^T F of the reported actuator force) orthogonal to the reference.
+    std::array<double, kMaxJointDofs> ghost_torque_nm{};
     double energy_observer_j{0.0};  // the port's passivity observer
     friend bool operator==(const ExoskeletonTelemetry&, const ExoskeletonTelemetry&) = default;
 };
@@ -201,6 +212,8 @@ struct ThimbleTelemetry {
     double platform_height_m{0.0};                             // the optimiser's platform pose
     double platform_tilt_x_rad{0.0};
     double platform_tilt_y_rad{0.0};
+    std::array<double, 3> reference_force_device_n{};  // the sim's reference on the pad
+    std::array<double, 3> reference_moment_device_nm{};
     friend bool operator==(const ThimbleTelemetry&, const ThimbleTelemetry&) = default;
 };
 

@@ -40,6 +40,8 @@ class KinestheticOutput {
     KinestheticOutputSettings settings_;
     FingerChain chain_;
     std::array<std::vector<int>, 3> skin_;  // skin nodes of each phalanx
+    // [first, end) node ids of each phalanx, for the reference torques of its contacts
+    std::array<std::pair<int, int>, 3> nodes_{};
 };
 
 struct TactileOutputSettings {
@@ -71,6 +73,7 @@ class TactileOutput {
         double area_m2;
     };
     int body_{-1};
+    std::pair<int, int> nodes_{};  // [first, end) node ids of the distal phalanx
     Mat3 bone_from_device_rotation_;
     Vec3 bone_from_device_translation_m_;
     double pad_stiffness_pa_per_m_{0.0};

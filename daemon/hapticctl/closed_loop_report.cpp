@@ -1,0 +1,186 @@
+#include "closed_loop_report.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <stdexcept>
+
+namespace haptic::ctl {
+namespace {
+
+std::vector<std::string_view> splitFields(std::string_view line) {
+    std::vector<std::string_view> fields;
+    while (true) {
+        const std::size_t comma = line.find(',');
+        fields.push_back(line.substr(0, comma));
+        if (comma == std::string_view::npos) {
+            return fields;
+        }
+        line.remove_prefix(comma + 1);
+    }
+}
+
+std::string_view nextLine(std::string_view& text) {
+    const std::size_t end = text.find('\n');
+    const std::string_view line = text.substr(0, end);
+    text.remove_prefix(end == std::string_view::npos ? text.size() : end + 1);
+    return line;
+}
+
+double norm3(const DeviceColumns& device, std::string_view prefix, std::string_view suffix,
+             std::size_t row) {
+    double sum = 0.0;
+    for (const char* axis : {"x", "y", "z"}) {
+        const double v = device.column(fmt::format("{}{}{}", prefix, axis, suffix))[row];
+        sum += v * v;
+    }
+    return std::sqrt(sum);
+}
+
+}  // namespace
+
+const std::vector<double>& DeviceColumns::column(std::string_view name) const {
+    const auto found = values.find(name);
+    if (found == values.end()) {
+        throw std::runtime_error("telemetry CSV: no column '" + std::string(name) + "'");
+    }
+    return found->second;
+}
+
+std::map<int, DeviceColumns> readTelemetryCsv(std::string_view csv) {
+    const std::vector<std::string_view> header = splitFields(nextLine(csv));
+    constexpr std::size_t kDeviceColumn = 2;
+    constexpr std::size_t kKindColumn = 3;
+    if (header.size() <= kKindColumn || header[kDeviceColumn] != "device" ||
+        header[kKindColumn] != "device_kind") {
+        throw std::runtime_error("telemetry CSV: the first line is not hapticctl record's header");
+    }
+    std::map<int, DeviceColumns> devices;
+    while (!csv.empty()) {
+        const std::string_view line = nextLine(csv);
+        const std::vector<std::string_view> fields = splitFields(line);
+        if (fields.size() != header.size()) {
+            continue;  // a truncated last line
+        }
+        int index = 0;
+        const auto& device_field = fields[kDeviceColumn];
+        if (std::from_chars(device_field.data(), device_field.data() + device_field.size(), index)
+                .ec != std::errc()) {
+            continue;
+        }
+        DeviceColumns& device = devices[index];
+        device.kind = std::string(fields[kKindColumn]);
+        for (std::size_t i = 0; i < header.size(); ++i) {
+            if (i == kKindColumn) {
+                continue;
+            }
+            double value = 0.0;
+            const auto& field = fields[i];
+            if (std::from_chars(field.data(), field.data() + field.size(), value).ec !=
+                std::errc()) {
+                value = std::nan("");
+            }
+            device.values[std::string(header[i])].push_back(value);
+        }
+    }
+    return devices;
+}
+
+ExoskeletonReport exoskeletonReport(const DeviceColumns& device,
+                                    const ContactQualitySettings& settings) {
+    ExoskeletonReport report;
+    const auto& command = device.column("actuator_force_cmd_n");
+    const auto& felt = device.column("exo_actuator_force_n");
+    const auto& reference = device.column("exo_reference_actuator_force_n");
+    const auto& energy = device.column("exo_energy_observer_j");
+    report.quality = contactQuality(command, settings);
+    double sum_reference = 0.0;
+    double sum_squared_error = 0.0;
+    double sum_squared_ghost = 0.0;
+    for (std::size_t i = 0; i < felt.size(); ++i) {
+        if (!(std::abs(reference[i]) > settings.contact_threshold_n ||
+              std::abs(felt[i]) > settings.contact_threshold_n)) {
+            continue;
+        }
+        ++report.contact_ticks;
+        sum_reference += std::abs(reference[i]);
+        const double error = felt[i] - reference[i];
+        sum_squared_error += error * error;
+        report.peak_error_n = std::max(report.peak_error_n, std::abs(error));
+        double ghost_squared = 0.0;
+        for (int j = 0; j < 3; ++j) {
+            const double g = device.column(fmt::format("exo_ghost_torque_{}_nm", j))[i];
+            ghost_squared += g * g;
+        }
+        sum_squared_ghost += ghost_squared;
+        if (std::abs(command[i]) >= settings.clamp_fraction * settings.clamp_n &&
+            std::abs(reference[i]) < 0.8 * settings.clamp_n) {
+            ++report.clamp_below_reference_ticks;
+        }
+    }
+    if (report.contact_ticks > 0) {
+        const auto n = static_cast<double>(report.contact_ticks);
+        report.mean_reference_n = sum_reference / n;
+        report.rms_error_n = std::sqrt(sum_squared_error / n);
+        report.rms_ghost_torque_nm = std::sqrt(sum_squared_ghost / n);
+    }
+    if (!energy.empty()) {
+        report.delivered_energy_j = -(energy.back() - energy.front());
+    }
+    return report;
+}
+
+ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySettings& settings) {
+    ThimbleReport report;
+    const auto& time = device.column("time_s");
+    report.ticks = time.size();
+    double sum = 0.0;
+    for (std::size_t i = 0; i < time.size(); ++i) {
+        const double force = norm3(device, "thimble_reference_force_", "_n", i);
+        report.peak_reference_force_n = std::max(report.peak_reference_force_n, force);
+        if (force > settings.contact_threshold_n) {
+            ++report.contact_ticks;
+            sum += force;
+        }
+    }
+    if (report.contact_ticks > 0) {
+        report.mean_reference_force_n = sum / static_cast<double>(report.contact_ticks);
+    }
+    return report;
+}
+
+std::string formatReport(const std::map<int, DeviceColumns>& devices,
+                         const ContactQualitySettings& settings) {
+    std::string out;
+    for (const auto& [index, device] : devices) {
+        if (device.kind == "exoskeleton") {
+            const ExoskeletonReport r = exoskeletonReport(device, settings);
+            const ContactQuality& q = r.quality;
+            out += fmt::format(
+                "exoskeleton (device {}): {} ticks, {} in contact (|F| > {:.2f} N)\n"
+                "  felt vs reference: mean |reference| {:.3f} N, error RMS {:.3f} N ({:.1f}% of "
+                "it), peak {:.3f} N\n"
+                "  ghost torque RMS {:.5f} N m; net energy delivered {:.6f} J\n"
+                "  command: at the {:.1f} N clamp {:.1f}% of contact ticks ({:.1f}% while the "
+                "reference is below 80% of it); chatter {:.3f} N RMS = {:.1f}% of the mean "
+                "|command| {:.3f} N\n",
+                index, q.ticks, r.contact_ticks, settings.contact_threshold_n, r.mean_reference_n,
+                r.rms_error_n, 100.0 * r.errorFraction(), r.peak_error_n, r.rms_ghost_torque_nm,
+                r.delivered_energy_j, settings.clamp_n, 100.0 * q.clampFraction(),
+                100.0 * r.clampBelowReferenceFraction(), q.chatter_rms_n,
+                100.0 * q.chatterFraction(), q.mean_contact_force_n);
+        } else if (device.kind == "thimble") {
+            const ThimbleReport r = thimbleReport(device, settings);
+            out += fmt::format(
+                "thimble (device {}): {} ticks, reference pad force above {:.2f} N on {}, mean "
+                "{:.3f} N, peak {:.3f} N (the felt pad force is not measured yet)\n",
+                index, r.ticks, settings.contact_threshold_n, r.contact_ticks,
+                r.mean_reference_force_n, r.peak_reference_force_n);
+        }
+    }
+    return out;
+}
+
+}  // namespace haptic::ctl

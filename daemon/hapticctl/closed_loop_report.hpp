@@ -1,0 +1,74 @@
+#pragma once
+
+// The end-to-end figures of one recorded run (hapticctl record), per device: what the finger
+// felt against the reference the simulation computed (docs/hapticctl.md, "plot").
+//
+// Exoskeleton, on the ticks where the reference or the felt force exceeds the contact
+// threshold ("contact"):
+//   felt       the force the actuator reports (exo_actuator_force_n);
+//   reference  B^+ tau_ref, the actuator force that best gives the sim's fully actuated
+//              reference torque (exo_reference_actuator_force_n);
+//   error      RMS and peak of felt - reference, and RMS as a share of the mean |reference|;
+//   ghost      RMS of |ghost torque|: the felt joint torque orthogonal to the reference;
+//   clamp      commanded force at the clamp while |reference| < 80 % of it (share of contact);
+//   chatter    contact_quality.hpp, on the commanded force;
+//   energy     net energy the device delivered to the finger: minus the change of the port's
+//              passivity observer over the run (> 0: the device gave energy).
+// Thimble: the reference pad force (|F| and its mean in contact); the felt pad force needs a
+// pad model of the user's and is not measured yet.
+
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "contact_quality.hpp"
+
+namespace haptic::ctl {
+
+// The columns of one device in a recorded CSV, by name (telemetryCsvHeader()).
+struct DeviceColumns {
+    std::string kind;  // "exoskeleton" or "thimble"
+    std::map<std::string, std::vector<double>, std::less<>> values;
+    [[nodiscard]] const std::vector<double>& column(std::string_view name) const;
+};
+
+// Rows per device index. Throws std::runtime_error when the header lacks a column.
+[[nodiscard]] std::map<int, DeviceColumns> readTelemetryCsv(std::string_view csv);
+
+struct ExoskeletonReport {
+    ContactQuality quality;       // of the commanded force
+    std::size_t contact_ticks{0};  // reference or felt above the threshold
+    double mean_reference_n{0.0};
+    double rms_error_n{0.0};
+    double peak_error_n{0.0};
+    double rms_ghost_torque_nm{0.0};
+    std::size_t clamp_below_reference_ticks{0};
+    double delivered_energy_j{0.0};
+    [[nodiscard]] double errorFraction() const noexcept {
+        return mean_reference_n > 0.0 ? rms_error_n / mean_reference_n : 0.0;
+    }
+    [[nodiscard]] double clampBelowReferenceFraction() const noexcept {
+        return contact_ticks == 0 ? 0.0
+                                  : static_cast<double>(clamp_below_reference_ticks) /
+                                        static_cast<double>(contact_ticks);
+    }
+};
+
+struct ThimbleReport {
+    std::size_t ticks{0};
+    std::size_t contact_ticks{0};  // reference |F| above the threshold
+    double mean_reference_force_n{0.0};
+    double peak_reference_force_n{0.0};
+};
+
+[[nodiscard]] ExoskeletonReport exoskeletonReport(const DeviceColumns& device,
+                                                  const ContactQualitySettings& settings);
+[[nodiscard]] ThimbleReport thimbleReport(const DeviceColumns& device,
+                                          const ContactQualitySettings& settings);
+
+// The report as text, one block per device.
+[[nodiscard]] std::string formatReport(const std::map<int, DeviceColumns>& devices,
+                                       const ContactQualitySettings& settings);
+
+}  // namespace haptic::ctl
