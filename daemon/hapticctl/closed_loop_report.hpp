@@ -37,7 +37,7 @@ struct DeviceColumns {
 [[nodiscard]] std::map<int, DeviceColumns> readTelemetryCsv(std::string_view csv);
 
 struct ExoskeletonReport {
-    ContactQuality quality;       // of the commanded force
+    ContactQuality quality;        // of the commanded force
     std::size_t contact_ticks{0};  // reference or felt above the threshold
     double mean_reference_n{0.0};
     double rms_error_n{0.0};

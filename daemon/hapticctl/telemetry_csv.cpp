@@ -44,9 +44,11 @@ std::string telemetryCsvHeader() {
     for (std::size_t i = 0; i < msgs::kThimbleServos; ++i) {
         header += fmt::format(",servo_angle_{}_rad", i);
     }
-    header += ",thimble_reference_force_x_n,thimble_reference_force_y_n,thimble_reference_force_z_n";
-    header += ",thimble_reference_moment_x_nm,thimble_reference_moment_y_nm,"
-              "thimble_reference_moment_z_nm";
+    header +=
+        ",thimble_reference_force_x_n,thimble_reference_force_y_n,thimble_reference_force_z_n";
+    header +=
+        ",thimble_reference_moment_x_nm,thimble_reference_moment_y_nm,"
+        "thimble_reference_moment_z_nm";
     return header + "\n";
 }
 
@@ -117,8 +119,9 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
         fmt::arg("csv", csv), fmt::arg("low", -2.0 * exo_clamp_n),
         fmt::arg("high", 2.0 * exo_clamp_n));
     // Columns 31-33: the sim's reference force on the pad, on the right axis.
-    script += "set ylabel 'thimble servo angle command [rad]'\n"
-              "set y2label 'thimble reference pad force [N]'\nset y2tics\nplot ";
+    script +=
+        "set ylabel 'thimble servo angle command [rad]'\n"
+        "set y2label 'thimble reference pad force [N]'\nset y2tics\nplot ";
     for (int servo = 0; servo < 3; ++servo) {
         script += fmt::format(
             "{sep}{csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):{column} with points "

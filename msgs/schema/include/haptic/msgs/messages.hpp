@@ -195,8 +195,8 @@ struct HapticStatus {
 struct ExoskeletonTelemetry {
     double actuator_force_cmd_n{0.0};  // force commanded to the linear actuator
     double actuator_force_n{0.0};      // force the actuator reports: what the finger feels
-    std::array<double, kMaxJointDofs> joint_position_rad{};  // measured finger joints
-    std::array<double, kMaxJointDofs> proxy_position_rad{};  // the proxy the coupling pulls to
+    std::array<double, kMaxJointDofs> joint_position_rad{};   // measured finger joints
+    std::array<double, kMaxJointDofs> proxy_position_rad{};   // the proxy the coupling pulls to
     std::array<double, kMaxJointDofs> reference_torque_nm{};  // the sim's reference
     double reference_actuator_force_n{0.0};  // B^+ reference_torque_nm: the force to compare
     // The felt joint torque (J^T F of the reported actuator force) orthogonal to the reference.

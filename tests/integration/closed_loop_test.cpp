@@ -1,0 +1,199 @@
+// The closed loop as the demo runs it, with the real parts: iox-roudi with config/roudi.toml,
+// Fast DDS on a test-only domain, `hapticemu --user` (the virtual user wearing both devices on
+// the UDP bus and publishing its hand on tracking/hand), hapticd, and handsim tracking that
+// topic, all with the shipped configuration. One recorded run is judged by what the finger
+// gets (closed_loop_report.hpp): force only in contact, no clamp, a passive port, the thimble
+// pressing only in contact, and live method switches while rendering.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include "child_process.hpp"
+#include "closed_loop_report.hpp"
+#include "haptic/ipc/iceoryx_runtime.hpp"
+
+namespace haptic::testing {
+namespace {
+
+using namespace std::chrono_literals;
+
+const std::string kConfigDir = HAPTIC_CONFIG_DIR;
+
+std::string domainArgument() {
+    return std::to_string(100 + (::getpid() + 50) % 100);
+}
+
+CommandResult ctl(std::vector<std::string> arguments) {
+    arguments.insert(arguments.begin(), {HAPTICCTL_PATH, "--dds-domain", domainArgument()});
+    return runCommand(arguments, 30s);
+}
+
+// Ticks on which `reference` stays below `threshold` for `settle` ticks before and after:
+// clear of contact. (At an onset hapticd renders before the sim's reference shows the contact:
+// the device's finger is where the tracker will see it one latency later, and the daemon
+// re-solves the sim's linearised constraints against it at 1 kHz.)
+std::vector<bool> settledWithout(const std::vector<double>& reference, double threshold,
+                                 std::size_t settle) {
+    const std::size_t n = reference.size();
+    std::vector<std::size_t> quiet_before(n, 0), quiet_after(n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        const bool quiet = std::abs(reference[i]) < threshold;
+        quiet_before[i] = quiet ? (i > 0 ? quiet_before[i - 1] : 0) + 1 : 0;
+    }
+    for (std::size_t i = n; i-- > 0;) {
+        const bool quiet = std::abs(reference[i]) < threshold;
+        quiet_after[i] = quiet ? (i + 1 < n ? quiet_after[i + 1] : 0) + 1 : 0;
+    }
+    std::vector<bool> out(n, false);
+    for (std::size_t i = 0; i < n; ++i) {
+        out[i] = quiet_before[i] > settle && quiet_after[i] > settle;
+    }
+    return out;
+}
+
+TEST(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitches) {
+    if (HAPTIC_SANITIZED != 0) {
+        GTEST_SKIP() << "under the sanitizers handsim steps at ~4 Hz, so hapticd fades every "
+                        "sim input as stale and no contact is rendered to judge";
+    }
+    ASSERT_FALSE(ipc::probeRoudi().reachable) << "an iox-roudi is already running; stop it";
+    ChildProcess roudi({IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l", "warning"},
+                       "roudi");
+    for (auto deadline = std::chrono::steady_clock::now() + 10s; !ipc::probeRoudi().reachable;) {
+        ASSERT_TRUE(roudi.running()) << roudi.stderrText();
+        ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
+        std::this_thread::sleep_for(20ms);
+    }
+    ChildProcess user(
+        {HAPTICEMU_PATH, "--user", kConfigDir + "/user.yaml", "--dds-domain", domainArgument()},
+        "hapticemu");
+    ChildProcess daemon({HAPTICD_PATH, "--realtime", "ignore", "--dds-domain", domainArgument()},
+                        "hapticd");
+    ChildProcess sim(
+        {HANDSIM_PATH, "--dds-domain", domainArgument(), "--tracking-topic", "tracking/hand"},
+        "handsim");
+
+    // hapticd accepts enable once both devices report in.
+    CommandResult enabled;
+    for (auto deadline = std::chrono::steady_clock::now() + 30s;
+         std::chrono::steady_clock::now() < deadline;) {
+        ASSERT_TRUE(user.running()) << user.stderrText();
+        ASSERT_TRUE(daemon.running()) << daemon.stderrText();
+        ASSERT_TRUE(sim.running()) << sim.stderrText();
+        enabled = ctl({"enable"});
+        if (enabled.exit_code == 0) {
+            break;
+        }
+        std::this_thread::sleep_for(500ms);
+    }
+    ASSERT_EQ(enabled.exit_code, 0) << enabled.err;
+
+    // Two periods of the default scene's script (6 s each), with every method switched in
+    // live during the second.
+    const std::string csv = "/tmp/haptic-closed-loop-" + std::to_string(::getpid()) + ".csv";
+    ChildProcess recorder(
+        {HAPTICCTL_PATH, "--dds-domain", domainArgument(), "record", csv, "--duration", "12"},
+        "record");
+    std::this_thread::sleep_for(6s);
+    for (const char* method :
+         {"naive", "subspace", "anisotropic", "nullspace", "standard", "linearized_subspace"}) {
+        const CommandResult switched = ctl({"method", method});
+        EXPECT_EQ(switched.exit_code, 0) << method << ": " << switched.err;
+        std::this_thread::sleep_for(300ms);
+    }
+    ASSERT_EQ(recorder.waitFor(40s), std::optional<int>(0)) << recorder.stderrText();
+    const CommandResult status = ctl({"status", "--timeout", "5"});
+    EXPECT_THAT(status.out, ::testing::HasSubstr("State: RENDERING")) << status.err;
+    EXPECT_THAT(status.out, ::testing::HasSubstr("Faults: none")) << status.out;
+
+    std::ifstream file(csv);
+    std::stringstream text;
+    text << file.rdbuf();
+    const auto devices = ctl::readTelemetryCsv(text.str());
+    std::filesystem::remove(csv);
+    ASSERT_EQ(devices.size(), 2U);
+    const ctl::DeviceColumns& exo = devices.at(0);
+    const ctl::DeviceColumns& thimble = devices.at(1);
+    ASSERT_EQ(exo.kind, "exoskeleton");
+    ASSERT_GT(exo.column("time_s").size(), 9000U) << "telemetry lost most of the run";
+    const ctl::ContactQualitySettings settings;  // the shipped 10 N clamp
+    std::printf("%s", ctl::formatReport(devices, settings).c_str());
+
+    // The loop is closed: the simulated finger, tracking the user, touched the block in both
+    // periods, and the sim's reference says so for both devices.
+    const auto& exo_reference = exo.column("exo_reference_actuator_force_n");
+    const auto contact_ticks = std::count_if(exo_reference.begin(), exo_reference.end(),
+                                             [](double f) { return std::abs(f) > 0.5; });
+    EXPECT_GT(contact_ticks, 3000) << "the finger pressed the block for a few seconds";
+    const ctl::ThimbleReport thimble_report = ctl::thimbleReport(thimble, settings);
+    EXPECT_GT(thimble_report.contact_ticks, 3000U);
+
+    // Exoskeleton: no force once the sim has reported no contact for 300 ms (fade 100 ms).
+    const auto& command = exo.column("actuator_force_cmd_n");
+    const auto free_ticks = settledWithout(exo_reference, 1e-9, 300);
+    std::size_t free_count = 0;
+    double largest_free_force = 0.0;
+    for (std::size_t i = 0; i < command.size(); ++i) {
+        if (free_ticks[i]) {
+            ++free_count;
+            largest_free_force = std::max(largest_free_force, std::abs(command[i]));
+        }
+    }
+    EXPECT_GT(free_count, 1500U) << "the script lifts the finger for ~2 s per period";
+    EXPECT_LT(largest_free_force, 0.05);
+
+    // In contact: never pinned at the clamp (the demo's old failure: 61 % of contact ticks),
+    // and passive. NOT asserted, because it does not hold yet (docs/benchmarks.md, "Closed
+    // loop"): that the force is present in contact and chatters by at most 5 % of its mean.
+    // The rendered force is 0-20 % of the sim's reference; the port's passivity controller
+    // refuses most of it, since the demo's press comes from the wrist and puts no energy into
+    // the actuator port, and from run to run the mean force is 0.1-0.9 N with chatter of
+    // 5-80 % of that mean. The report above prints both for every run.
+    const ctl::ExoskeletonReport report = ctl::exoskeletonReport(exo, settings);
+    EXPECT_LE(report.quality.clampFraction(), 0.05);
+    EXPECT_LE(report.delivered_energy_j, 1e-3) << "the exoskeleton stays passive";
+
+    // Thimble: it presses while the sim reports pad contact and sits retracted otherwise.
+    const auto& servo = thimble.column("servo_angle_cmd_0_rad");
+    const double retract = *std::max_element(servo.begin(), servo.end());
+    std::vector<double> pad_force(servo.size());
+    for (std::size_t i = 0; i < servo.size(); ++i) {
+        pad_force[i] = std::hypot(thimble.column("thimble_reference_force_x_n")[i],
+                                  thimble.column("thimble_reference_force_y_n")[i],
+                                  thimble.column("thimble_reference_force_z_n")[i]);
+    }
+    const auto pad_free = settledWithout(pad_force, 1e-9, 300);
+    std::size_t pressing = 0, pressed_ticks = 0, retracted = 0, free_pad_ticks = 0;
+    for (std::size_t i = 0; i < servo.size(); ++i) {
+        if (pad_force[i] > 0.2) {
+            ++pressed_ticks;
+            pressing += servo[i] < retract - 0.2 ? 1 : 0;
+        }
+        if (pad_free[i]) {
+            ++free_pad_ticks;
+            retracted += std::abs(servo[i] - retract) < 1e-3 ? 1 : 0;
+        }
+    }
+    ASSERT_GT(pressed_ticks, 1000U);
+    EXPECT_GT(static_cast<double>(pressing), 0.9 * static_cast<double>(pressed_ticks));
+    ASSERT_GT(free_pad_ticks, 1000U);
+    EXPECT_EQ(retracted, free_pad_ticks);
+
+    for (ChildProcess* process : {&sim, &daemon, &user}) {
+        EXPECT_EQ(process->terminate(), std::optional<int>(0));
+    }
+    EXPECT_EQ(roudi.terminate(), std::optional<int>(0));
+}
+
+}  // namespace
+}  // namespace haptic::testing
