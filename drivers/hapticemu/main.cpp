@@ -156,7 +156,8 @@ int main(int argc, char** argv) {
     app.add_option("--duration", duration_s, "stop after this many seconds (0: until signalled)");
     app.add_option("--dds-domain", dds_domain, "with --user: override dds.domain_id")
         ->check(CLI::Range(0, 232));
-    app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
+    auto* log_level_option = app.add_option(
+        "--log-level", log_level, "trace, debug, info, warn, error (default: the user file's)");
     CLI11_PARSE(app, argc, argv);
     if (device_paths.empty() && user_path.empty()) {
         std::fprintf(stderr, "hapticemu: give --device FILE (one or more) or --user FILE\n");
@@ -170,6 +171,9 @@ int main(int argc, char** argv) {
             user_config = haptic::config::loadVirtualUserConfig(user_path);
             if (dds_domain >= 0) {
                 user_config->dds.domain_id = dds_domain;
+            }
+            if (log_level_option->count() == 0) {
+                log_level = std::string(haptic::config::toString(user_config->log_level));
             }
             for (const auto& device : user_config->devices) {
                 devices.push_back({device, nullptr});
