@@ -9,17 +9,23 @@
 # a PNG of the rendered forces and loop timing with `hapticctl plot`.
 #
 #   scripts/demo.sh [--duration SECONDS] [--record SECONDS] [--realtime enforce|ignore]
+#   scripts/demo.sh --compare-methods [--record SECONDS]
+#       one run, every exoskeleton method in turn (switched live): RECORD seconds of telemetry
+#       each (default 15), a PNG and the closed-loop report per
+#       method, then a summary; exits when done.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 DURATION=0
 REALTIME=ignore   # this VM has no PREEMPT_RT kernel; use 'enforce' on a lab PC
 RECORD=15         # seconds of telemetry in the PNG: two and a half loops of the script
+COMPARE=0
 while (($#)); do
   case "$1" in
     --duration) DURATION=$2; shift 2 ;;
     --realtime) REALTIME=$2; shift 2 ;;
     --record) RECORD=$2; shift 2 ;;
+    --compare-methods) COMPARE=1; shift ;;
     -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown argument '$1'" >&2; exit 2 ;;
   esac
@@ -131,6 +137,23 @@ if ((enabled)); then
 else
   echo "demo: hapticd did not accept 'enable' within 30 s:" >&2
   cat "$LOGS/enable.log" >&2
+fi
+if ((COMPARE)); then
+  ((enabled)) || exit 1
+  echo "demo: comparing the exoskeleton's methods, $RECORD s each, in one run"
+  for method in standard naive nullspace subspace linearized_subspace anisotropic; do
+    "$HAPTICCTL" method "$method" >"$LOGS/method-$method.log" 2>&1 || {
+      echo "demo: 'hapticctl method $method' failed: $(cat "$LOGS/method-$method.log")" >&2; exit 1; }
+    sleep 1  # past the 200 ms blend into the new method
+    "$HAPTICCTL" record "$LOGS/method-$method.csv" --duration "$RECORD" >>"$LOGS/method-$method.log" 2>&1
+    "$HAPTICCTL" plot "$LOGS/method-$method.csv" --output "$LOGS/method-$method.png" \
+      >"$LOGS/method-$method.txt" 2>&1 || true
+    echo "== $method"
+    tail -n +2 "$LOGS/method-$method.txt"
+  done
+  "$HAPTICCTL" status | grep -E "State|Faults" || true
+  echo "demo: per-method CSV, PNG and report in $LOGS/method-*"
+  exit 0
 fi
 if ((DURATION > 0 && RECORD > DURATION - 2)); then RECORD=$((DURATION > 4 ? DURATION - 2 : 2)); fi
 CSV="$LOGS/telemetry.csv"
