@@ -129,6 +129,15 @@ ExoskeletonReport exoskeletonReport(const DeviceColumns& device,
     if (!energy.empty()) {
         report.delivered_energy_j = -(energy.back() - energy.front());
     }
+    const auto& tick = device.column("tick");
+    for (std::size_t i = 1; i < command.size(); ++i) {
+        if (tick[i] != tick[i - 1] + 1.0) {
+            continue;  // a telemetry sample was lost in between
+        }
+        const double step = std::abs(command[i] - command[i - 1]);
+        report.largest_step_n = std::max(report.largest_step_n, step);
+        report.steps_over_rate_limit += step > settings.max_step_n + 1e-9 ? 1 : 0;
+    }
     return report;
 }
 
@@ -165,12 +174,14 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
                 "  ghost torque RMS {:.5f} N m; net energy delivered {:.6f} J\n"
                 "  command: at the {:.1f} N clamp {:.1f}% of contact ticks ({:.1f}% while the "
                 "reference is below 80% of it); chatter {:.3f} N RMS = {:.1f}% of the mean "
-                "|command| {:.3f} N\n",
+                "|command| {:.3f} N\n"
+                "  largest step of the command {:.3f} N; {} steps above the {:.2f} N rate limit\n",
                 index, q.ticks, r.contact_ticks, settings.contact_threshold_n, r.mean_reference_n,
                 r.rms_error_n, 100.0 * r.errorFraction(), r.peak_error_n, r.rms_ghost_torque_nm,
                 r.delivered_energy_j, settings.clamp_n, 100.0 * q.clampFraction(),
                 100.0 * r.clampBelowReferenceFraction(), q.chatter_rms_n,
-                100.0 * q.chatterFraction(), q.mean_contact_force_n);
+                100.0 * q.chatterFraction(), q.mean_contact_force_n, r.largest_step_n,
+                r.steps_over_rate_limit, settings.max_step_n);
         } else if (device.kind == "thimble") {
             const ThimbleReport r = thimbleReport(device, settings);
             out += fmt::format(

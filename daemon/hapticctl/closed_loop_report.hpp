@@ -13,7 +13,10 @@
 //   clamp      commanded force at the clamp while |reference| < 80 % of it (share of contact);
 //   chatter    contact_quality.hpp, on the commanded force;
 //   energy     net energy the device delivered to the finger: minus the change of the port's
-//              passivity observer over the run (> 0: the device gave energy).
+//              passivity observer over the run (> 0: the device gave energy);
+//   steps      the largest change of the command between consecutive ticks, and how many
+//              changes exceed the rate limit (the safety stage lets a force fall towards zero
+//              faster than that; a rise never).
 // Thimble: the reference pad force (|F| and its mean in contact); the felt pad force needs a
 // pad model of the user's and is not measured yet.
 
@@ -45,6 +48,8 @@ struct ExoskeletonReport {
     double rms_ghost_torque_nm{0.0};
     std::size_t clamp_below_reference_ticks{0};
     double delivered_energy_j{0.0};
+    double largest_step_n{0.0};
+    std::size_t steps_over_rate_limit{0};
     [[nodiscard]] double errorFraction() const noexcept {
         return mean_reference_n > 0.0 ? rms_error_n / mean_reference_n : 0.0;
     }

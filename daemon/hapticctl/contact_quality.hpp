@@ -18,6 +18,7 @@ struct ContactQualitySettings {
     double clamp_fraction{0.99};
     double contact_threshold_n{0.05};
     std::size_t smoothing_ticks{33};  // odd; 33 ms at 1 kHz
+    double max_step_n{0.5};           // the rate limit over one tick (500 N/s shipped)
 };
 
 struct ContactQuality {

@@ -160,8 +160,8 @@ TEST(ClosedLoopReport, ReadsTheRecordingBackAndComparesFeltWithReference) {
         sample.device_kind = msgs::DeviceKind::kExoskeleton;
         const bool contact = i >= 50;
         sample.exoskeleton.reference_actuator_force_n = contact ? -2.0 : 0.0;
-        sample.exoskeleton.actuator_force_n = contact ? -1.5 : 0.0;  // 0.5 N short
-        sample.exoskeleton.actuator_force_cmd_n = contact ? -1.6 : 0.0;
+        sample.exoskeleton.actuator_force_n = contact ? -1.5 : 0.0;      // 0.5 N short
+        sample.exoskeleton.actuator_force_cmd_n = contact ? -1.6 : 0.0;  // one 1.6 N step
         sample.exoskeleton.ghost_torque_nm = {contact ? 0.003 : 0.0, contact ? 0.004 : 0.0, 0.0};
         sample.exoskeleton.energy_observer_j = -0.01 * i;  // the device gives energy
         csv += telemetryCsvRow(sample, 0);
@@ -185,6 +185,8 @@ TEST(ClosedLoopReport, ReadsTheRecordingBackAndComparesFeltWithReference) {
     EXPECT_NEAR(exo.rms_ghost_torque_nm, 0.005, 1e-6);
     EXPECT_NEAR(exo.delivered_energy_j, 0.99, 1e-6);
     EXPECT_EQ(exo.clamp_below_reference_ticks, 0U);
+    EXPECT_NEAR(exo.largest_step_n, 1.6, 1e-9);
+    EXPECT_EQ(exo.steps_over_rate_limit, 1U);
 
     const ThimbleReport thimble = thimbleReport(devices.at(1), {});
     EXPECT_EQ(thimble.contact_ticks, 50U);
