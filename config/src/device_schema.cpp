@@ -74,6 +74,9 @@ CanConfig readCan(MapReader can) {
     out.heartbeat_timeout_ms =
         can.required("heartbeat_timeout_ms", spec::Integer<int>::closed(1, 1000));
     out.state_timeout_ms = can.required("state_timeout_ms", spec::Integer<int>::closed(1, 1000));
+    // At least two 1 kHz command periods, so one lost frame never trips it; at most 100 ms,
+    // because past that the device is no longer watching for its host.
+    out.command_timeout_ms = can.required("command_timeout_ms", spec::Integer<int>::closed(2, 100));
 
     out.transport = can.optional("transport", CanTransport::kSocketCan, spec::Enum<CanTransport>{});
     const auto udp_port = can.take("udp_port");

@@ -49,6 +49,7 @@ namespace {
 struct EmulatedDevice {
     haptic::config::DeviceConfig config;
     std::unique_ptr<haptic::emu::DeviceEmulator> emulator;
+    bool timed_out{false};  // last seen emulator->commandTimedOut(), to log each change once
 };
 
 // A fault command for one of several devices names it first; a lone device needs no name.
@@ -285,12 +286,36 @@ int main(int argc, char** argv) {
             if (duration_ns > 0 && now_ns - start_ns >= duration_ns) {
                 break;
             }
+            // Drain the bus before tick() judges the command timeout: after a stall of this
+            // process the commands hapticd sent meanwhile are waiting here, and the device
+            // must be judged on them, not on its own absence.
+            haptic::can::CanFrame frame;
+            for (int i = 0; i < 256 && bus->read(frame) == haptic::can::IoResult::kOk; ++i) {
+                now_ns = haptic::common::monotonicNowNs();
+                for (std::size_t d = 0; d < devices.size(); ++d) {
+                    // Each device listens to its own command id, as on a real bus.
+                    if (devices.size() == 1 || frame.id == command_ids[d]) {
+                        devices[d].emulator->handleFrame(frame, now_ns);
+                    }
+                }
+            }
+            now_ns = haptic::common::monotonicNowNs();
             const double t_s = 1e-9 * static_cast<double>(now_ns - start_ns);
             if (user) {
                 user->drive(t_s);
             }
             for (EmulatedDevice& device : devices) {
                 device.emulator->tick(now_ns);
+                if (device.emulator->commandTimedOut() != device.timed_out) {
+                    device.timed_out = device.emulator->commandTimedOut();
+                    if (device.timed_out) {
+                        spdlog::warn("'{}': no valid command for {} ms: safe state, fault 4",
+                                     device.config.name, device.config.can.command_timeout_ms);
+                    } else {
+                        spdlog::info("'{}': safe command received, command timeout cleared",
+                                     device.config.name);
+                    }
+                }
             }
             if (user) {
                 if (const auto pose = user->track(now_ns, t_s)) {
@@ -318,20 +343,11 @@ int main(int argc, char** argv) {
             if ((fds[1].revents & (POLLIN | POLLHUP)) != 0) {
                 stdin_open = commands.readAvailable(devices);
             }
-            haptic::can::CanFrame frame;
-            for (int i = 0; i < 256 && bus->read(frame) == haptic::can::IoResult::kOk; ++i) {
-                now_ns = haptic::common::monotonicNowNs();
-                for (std::size_t d = 0; d < devices.size(); ++d) {
-                    // Each device listens to its own command id, as on a real bus.
-                    if (devices.size() == 1 || frame.id == command_ids[d]) {
-                        devices[d].emulator->handleFrame(frame, now_ns);
-                    }
-                }
-            }
         }
         for (const EmulatedDevice& device : devices) {
-            spdlog::info("stopping '{}': {} commands accepted, {} rejected", device.config.name,
-                         device.emulator->commandsAccepted(), device.emulator->rejects().total());
+            spdlog::info("stopping '{}': {} commands accepted, {} rejected, {} command timeouts",
+                         device.config.name, device.emulator->commandsAccepted(),
+                         device.emulator->rejects().total(), device.emulator->commandTimeouts());
         }
         if (user) {
             spdlog::info("tracker: {} poses published, {} not written", user->samplesPublished(),

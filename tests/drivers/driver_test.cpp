@@ -13,6 +13,7 @@
 #include "haptic/devices/exoskeleton_driver.hpp"
 #include "haptic/devices/thimble_driver.hpp"
 #include "haptic/emu/device_emulator.hpp"
+#include "haptic/tactile/thimble_kinematics.hpp"
 
 namespace haptic::devices {
 namespace {
@@ -131,8 +132,61 @@ TEST(ExoskeletonDriver, DetectsStaleStateWhenTheDeviceStopsAnswering) {
     }
     rig.advance(kMs);
     driver.poll(rig.now);
-    EXPECT_EQ(driver.faults(rig.now), static_cast<std::uint32_t>(kStateStale));
+    // Nothing commanded the device for as long, so its own command timeout (10 ms, shipped)
+    // has tripped as well: it reports fault 4 in the same breath.
+    EXPECT_EQ(driver.faults(rig.now), static_cast<std::uint32_t>(kStateStale | kDeviceFault));
+    EXPECT_EQ(driver.state().last_fault.code, protocol::DeviceFaultCode::kCommandTimeout);
     EXPECT_EQ(driver.link().staleCount(), 1U);
+}
+
+// The device's own watchdog, as the real device runs it: stream mode (model on the clock,
+// state every tick). Silence past can.command_timeout_ms disables it at 0 N with fault 4; a
+// host that resumes with force is ignored until it commands the safe state.
+TEST(ExoskeletonDriver, CommandTimeoutDisablesTheDeviceUntilADisableAcknowledgesIt) {
+    const auto device = exoskeletonDevice();
+    Rig rig(device, emu::EmulatorMode::kStream);
+    ExoskeletonDriver driver(device, rig.host);
+    for (int i = 0; i < 50; ++i) {
+        tick(rig, driver, 5.0);
+    }
+    ASSERT_NEAR(driver.state().actuator.force_n, 5.0, 0.2);
+    // Silence: enabled with force up to the timeout, limp one tick after it.
+    for (int i = 0; i < device.can.command_timeout_ms; ++i) {
+        rig.advance(kMs);
+        driver.poll(rig.now);
+        ASSERT_NE(driver.state().actuator.status & protocol::kExoEnabled, 0U) << i + 1 << " ms";
+        ASSERT_FALSE(rig.emulator->commandTimedOut()) << i + 1 << " ms";
+    }
+    rig.advance(kMs);
+    rig.advance(kMs);  // the state frame of the tick after the one that tripped
+    driver.poll(rig.now);
+    EXPECT_TRUE(rig.emulator->commandTimedOut());
+    EXPECT_EQ(driver.state().actuator.force_n, 0.0);
+    EXPECT_EQ(driver.state().actuator.status & protocol::kExoEnabled, 0U);
+    EXPECT_NE(driver.state().actuator.status & protocol::kExoFaulted, 0U);
+    EXPECT_TRUE(driver.state().last_fault.active);
+    EXPECT_EQ(driver.state().last_fault.code, protocol::DeviceFaultCode::kCommandTimeout);
+    EXPECT_NE(driver.faults(rig.now) & kDeviceFault, 0U);
+    // The host wakes up and resumes its force: refused, the device stays limp and faulted.
+    for (int i = 0; i < 30; ++i) {
+        tick(rig, driver, 5.0);
+        ASSERT_EQ(driver.state().actuator.force_n, 0.0) << "tick " << i;
+    }
+    EXPECT_EQ(driver.state().heartbeat.mode, protocol::DeviceMode::kFault);
+    EXPECT_EQ(driver.state().heartbeat.active_fault, 4U);
+    // A disable acknowledges: the fault clears, the device stays disabled.
+    rig.advance(kMs);
+    ASSERT_EQ(driver.sendCommand({0.0, false}), can::IoResult::kOk);
+    rig.advance(0);
+    driver.poll(rig.now);
+    EXPECT_FALSE(rig.emulator->commandTimedOut());
+    EXPECT_FALSE(driver.state().last_fault.active);
+    // Enabled again by the host, it renders again.
+    for (int i = 0; i < 50; ++i) {
+        tick(rig, driver, 5.0);
+    }
+    EXPECT_NEAR(driver.state().actuator.force_n, 5.0, 0.2);
+    EXPECT_EQ(rig.emulator->commandTimeouts(), 1U);
 }
 
 TEST(ExoskeletonDriver, ReportsDeviceFaultsAndTheirClearing) {
@@ -244,6 +298,49 @@ TEST(ThimbleDriver, ServosFollowTargetsAtTheRateLimitAndHeartbeatLossIsDetected)
     }
     EXPECT_EQ(driver.faults(rig.now), static_cast<std::uint32_t>(kHeartbeatLost));
     EXPECT_EQ(driver.codec().rejects().total(), 0U);
+}
+
+TEST(ThimbleDriver, CommandTimeoutRetractsThePlateUntilTheRetractPoseAcknowledgesIt) {
+    const auto device = thimbleDevice();
+    Rig rig(device, emu::EmulatorMode::kStream);
+    ThimbleDriver driver(device, rig.host);
+    const tactile::ThimbleKinematics kinematics(device.thimble());
+    const auto retract = kinematics.inverse(kinematics.retractPose());
+    ASSERT_TRUE(retract.ok());
+    const protocol::ThimbleCommand press{{1.2, 1.2, 1.2}};
+    const auto send = [&](const protocol::ThimbleCommand& command) {
+        rig.advance(kMs);
+        driver.poll(rig.now);
+        ASSERT_EQ(driver.sendCommand(command), can::IoResult::kOk);
+        rig.advance(0);
+        driver.poll(rig.now);
+    };
+    for (int i = 0; i < 500; ++i) {
+        send(press);
+    }
+    ASSERT_NEAR(driver.state().servos.servo_angle_rad[0], 1.2, 1e-3);
+    for (int i = 0; i < device.can.command_timeout_ms + 1; ++i) {
+        rig.advance(kMs);
+    }
+    ASSERT_TRUE(rig.emulator->commandTimedOut());
+    // Press commands are ignored: the servos run to the retract pose at their rate limit.
+    for (int i = 0; i < 500; ++i) {
+        send(press);
+    }
+    driver.poll(rig.now);
+    for (std::size_t k = 0; k < 3; ++k) {
+        EXPECT_NEAR(driver.state().servos.servo_angle_rad[k], retract.servo_rad[k], 2e-4);
+    }
+    EXPECT_TRUE(driver.state().last_fault.active);
+    EXPECT_EQ(driver.state().last_fault.code, protocol::DeviceFaultCode::kCommandTimeout);
+    // Commanding the retract pose acknowledges; the plate follows commands again.
+    send(protocol::ThimbleCommand{retract.servo_rad});
+    EXPECT_FALSE(rig.emulator->commandTimedOut());
+    EXPECT_FALSE(driver.state().last_fault.active);
+    for (int i = 0; i < 500; ++i) {
+        send(press);
+    }
+    EXPECT_NEAR(driver.state().servos.servo_angle_rad[0], 1.2, 1e-3);
 }
 
 TEST(Drivers, ShareOneBusThroughHandleFrame) {

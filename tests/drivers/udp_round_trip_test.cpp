@@ -67,7 +67,8 @@ TEST(UdpRoundTrip, ThimbleDriverAgainstHapticemuProcess) {
 
 // Runs the driver's 1 kHz-ish loop against the streaming emulator until `done` holds.
 template <typename Done>
-bool loopUntil(can::UdpBus& bus, devices::ExoskeletonDriver& driver, Done done) {
+bool loopUntil(can::UdpBus& bus, devices::ExoskeletonDriver& driver, Done done,
+               protocol::ExoskeletonCommand command = {2.0, true}) {
     const std::int64_t deadline = common::monotonicNowNs() + 5'000'000'000;
     while (common::monotonicNowNs() < deadline) {
         pollfd fd{bus.pollFd(), POLLIN, 0};
@@ -75,7 +76,7 @@ bool loopUntil(can::UdpBus& bus, devices::ExoskeletonDriver& driver, Done done) 
         const std::int64_t now = common::monotonicNowNs();
         driver.poll(now);
         const std::uint32_t faults = driver.faults(now);
-        (void)driver.sendCommand({2.0, true});
+        (void)driver.sendCommand(command);
         if (done(faults)) {
             return true;
         }
@@ -110,7 +111,18 @@ TEST(UdpEmulator, StreamsStateAndAppliesFaultCommandsFromStdin) {
         return (faults & devices::kBusOff) != 0 && (faults & devices::kStateStale) != 0;
     }));
     ASSERT_TRUE(emulator.sendCommand("clear"));
-    EXPECT_TRUE(loopUntil(bus, driver, [](std::uint32_t faults) { return faults == 0; }));
+    // Bus-off kept our commands off the bus for longer than can.command_timeout_ms, so the
+    // device went safe on its own (fault 4) and ignores force until a disable acknowledges it.
+    EXPECT_TRUE(loopUntil(bus, driver, [&](std::uint32_t faults) {
+        return (faults & devices::kDeviceFault) != 0 &&
+               driver.state().heartbeat.active_fault ==
+                   static_cast<std::uint8_t>(protocol::DeviceFaultCode::kCommandTimeout);
+    }));
+    EXPECT_TRUE(
+        loopUntil(bus, driver, [](std::uint32_t faults) { return faults == 0; }, {0.0, false}));
+    EXPECT_TRUE(loopUntil(bus, driver, [&](std::uint32_t) {
+        return driver.state().actuator.force_n > 1.9;  // enabled again, rendering again
+    }));
     ASSERT_TRUE(emulator.sendCommand("no such fault"));
     EXPECT_TRUE(loopUntil(bus, driver, [&](std::uint32_t) {
         return emulator.output().find("error: unknown fault command 'no such fault'") !=

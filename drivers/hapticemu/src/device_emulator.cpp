@@ -1,8 +1,12 @@
 #include "haptic/emu/device_emulator.hpp"
 
+#include <cmath>
+#include <stdexcept>
+
 #include "haptic/emu/device_models.hpp"
 #include "haptic/protocol/exoskeleton_protocol.hpp"
 #include "haptic/protocol/thimble_protocol.hpp"
+#include "haptic/tactile/thimble_kinematics.hpp"
 
 namespace haptic::emu {
 
@@ -24,6 +28,7 @@ void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
         codec_base_.encodeFault(report, frame);
         send(frame, now_ns);
     }
+    checkCommandTimeout(now_ns);
     if (now_ns >= next_heartbeat_ns_) {
         next_heartbeat_ns_ += options_.heartbeat_period_ns;
         if (next_heartbeat_ns_ <= now_ns) {
@@ -31,7 +36,7 @@ void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
         }
         if (!faults_.heartbeatStopped()) {
             protocol::Heartbeat heartbeat;
-            heartbeat.active_fault = faults_.deviceFault();
+            heartbeat.active_fault = activeFault();
             heartbeat.mode = heartbeat.active_fault != 0 ? protocol::DeviceMode::kFault
                                                          : protocol::DeviceMode::kOperational;
             heartbeat.uptime_ms = static_cast<std::uint32_t>((now_ns - start_ns_) / 1'000'000);
@@ -60,13 +65,47 @@ void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
     faults_.flush(bus_, now_ns);
 }
 
-void DeviceEmulator::onCommandAccepted(std::int64_t now_ns) noexcept {
+std::uint8_t DeviceEmulator::activeFault() const noexcept {
+    if (faults_.deviceFault() != 0) {
+        return faults_.deviceFault();
+    }
+    return timed_out_ ? static_cast<std::uint8_t>(protocol::DeviceFaultCode::kCommandTimeout) : 0;
+}
+
+void DeviceEmulator::checkCommandTimeout(std::int64_t now_ns) noexcept {
+    if (!command_seen_ || timed_out_ || now_ns - last_command_ns_ <= command_timeout_ns_) {
+        return;
+    }
+    timed_out_ = true;
+    ++timeouts_;
+    reportCommandTimeout(true, now_ns);
+}
+
+void DeviceEmulator::reportCommandTimeout(bool active, std::int64_t now_ns) noexcept {
+    protocol::FaultReport report;
+    report.code = protocol::DeviceFaultCode::kCommandTimeout;
+    report.active = active;
+    report.detail = static_cast<std::uint32_t>(command_timeout_ns_ / 1'000'000);
+    can::CanFrame frame;
+    codec_base_.encodeFault(report, frame);
+    send(frame, now_ns);
+}
+
+bool DeviceEmulator::onCommandAccepted(std::int64_t now_ns, bool asks_safe) noexcept {
     ++commands_;
+    command_seen_ = true;
+    last_command_ns_ = now_ns;
+    if (timed_out_ && asks_safe) {
+        timed_out_ = false;
+        reportCommandTimeout(false, now_ns);
+    }
+    const bool apply = !timed_out_;
     if (options_.mode == EmulatorMode::kLockstep) {
         stepModel(tickSeconds());
         sendState(now_ns);
         faults_.flush(bus_, now_ns);
     }
+    return apply;
 }
 
 namespace {
@@ -83,22 +122,26 @@ class ExoskeletonEmulator final : private CodecOwner<protocol::ExoskeletonCodec>
   public:
     ExoskeletonEmulator(const config::DeviceConfig& device, can::CanBus& bus,
                         EmulatorOptions options)
-        : CodecOwner(device), DeviceEmulator(bus, options, codec_), model_(device) {}
+        : CodecOwner(device), DeviceEmulator(bus, options, codec_, device), model_(device) {}
 
     void handleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept override {
         const protocol::ExoskeletonMessage message = codec_.decode(frame);
         if (message.type != protocol::ExoskeletonMessage::Type::kCommand) {
             return;
         }
-        command_ = message.command;
         last_command_counter_ = message.counter;
-        onCommandAccepted(now_ns);
+        // Set before the lockstep tick inside onCommandAccepted(), undone if it refuses.
+        const protocol::ExoskeletonCommand previous = command_;
+        command_ = message.command;
+        if (!onCommandAccepted(now_ns, !message.command.enable)) {
+            command_ = previous;
+        }
     }
     [[nodiscard]] ExoskeletonModel* exoskeletonModel() noexcept override { return &model_; }
 
   private:
     void stepModel(double dt_s) noexcept override {
-        model_.step(dt_s, command_.force_n, command_.enable && faults_.deviceFault() == 0);
+        model_.step(dt_s, command_.force_n, command_.enable && activeFault() == 0);
     }
     void sendState(std::int64_t now_ns) noexcept override {
         protocol::ExoskeletonActuatorState actuator;
@@ -106,7 +149,7 @@ class ExoskeletonEmulator final : private CodecOwner<protocol::ExoskeletonCodec>
         actuator.force_n = model_.forceN();
         actuator.status =
             static_cast<std::uint8_t>((model_.enabled() ? protocol::kExoEnabled : 0) |
-                                      (faults_.deviceFault() != 0 ? protocol::kExoFaulted : 0) |
+                                      (activeFault() != 0 ? protocol::kExoFaulted : 0) |
                                       (model_.atStrokeMin() ? protocol::kExoAtStrokeMin : 0) |
                                       (model_.atStrokeMax() ? protocol::kExoAtStrokeMax : 0));
         actuator.command_echo = last_command_counter_;
@@ -129,7 +172,10 @@ class ExoskeletonEmulator final : private CodecOwner<protocol::ExoskeletonCodec>
 class ThimbleEmulator final : private CodecOwner<protocol::ThimbleCodec>, public DeviceEmulator {
   public:
     ThimbleEmulator(const config::DeviceConfig& device, can::CanBus& bus, EmulatorOptions options)
-        : CodecOwner(device), DeviceEmulator(bus, options, codec_), model_(device) {
+        : CodecOwner(device),
+          DeviceEmulator(bus, options, codec_, device),
+          model_(device),
+          retract_rad_(retractAngles(device)) {
         target_.servo_target_rad = model_.angleRad();
     }
 
@@ -138,15 +184,36 @@ class ThimbleEmulator final : private CodecOwner<protocol::ThimbleCodec>, public
         if (message.type != protocol::ThimbleMessage::Type::kCommand) {
             return;
         }
+        bool asks_retract = true;
+        for (std::size_t i = 0; i < 3; ++i) {
+            asks_retract = asks_retract && std::abs(message.command.servo_target_rad[i] -
+                                                    retract_rad_[i]) <= kRetractToleranceRad;
+        }
+        const protocol::ThimbleCommand previous = target_;
         target_ = message.command;
-        onCommandAccepted(now_ns);
+        if (!onCommandAccepted(now_ns, asks_retract)) {
+            target_ = previous;
+        }
     }
     [[nodiscard]] const ThimbleModel* thimbleModel() const noexcept override { return &model_; }
 
   private:
+    // The firmware's home pose: the plate at its retract pose (the same kinematics hapticd
+    // uses, from the same device file), where a timed-out device drives its servos.
+    static std::array<double, 3> retractAngles(const config::DeviceConfig& device) {
+        const tactile::ThimbleKinematics kinematics(device.thimble());
+        const auto ik = kinematics.inverse(kinematics.retractPose());
+        if (!ik.ok()) {
+            throw std::invalid_argument("thimble '" + device.name +
+                                        "': the retract pose has no inverse kinematics");
+        }
+        return {ik.servo_rad[0], ik.servo_rad[1], ik.servo_rad[2]};
+    }
+
     void stepModel(double dt_s) noexcept override {
+        // An injected fault freezes the servos where they are; the command timeout retracts.
         if (faults_.deviceFault() == 0) {
-            model_.step(dt_s, target_.servo_target_rad);
+            model_.step(dt_s, commandTimedOut() ? retract_rad_ : target_.servo_target_rad);
         }
     }
     void sendState(std::int64_t now_ns) noexcept override {
@@ -158,7 +225,11 @@ class ThimbleEmulator final : private CodecOwner<protocol::ThimbleCodec>, public
         }
     }
 
+    // Commands quantise angles to 1e-4 rad; a retract command lands within half of that.
+    static constexpr double kRetractToleranceRad = 1e-3;
+
     ThimbleModel model_;
+    std::array<double, 3> retract_rad_;
     protocol::ThimbleCommand target_;
 };
 

@@ -88,8 +88,12 @@ void ExoskeletonModel::step(double dt_s, double force_command_n, bool enable) no
     if (enable && std::isfinite(force_command_n)) {
         target_n = std::clamp(force_command_n, -actuator_.max_force_n, actuator_.max_force_n);
     }
-    // Implicit Euler of tau dF/dt = target - F: stable for any dt.
-    force_n_ += (target_n - force_n_) * dt_s / (actuator_.lag_time_constant_s + dt_s);
+    if (enable) {
+        // Implicit Euler of tau dF/dt = target - F: stable for any dt.
+        force_n_ += (target_n - force_n_) * dt_s / (actuator_.lag_time_constant_s + dt_s);
+    } else {
+        force_n_ = 0.0;  // a disabled drive carries no current: limp at once, not after a lag
+    }
     time_s_ += dt_s;
 
     std::array<double, 3> jacobian{};

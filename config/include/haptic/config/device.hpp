@@ -76,6 +76,10 @@ struct CanConfig {
     std::uint32_t fault_id{0};
     int heartbeat_timeout_ms{0};  // no heartbeat for this long: device goes to safe state
     int state_timeout_ms{0};      // no state frame for this long: device goes to safe state
+    // The device's own watchdog (written into the protocol, docs/drivers.md): no valid command
+    // for this long and the device goes to its safe state by itself (exoskeleton disabled at
+    // 0 N, thimble retracted) and reports fault 4, whatever happened to the host.
+    int command_timeout_ms{0};
 };
 
 // YAML: safety: {...}. Hard limits enforced by hapticd after rendering, whatever the method.

@@ -10,6 +10,15 @@
 //   stream    the model advances on the clock and state goes out every tick, as the real
 //             device does; commands only change the setpoint.
 // Heartbeats follow the clock in both modes.
+//
+// Command timeout (can.command_timeout_ms, the device's own watchdog; docs/drivers.md):
+// armed by the first valid command. When no valid command has arrived for that long, the
+// device goes to its safe state by itself (exoskeleton disabled at 0 N, thimble driven to its
+// retract pose), reports fault 4 active (fault frame, heartbeat mode "fault", the
+// exoskeleton's faulted bit) and ignores setpoints. Only a command that asks for the safe
+// state acknowledges it (exoskeleton: enable bit clear; thimble: the retract pose), so a host
+// that wakes up mid-stroke cannot resume the force it was sending: it must first command
+// safe, as a drive needs a fault reset and a new enable.
 
 #include <cstdint>
 #include <memory>
@@ -47,6 +56,11 @@ class DeviceEmulator {
     [[nodiscard]] virtual ExoskeletonModel* exoskeletonModel() noexcept { return nullptr; }
     [[nodiscard]] virtual const ThimbleModel* thimbleModel() const noexcept { return nullptr; }
     [[nodiscard]] std::uint64_t commandsAccepted() const noexcept { return commands_; }
+    // Whether the command timeout holds the device safe now, and how often it tripped.
+    [[nodiscard]] bool commandTimedOut() const noexcept { return timed_out_; }
+    [[nodiscard]] std::uint64_t commandTimeouts() const noexcept { return timeouts_; }
+    // The fault the device reports: an injected one first, else the command timeout (4).
+    [[nodiscard]] std::uint8_t activeFault() const noexcept;
     [[nodiscard]] const protocol::RejectCounters& rejects() const noexcept {
         return codec_base_.rejects();
     }
@@ -54,13 +68,18 @@ class DeviceEmulator {
   protected:
     // `codec` must already be constructed: derived classes hold it in a base listed before
     // DeviceEmulator (base-from-member), never in a member of their own.
-    DeviceEmulator(can::CanBus& bus, EmulatorOptions options,
-                   protocol::DeviceCodecBase& codec) noexcept
-        : bus_(bus), options_(options), codec_base_(codec) {}
+    DeviceEmulator(can::CanBus& bus, EmulatorOptions options, protocol::DeviceCodecBase& codec,
+                   const config::DeviceConfig& device) noexcept
+        : bus_(bus),
+          options_(options),
+          command_timeout_ns_(static_cast<std::int64_t>(device.can.command_timeout_ms) * 1'000'000),
+          codec_base_(codec) {}
     virtual void stepModel(double dt_s) noexcept = 0;
     virtual void sendState(std::int64_t now_ns) noexcept = 0;
+    // A valid command arrived; `asks_safe` when it commands the safe state. Returns whether
+    // its setpoint may be applied (false while the command timeout holds the device safe).
     // Lockstep: one tick per command, then reply.
-    void onCommandAccepted(std::int64_t now_ns) noexcept;
+    [[nodiscard]] bool onCommandAccepted(std::int64_t now_ns, bool asks_safe) noexcept;
     void send(const can::CanFrame& frame, std::int64_t now_ns) noexcept {
         faults_.send(bus_, frame, now_ns);
     }
@@ -72,6 +91,14 @@ class DeviceEmulator {
     std::uint64_t commands_{0};
 
   private:
+    void checkCommandTimeout(std::int64_t now_ns) noexcept;
+    void reportCommandTimeout(bool active, std::int64_t now_ns) noexcept;
+
+    std::int64_t command_timeout_ns_;
+    std::int64_t last_command_ns_{0};
+    bool command_seen_{false};
+    bool timed_out_{false};
+    std::uint64_t timeouts_{0};
     protocol::DeviceCodecBase& codec_base_;
     bool started_{false};
     std::int64_t start_ns_{0};
