@@ -6,6 +6,9 @@
 
 #include <cmath>
 
+#include "haptic/emu/device_models.hpp"
+#include "haptic/protocol/exoskeleton_protocol.hpp"
+#include "haptic/protocol/thimble_protocol.hpp"
 #include "haptic/runtime/exoskeleton_channel.hpp"
 #include "haptic/runtime/thimble_channel.hpp"
 #include "runtime_rig.hpp"
@@ -268,6 +271,76 @@ TEST(DeviceRuntime, DeviceFaultReportIsRaisedWithItsCode) {
                 HasSubstr("overtemperature"));
 }
 
+// hapticd stalls (SIGSTOP, a starved VM) while rendering: the devices' own command timeout
+// makes them safe without it, and when it wakes it latches their report instead of resuming.
+TEST(DeviceRuntime, AStalledDaemonIsCaughtByTheDevicesOwnTimeoutAndLatchesAFault) {
+    RuntimeRig rig;
+    renderWithContact(rig);
+    ASSERT_GT(std::abs(rig.emulators[kExo]->exoskeletonModel()->forceN()), 5.0);
+    rig.devicesOnly(rig.devices[kExo].can.command_timeout_ms + 2);
+    EXPECT_TRUE(rig.emulators[kExo]->commandTimedOut());
+    EXPECT_TRUE(rig.emulators[kThimble]->commandTimedOut());
+    EXPECT_EQ(rig.emulators[kExo]->exoskeletonModel()->forceN(), 0.0) << "limp by itself";
+    for (int i = 0; i < 20; ++i) {
+        rig.offerContact();
+        rig.tick();
+        ASSERT_EQ(rig.emulators[kExo]->exoskeletonModel()->forceN(), 0.0) << "tick " << i;
+    }
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    ASSERT_GE(rig.core.stateMachine().faultCount(), 1U);
+    EXPECT_EQ(rig.core.stateMachine().fault(0).code, runtime::kFaultDeviceReported);
+    EXPECT_THAT(std::string(rig.core.stateMachine().fault(0).message.view()),
+                HasSubstr("command timeout"));
+    // FAULT sends the safe command, which acknowledges the devices' timeout: at once for the
+    // exoskeleton (disable), for the thimble once hapticd's servo limiter has walked its
+    // targets back to the retract pose. The daemon stays latched until an operator clears it,
+    // and force needs a new enable.
+    EXPECT_FALSE(rig.emulators[kExo]->commandTimedOut());
+    rig.ticks(500);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    EXPECT_FALSE(rig.emulators[kThimble]->commandTimedOut());
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kClearFault));
+    rig.ticks(20);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
+    EXPECT_EQ(rig.exoForce(), 0.0);
+    renderWithContact(rig);
+    // Re-enabled, the port starts a new passivity interval with no stored energy: the wall
+    // pushes again once the user's finger moves into it (the emulated user flexes at 0.5 Hz).
+    double largest_n = 0.0;
+    for (int i = 0; i < 3000; ++i) {
+        if (i % 10 == 0) {
+            rig.offerContact();
+        }
+        rig.tick();
+        largest_n = std::max(largest_n, std::abs(rig.exoForce()));
+    }
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
+    EXPECT_NEAR(largest_n, 10.0, 1e-9);
+}
+
+// A hapticd restarted after a crash finds the devices timed out by its predecessor's silence:
+// already safe, so its first safe commands acknowledge them and it comes up IDLE.
+TEST(DeviceRuntime, ACommandTimeoutLeftByThePreviousHostIsAcknowledgedAtStart) {
+    RuntimeRig rig;
+    protocol::ExoskeletonCodec exo_codec(rig.devices[kExo]);
+    protocol::ThimbleCodec thimble_codec(rig.devices[kThimble]);
+    can::CanFrame frame;
+    ASSERT_TRUE(exo_codec.encodeCommand({6.0, true}, frame));
+    ASSERT_EQ(rig.host.write(frame), can::IoResult::kOk);
+    ASSERT_TRUE(thimble_codec.encodeCommand({{0.9, 0.9, 0.9}}, frame));
+    ASSERT_EQ(rig.host.write(frame), can::IoResult::kOk);
+    rig.devicesOnly(100);  // the previous host died after that command
+    ASSERT_TRUE(rig.emulators[kExo]->commandTimedOut());
+    ASSERT_TRUE(rig.emulators[kThimble]->commandTimedOut());
+    rig.ticks(100);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
+    EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U);
+    EXPECT_FALSE(rig.emulators[kExo]->commandTimedOut());
+    EXPECT_FALSE(rig.emulators[kThimble]->commandTimedOut());
+    renderWithContact(rig);
+    EXPECT_NEAR(std::abs(rig.exoForce()), 10.0, 1e-9);
+}
+
 TEST(DeviceRuntime, TransmitFailureForTenTicksFaults) {
     RuntimeRig rig;
     renderWithContact(rig);
@@ -277,7 +350,14 @@ TEST(DeviceRuntime, TransmitFailureForTenTicksFaults) {
     rig.host.injectBackpressure(40);
     rig.ticks(25);
     ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
-    EXPECT_EQ(rig.core.stateMachine().fault(0).code, runtime::kFaultTransmitFailed);
+    // The devices, receiving nothing for as long, report their own command timeout too
+    // (fault 4 as 102); the daemon's transmit fault must be among the listed causes.
+    bool transmit_fault = false;
+    for (std::size_t i = 0; i < rig.core.stateMachine().faultCount(); ++i) {
+        transmit_fault = transmit_fault ||
+                         rig.core.stateMachine().fault(i).code == runtime::kFaultTransmitFailed;
+    }
+    EXPECT_TRUE(transmit_fault);
 }
 
 TEST(DeviceRuntime, MethodCommandSwitchesTheKinestheticStrategy) {

@@ -59,6 +59,23 @@ RuntimeRig::RuntimeRig()
     }
 }
 
+void RuntimeRig::devicesOnly(int milliseconds) {
+    for (int i = 0; i < milliseconds; ++i) {
+        now += kMs;
+        host.setTime(now);
+        target.setTime(now);
+        can::CanFrame frame;
+        while (target.read(frame) == can::IoResult::kOk) {
+            for (auto& emulator : emulators) {
+                emulator->handleFrame(frame, now);
+            }
+        }
+        for (auto& emulator : emulators) {
+            emulator->tick(now);
+        }
+    }
+}
+
 void RuntimeRig::tick() {
     now += kMs;
     host.setTime(now);

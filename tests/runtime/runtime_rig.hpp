@@ -32,6 +32,8 @@ class RuntimeRig {
             tick();
         }
     }
+    // Time passes for the devices only: hapticd is stalled, stopped or not started.
+    void devicesOnly(int milliseconds);
     // Sim input as handsim would send it (valid; contact on both devices).
     void offerContact();
     bool command(msgs::CommandKind kind, const char* argument = "");

@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "haptic/protocol/frame_codec.hpp"
+
 namespace haptic::runtime {
 namespace {
 
@@ -55,7 +57,9 @@ DeviceChannel::DeviceChannel(const config::DeviceConfig& device, can::CanBus& bu
     : settings_(settings),
       name_(device.name),
       bus_(bus),
-      heartbeat_timeout_ms_(device.can.heartbeat_timeout_ms) {}
+      heartbeat_timeout_ms_(device.can.heartbeat_timeout_ms),
+      heartbeat_timeout_ns_(static_cast<std::int64_t>(device.can.heartbeat_timeout_ms) *
+                            1'000'000) {}
 
 bool DeviceChannel::handleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept {
     if (!driverHandleFrame(frame, now_ns)) {
@@ -111,7 +115,21 @@ void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noe
     if (latched_ != 0 && core.stateMachine().faultCount() == 0) {
         latched_ = 0;
     }
-    const std::uint32_t active = link_bits_ & kLatchingFaults;
+    if (first_supervise_ns_ == 0) {
+        first_supervise_ns_ = now_ns;
+    }
+    std::uint32_t active = link_bits_ & kLatchingFaults;
+    // A command timeout the device reports within heartbeat_timeout_ms of this daemon's first
+    // command is the silence of the host before it (a crashed or stopped hapticd): the device
+    // is already safe, and the safe command this channel sends while it is held safe
+    // acknowledges it. Raising it would make a restarted daemon come up in FAULT for a stop
+    // that was handled. Any later one, and every other device fault, latches.
+    if ((active & devices::kDeviceFault) != 0 &&
+        deviceFaultCode() ==
+            static_cast<std::uint8_t>(protocol::DeviceFaultCode::kCommandTimeout) &&
+        now_ns - first_supervise_ns_ <= heartbeat_timeout_ns_) {
+        active &= ~static_cast<std::uint32_t>(devices::kDeviceFault);
+    }
     const std::uint32_t raised = active & ~latched_;
     for (const std::uint32_t fault_bit : {static_cast<std::uint32_t>(devices::kHeartbeatLost),
                                           static_cast<std::uint32_t>(devices::kBusOff),

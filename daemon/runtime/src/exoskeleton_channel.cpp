@@ -128,6 +128,13 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     const double force_n = port.force_n;
     command_.force_n = force_n;
     command_.enable = gain > 0.0;
+    // A disabled port is disconnected from the virtual environment and stores nothing: the
+    // next enable starts a new passivity interval. Without this, energy the observer booked
+    // against a force the device never applied (it went limp on its own command timeout, a
+    // fault, an E-stop) would block every later enable for the rest of the run.
+    if (!command_.enable && force_n == 0.0) {
+        guard_.passivity().reset();
+    }
 
     fillLinkReport(core.state(), gain, now_ns);
     for (Eigen::Index i = 0; i < q_.size(); ++i) {

@@ -16,7 +16,9 @@
 // Faults (haptic/status "Faults:", code in brackets) latch the device in its safe state:
 //   100 heartbeat lost   no heartbeat for can.heartbeat_timeout_ms after one was heard
 //   101 bus-off          the CAN controller reports bus-off
-//   102 device fault     the device reports a fault (fault frame or heartbeat mode)
+//   102 device fault     the device reports a fault (fault frame or heartbeat mode); a
+//                        command timeout (4) reported within heartbeat_timeout_ms of the
+//                        daemon's start is the previous host's and only acknowledged
 //   103 transmit failed  commands could not be queued for transmit_fault_ticks ticks in a row
 // A device never heard from is OFFLINE (held safe, not a fault: hapticd may start before the
 // devices). A stale state frame (can.state_timeout_ms) fades the force out through the port
@@ -110,6 +112,8 @@ class DeviceChannel {
     std::string name_;
     can::CanBus& bus_;
     int heartbeat_timeout_ms_;
+    std::int64_t heartbeat_timeout_ns_;
+    std::int64_t first_supervise_ns_{0};
     std::uint32_t link_bits_{devices::kNoHeartbeatYet};
     std::uint32_t latched_{0};
     int failed_transmits_{0};
