@@ -1,0 +1,257 @@
+#pragma once
+
+// The fixture of the device safety tests (device_safety_test.cpp, fail_stop_test.cpp): the
+// real iox-roudi, hapticd and one `hapticemu` process per device on its own UDP CAN bus, with
+// haptic/status and haptic/telemetry read over DDS by the test itself.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
+#include <memory>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include "HapticStatusPubSubTypes.h"
+#include "HapticTelemetryPubSubTypes.h"
+#include "child_process.hpp"
+#include "emulator_process.hpp"
+#include "haptic/ipc/dds_participant.hpp"
+#include "haptic/ipc/iceoryx_runtime.hpp"
+#include "haptic/ipc/topics.hpp"
+#include "haptic/msgs/conversions.hpp"
+
+namespace haptic::testing {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+inline const std::string kConfigDir = HAPTIC_CONFIG_DIR;
+inline constexpr std::size_t kExo = 0;
+inline constexpr std::size_t kThimble = 1;
+inline constexpr std::size_t kAllDevices = 99;
+inline constexpr double kMaxStepN = 0.5 + 1e-6;  // safety.max_force_rate_n_per_s 500 at 1 kHz
+
+inline std::int64_t monotonicNs() {
+    timespec ts{};
+    ::clock_gettime(CLOCK_MONOTONIC, &ts);
+    return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+inline std::string readFile(const fs::path& path) {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+inline void replaceLine(const fs::path& path, const std::string& from, const std::string& to) {
+    std::string text = readFile(path);
+    const auto at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from << " not in " << path;
+    text.replace(at, from.size(), to);
+    std::ofstream(path) << text;
+}
+
+// The shipped configuration, copied, with each device on its own UDP bus (a port block per
+// test process, so parallel ctest runs never share one) and timeouts that tolerate a loaded
+// 2-core VM under ASan: a stalled emulator must not look like a lost device here.
+struct TestConfig {
+    TestConfig() {
+        dir = fs::temp_directory_path() / ("haptic-safety-" + std::to_string(::getpid()));
+        fs::remove_all(dir);
+        fs::copy(kConfigDir, dir, fs::copy_options::recursive);
+        // Below the ephemeral port range (see can_bus_test.cpp's testBlock).
+        const int base = 18000 + (::getpid() % 600) * 16;
+        exo_port = base;
+        thimble_port = base + 8;
+        const std::string timeouts_from = "heartbeat_timeout_ms: 50";
+        replaceLine(dir / "devices/exoskeleton.yaml", "udp_port: 47000",
+                    "udp_port: " + std::to_string(exo_port));
+        replaceLine(dir / "devices/thimble.yaml", "udp_port: 47000",
+                    "udp_port: " + std::to_string(thimble_port));
+        for (const char* device : {"devices/exoskeleton.yaml", "devices/thimble.yaml"}) {
+            replaceLine(dir / device, timeouts_from, "heartbeat_timeout_ms: 250");
+            replaceLine(dir / device, "state_timeout_ms: 10", "state_timeout_ms: 50");
+            // The devices' own command timeout stays as shipped (10 ms) except under the
+            // sanitizers, where hapticd's ticks stall for tens of ms on this VM.
+            if (HAPTIC_SANITIZED != 0) {
+                replaceLine(dir / device, "command_timeout_ms: 10", "command_timeout_ms: 50");
+            }
+        }
+    }
+    ~TestConfig() { fs::remove_all(dir); }
+
+    fs::path dir;
+    int exo_port{0};
+    int thimble_port{0};
+};
+
+inline std::string domain() {
+    return std::to_string(100 + (::getpid() + 37) % 100);
+}
+
+class DeviceSafetyTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        ASSERT_FALSE(ipc::probeRoudi().reachable)
+            << "an iox-roudi is already running on this host; stop it (and the demo) first";
+        roudi_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l",
+                                     "warning"},
+            "roudi");
+        const auto deadline = std::chrono::steady_clock::now() + 10s;
+        while (!ipc::probeRoudi().reachable) {
+            ASSERT_TRUE(roudi_->running()) << roudi_->stderrText();
+            ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
+            std::this_thread::sleep_for(20ms);
+        }
+        exo_emu_ = startEmulator("devices/exoskeleton.yaml");
+        thimble_emu_ = startEmulator("devices/thimble.yaml");
+        startDaemon();
+        participant_ = std::make_unique<ipc::DdsParticipant>(
+            ipc::DdsSettings{static_cast<std::uint32_t>(std::stoi(domain())),
+                             kConfigDir + "/dds_profiles.xml", "haptic_participant"},
+            "device_safety_test");
+        status_reader_ = participant_->createReader<idl::HapticStatusPubSubType>(
+            ipc::kStatusTopic, ipc::TopicKind::kLatestState);
+        telemetry_reader_ = participant_->createReader<idl::HapticTelemetryPubSubType>(
+            ipc::kTelemetryTopic, ipc::TopicKind::kStream);
+        // Both devices heard and ready.
+        waitForStatus("both devices READY", [](const msgs::HapticStatus& s) {
+            return s.state == msgs::DaemonState::kIdle && s.devices.size() == 2 &&
+                   s.devices[0].state == msgs::DeviceRunState::kReady &&
+                   s.devices[1].state == msgs::DeviceRunState::kReady;
+        });
+    }
+
+    void TearDown() override {
+        sim_.reset();
+        if (daemon_) {
+            EXPECT_EQ(daemon_->terminate(), std::optional<int>(0)) << daemon_->stderrText();
+        }
+        daemon_.reset();
+        participant_.reset();
+        if (exo_emu_) {
+            exo_emu_->stop();
+        }
+        if (thimble_emu_) {
+            thimble_emu_->stop();
+        }
+        if (roudi_) {
+            roudi_->terminate();
+        }
+    }
+
+    // hapticd on the copied configuration (also a restart, as systemd's Restart= would do it).
+    void startDaemon() {
+        daemon_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{HAPTICD_PATH, "-c", (config_.dir / "daemon.yaml").string(),
+                                     "--realtime", "ignore", "--dds-domain", domain()},
+            "hapticd");
+    }
+
+    // The emulator takes the port block from the device file, as hapticd does.
+    std::unique_ptr<EmulatorProcess> startEmulator(const std::string& device) {
+        return std::make_unique<EmulatorProcess>(std::vector<std::string>{
+            HAPTICEMU_PATH, "-d", (config_.dir / device).string(), "--bus", "udp"});
+    }
+
+    void startSim() {
+        sim_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{HANDSIM_PATH, "--dds-domain", domain()}, "handsim");
+    }
+
+    // A generous --timeout: DDS discovery of a fresh hapticctl takes seconds under ASan.
+    CommandResult hapticctl(std::vector<std::string> args) {
+        std::vector<std::string> argv{HAPTICCTL_PATH, "--dds-domain", domain(), "--timeout", "10"};
+        argv.insert(argv.end(), args.begin(), args.end());
+        return runCommand(argv, 20s);
+    }
+
+    // Takes haptic/status until `done` holds (20 s at most); returns the last status.
+    msgs::HapticStatus waitForStatus(const std::string& what,
+                                     const std::function<bool(const msgs::HapticStatus&)>& done) {
+        idl::HapticStatus sample;
+        msgs::HapticStatus status;
+        const auto deadline = std::chrono::steady_clock::now() + 20s;
+        while (std::chrono::steady_clock::now() < deadline) {
+            EXPECT_TRUE(daemon_->running()) << daemon_->stderrText();
+            if (!daemon_->running()) {
+                break;
+            }
+            if (status_reader_.waitAndTake(sample, 200ms) && msgs::fromIdl(sample, status).ok() &&
+                done(status)) {
+                return status;
+            }
+        }
+        ADD_FAILURE() << "timed out waiting for: " << what << "\nlast hapticd log:\n"
+                      << daemon_->stderrText();
+        return status;
+    }
+
+    // Every telemetry sample of `device` received within `duration`.
+    std::vector<msgs::TelemetrySample> collectTelemetry(std::size_t device,
+                                                        std::chrono::milliseconds duration,
+                                                        const std::function<void()>& during = {}) {
+        std::vector<msgs::TelemetrySample> samples;
+        idl::HapticTelemetry sample;
+        msgs::HapticTelemetry batch;
+        const auto end = std::chrono::steady_clock::now() + duration;
+        bool started = false;
+        while (std::chrono::steady_clock::now() < end) {
+            if (!started && during) {
+                during();
+                started = true;
+            }
+            if (!telemetry_reader_.waitAndTake(sample, 50ms) ||
+                !msgs::fromIdl(sample, batch).ok()) {
+                continue;
+            }
+            for (const auto& s : batch.samples) {
+                if (device == kAllDevices || s.device_index == device) {
+                    samples.push_back(s);
+                }
+            }
+        }
+        return samples;
+    }
+
+    void drainTelemetry() {
+        idl::HapticTelemetry sample;
+        while (telemetry_reader_.waitAndTake(sample, 0ms)) {
+        }
+    }
+
+    bool command(const std::string& verb, const std::string& argument = "") {
+        std::vector<std::string> args{verb};
+        if (!argument.empty()) {
+            args.push_back(argument);
+        }
+        const auto result = hapticctl(args);
+        EXPECT_EQ(result.exit_code, 0) << verb << ": " << result.out << result.err;
+        return result.exit_code == 0;
+    }
+
+    TestConfig config_;
+    std::unique_ptr<ChildProcess> roudi_;
+    std::unique_ptr<EmulatorProcess> exo_emu_;
+    std::unique_ptr<EmulatorProcess> thimble_emu_;
+    std::unique_ptr<ChildProcess> daemon_;
+    std::unique_ptr<ChildProcess> sim_;
+    std::unique_ptr<ipc::DdsParticipant> participant_;
+    ipc::DdsReader<idl::HapticStatus> status_reader_;
+    ipc::DdsReader<idl::HapticTelemetry> telemetry_reader_;
+};
+
+}  // namespace haptic::testing

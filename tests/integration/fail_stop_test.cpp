@@ -1,0 +1,244 @@
+// hapticd stopping while a finger is in the devices, judged on the CAN bus itself: the test
+// listens on each device's UDP bus as one more party and decodes the emulated device's own
+// state, heartbeat and fault frames (and hapticd's commands), not hapticd's view of them.
+//   SIGKILL  nothing of hapticd runs: the devices' own command timeout makes them safe.
+//   restart  a new hapticd on the same RouDi comes up IDLE and renders after `enable`.
+//   SIGTERM  hapticd's fail-stop writes the safe commands within two ticks and exits 0.
+
+#include <poll.h>
+
+#include <cstdio>
+
+#include "device_safety_rig.hpp"
+#include "haptic/can/udp_bus.hpp"
+#include "haptic/config/device.hpp"
+#include "haptic/protocol/exoskeleton_protocol.hpp"
+#include "haptic/protocol/thimble_protocol.hpp"
+#include "haptic/tactile/thimble_kinematics.hpp"
+
+namespace haptic::testing {
+namespace {
+
+// Scheduling slack on top of each bound: a loaded 2-core VM in Release, far more under the
+// sanitizers (their processes stall for tens of ms).
+constexpr std::int64_t kSlackNs = HAPTIC_SANITIZED != 0 ? 40'000'000 : 3'000'000;
+constexpr std::int64_t kTickNs = 1'000'000;
+
+template <typename Message>
+struct Heard {
+    std::int64_t at_ns;
+    Message message;
+};
+
+// One more party on a device's UDP bus, decoding that device's frames as they arrive.
+template <typename Codec, typename Message>
+class BusListener {
+  public:
+    BusListener(const config::DeviceConfig& device)
+        : bus_(can::UdpBusConfig{device.can.udp_port, device.can.udp_slots, {}}), codec_(device) {}
+
+    std::vector<Heard<Message>> listen(std::chrono::milliseconds duration) {
+        std::vector<Heard<Message>> heard;
+        const std::int64_t end = monotonicNs() + duration.count() * 1'000'000;
+        while (monotonicNs() < end) {
+            pollfd fd{bus_.pollFd(), POLLIN, 0};
+            (void)::poll(&fd, 1, 1);
+            can::CanFrame frame;
+            while (bus_.read(frame) == can::IoResult::kOk) {
+                const Message message = codec_.decode(frame);
+                if (message.type != Message::Type::kNotForThisDevice &&
+                    message.type != Message::Type::kRejected) {
+                    heard.push_back({monotonicNs(), message});
+                }
+            }
+        }
+        return heard;
+    }
+
+  private:
+    can::UdpBus bus_;
+    Codec codec_;
+};
+
+using ExoListener = BusListener<protocol::ExoskeletonCodec, protocol::ExoskeletonMessage>;
+using ThimbleListener = BusListener<protocol::ThimbleCodec, protocol::ThimbleMessage>;
+using ExoType = protocol::ExoskeletonMessage::Type;
+using ThimbleType = protocol::ThimbleMessage::Type;
+
+bool enabledWithForce(const protocol::ExoskeletonMessage& m, double min_force_n) {
+    return m.type == ExoType::kActuatorState && (m.actuator.status & protocol::kExoEnabled) != 0 &&
+           std::abs(m.actuator.force_n) >= min_force_n;
+}
+
+bool limp(const protocol::ExoskeletonMessage& m) {
+    return m.type == ExoType::kActuatorState && m.actuator.force_n == 0.0 &&
+           (m.actuator.status & protocol::kExoEnabled) == 0;
+}
+
+class FailStopTest : public DeviceSafetyTest {
+  protected:
+    FailStopTest()
+        : exo_device_(config::loadDeviceConfig(config_.dir / "devices/exoskeleton.yaml")),
+          thimble_device_(config::loadDeviceConfig(config_.dir / "devices/thimble.yaml")),
+          exo_bus_(exo_device_),
+          thimble_bus_(thimble_device_) {
+        const tactile::ThimbleKinematics kinematics(thimble_device_.thimble());
+        retract_rad_ = kinematics.inverse(kinematics.retractPose()).servo_rad;
+    }
+
+    // Rendering with the sim running, until the exoskeleton reports itself enabled with force
+    // (or, when the emulated user's finger never meets the object within 6 s, enabled).
+    void renderUntilTheExoskeletonPushes() {
+        startSim();
+        waitForStatus("sim connected", [](const msgs::HapticStatus& s) {
+            return s.sim_link.connected && s.sim_link.received > 20;
+        });
+        ASSERT_TRUE(command("enable"));
+        waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
+            return s.state == msgs::DaemonState::kRendering;
+        });
+        const auto started = std::chrono::steady_clock::now();
+        bool enabled = false;
+        while (std::chrono::steady_clock::now() - started < 20s) {
+            const auto window = exo_bus_.listen(30ms);
+            const bool pushing = std::any_of(window.begin(), window.end(), [](const auto& h) {
+                return enabledWithForce(h.message, 0.3);
+            });
+            enabled = enabled || std::any_of(window.begin(), window.end(), [](const auto& h) {
+                          return enabledWithForce(h.message, 0.0);
+                      });
+            if (pushing || (enabled && std::chrono::steady_clock::now() - started > 6s)) {
+                break;
+            }
+        }
+        ASSERT_TRUE(enabled) << "the exoskeleton never reported itself enabled";
+    }
+
+    double fromRetract(const std::array<double, 3>& angles) const {
+        double largest = 0.0;
+        for (std::size_t k = 0; k < 3; ++k) {
+            largest = std::max(largest, std::abs(angles[k] - retract_rad_[k]));
+        }
+        return largest;
+    }
+
+    config::DeviceConfig exo_device_;
+    config::DeviceConfig thimble_device_;
+    ExoListener exo_bus_;
+    ThimbleListener thimble_bus_;
+    std::array<double, 3> retract_rad_{};
+};
+
+TEST_F(FailStopTest, SigkillLeavesBothDevicesSafeByThemselvesAndARestartRendersAfterEnable) {
+    renderUntilTheExoskeletonPushes();
+    const std::int64_t kill_ns = monotonicNs();
+    ASSERT_EQ(::kill(daemon_->pid(), SIGKILL), 0);
+    const auto exo = exo_bus_.listen(300ms);
+    ASSERT_TRUE(daemon_->waitFor(5s).has_value());
+
+    // The exoskeleton: limp (disabled, 0 N) within command_timeout_ms + 2 ms of the kill,
+    // and it stays so, faulted, reporting fault 4.
+    const std::int64_t timeout_ns =
+        static_cast<std::int64_t>(exo_device_.can.command_timeout_ms) * 1'000'000;
+    const auto first_limp = std::find_if(exo.begin(), exo.end(), [&](const auto& h) {
+        return h.at_ns > kill_ns && limp(h.message);
+    });
+    ASSERT_NE(first_limp, exo.end()) << "the exoskeleton never went limp after the kill";
+    const double limp_after_ms = static_cast<double>(first_limp->at_ns - kill_ns) * 1e-6;
+    std::printf("exoskeleton limp %.2f ms after SIGKILL (command_timeout_ms %d)\n", limp_after_ms,
+                exo_device_.can.command_timeout_ms);
+    EXPECT_LE(first_limp->at_ns - kill_ns, timeout_ns + 2 * kTickNs + kSlackNs);
+    for (auto it = first_limp; it != exo.end(); ++it) {
+        if (it->message.type == ExoType::kActuatorState) {
+            EXPECT_TRUE(limp(it->message)) << (it->at_ns - kill_ns) * 1e-6 << " ms after the kill";
+            EXPECT_NE(it->message.actuator.status & protocol::kExoFaulted, 0U);
+        }
+    }
+    // The fault frame goes out in the tick that trips, just before that tick's state.
+    EXPECT_TRUE(std::any_of(exo.begin(), exo.end(), [&](const auto& h) {
+        return h.at_ns > kill_ns && h.message.type == ExoType::kFault && h.message.fault.active &&
+               h.message.fault.code == protocol::DeviceFaultCode::kCommandTimeout;
+    }));
+
+    // The thimble: back at its retract pose (servo rate limited), reporting fault 4.
+    const auto thimble = thimble_bus_.listen(1000ms);
+    const auto last_state = std::find_if(thimble.rbegin(), thimble.rend(), [](const auto& h) {
+        return h.message.type == ThimbleType::kState;
+    });
+    ASSERT_NE(last_state, thimble.rend());
+    EXPECT_LT(fromRetract(last_state->message.state.servo_angle_rad), 2e-3);
+    EXPECT_TRUE(std::any_of(thimble.begin(), thimble.end(), [](const auto& h) {
+        return h.message.type == ThimbleType::kHeartbeat &&
+               h.message.heartbeat.active_fault ==
+                   static_cast<std::uint8_t>(protocol::DeviceFaultCode::kCommandTimeout);
+    }));
+
+    // Restart, as systemd's Restart= would: same RouDi, IDLE (the devices' timeout is the
+    // dead predecessor's and is acknowledged, not raised), force only after `enable`.
+    startDaemon();
+    waitForStatus("IDLE with both devices READY and no fault", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kIdle && s.faults.empty() && s.devices.size() == 2 &&
+               s.devices[kExo].state == msgs::DeviceRunState::kReady &&
+               s.devices[kThimble].state == msgs::DeviceRunState::kReady;
+    });
+    const auto idle = exo_bus_.listen(200ms);
+    EXPECT_FALSE(std::any_of(idle.begin(), idle.end(), [](const auto& h) {
+        return enabledWithForce(h.message, 0.0);
+    })) << "enabled without an operator";
+    ASSERT_TRUE(command("enable"));
+    waitForStatus("RENDERING after the restart", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kRendering && s.faults.empty();
+    });
+    const auto rendering = exo_bus_.listen(500ms);
+    EXPECT_TRUE(std::any_of(rendering.begin(), rendering.end(), [](const auto& h) {
+        return enabledWithForce(h.message, 0.0) &&
+               (h.message.actuator.status & protocol::kExoFaulted) == 0;
+    }));
+}
+
+TEST_F(FailStopTest, SigtermWritesTheSafeCommandsWithinTwoTicksAndExitsCleanly) {
+    renderUntilTheExoskeletonPushes();
+    const std::int64_t term_ns = monotonicNs();
+    ASSERT_EQ(::kill(daemon_->pid(), SIGTERM), 0);
+    const auto exo = exo_bus_.listen(200ms);
+    const auto thimble = thimble_bus_.listen(50ms);  // what the socket held meanwhile
+    EXPECT_EQ(daemon_->waitFor(10s), std::optional<int>(0)) << daemon_->stderrText();
+    daemon_.reset();
+
+    const auto first_safe_command = std::find_if(exo.begin(), exo.end(), [&](const auto& h) {
+        return h.at_ns > term_ns && h.message.type == ExoType::kCommand &&
+               !h.message.command.enable && h.message.command.force_n == 0.0;
+    });
+    ASSERT_NE(first_safe_command, exo.end()) << "hapticd never commanded the safe state";
+    const auto first_limp = std::find_if(exo.begin(), exo.end(), [&](const auto& h) {
+        return h.at_ns > term_ns && limp(h.message);
+    });
+    ASSERT_NE(first_limp, exo.end());
+    std::printf("SIGTERM: safe command after %.2f ms, exoskeleton limp after %.2f ms\n",
+                static_cast<double>(first_safe_command->at_ns - term_ns) * 1e-6,
+                static_cast<double>(first_limp->at_ns - term_ns) * 1e-6);
+    EXPECT_LE(first_safe_command->at_ns - term_ns, 2 * kTickNs + kSlackNs);
+    // One device tick more for the device to act on it and report.
+    EXPECT_LE(first_limp->at_ns - term_ns, 3 * kTickNs + kSlackNs);
+    for (auto it = first_safe_command; it != exo.end(); ++it) {
+        if (it->message.type == ExoType::kCommand) {
+            EXPECT_FALSE(it->message.command.enable);
+            EXPECT_EQ(it->message.command.force_n, 0.0);
+        }
+    }
+    // Limp from then on (command_timeout_ms later it also reports fault 4: nobody commands it).
+    for (auto it = first_limp; it != exo.end(); ++it) {
+        if (it->message.type == ExoType::kActuatorState) {
+            EXPECT_TRUE(limp(it->message));
+        }
+    }
+    // The thimble's last commands are its retract pose.
+    const auto last_command = std::find_if(thimble.rbegin(), thimble.rend(), [](const auto& h) {
+        return h.message.type == ThimbleType::kCommand;
+    });
+    ASSERT_NE(last_command, thimble.rend());
+    EXPECT_LT(fromRetract(last_command->message.command.servo_target_rad), 1e-3);
+}
+
+}  // namespace
+}  // namespace haptic::testing
