@@ -240,6 +240,15 @@ TEST(ConfigOutOfRange, CanIdBeyondElevenBits) {
                  "expected an integer in [0x0, 0x7ff], got 0x801"});
 }
 
+// Past 100 ms a device no longer watches its host: a finger would carry the last force that
+// long after hapticd died.
+TEST(ConfigOutOfRange, CommandTimeoutLongerThanTheDeviceMayWait) {
+    const auto file = kDataDir / "devices/command_timeout_too_long.yaml";
+    expectError(deviceError("command_timeout_too_long.yaml"),
+                {file.string(), lineOf(file, "command_timeout_ms"), 23, "can.command_timeout_ms",
+                 "expected an integer in [2, 100], got 250"});
+}
+
 TEST(ConfigOutOfRange, NonStandardBitrate) {
     const auto file = kDataDir / "devices/bad_bitrate.yaml";
     expectError(deviceError("bad_bitrate.yaml"),

@@ -112,6 +112,7 @@ TEST(ShippedConfig, Exoskeleton) {
     EXPECT_EQ(cfg.can.fault_id, 0x081U);
     EXPECT_EQ(cfg.can.heartbeat_timeout_ms, 50);
     EXPECT_EQ(cfg.can.state_timeout_ms, 10);
+    EXPECT_EQ(cfg.can.command_timeout_ms, 10);
     EXPECT_EQ(cfg.can.transport, CanTransport::kUdp);
     EXPECT_EQ(cfg.can.udp_port, 47000);
     EXPECT_EQ(cfg.can.udp_slots, 4);
