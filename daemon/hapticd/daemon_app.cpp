@@ -61,6 +61,13 @@ daemon::CoreSettings coreSettings(const config::DaemonConfig& cfg) {
         settings.known_methods.emplace_back(entry.name);
     }
     for (const auto& device : cfg.devices) {
+        const std::int64_t command_timeout_ns =
+            static_cast<std::int64_t>(device.can.command_timeout_ms) * 1'000'000;
+        if (settings.stall_limit_ns == 0 || command_timeout_ns < settings.stall_limit_ns) {
+            settings.stall_limit_ns = command_timeout_ns;
+        }
+    }
+    for (const auto& device : cfg.devices) {
         if (device.isExoskeleton()) {
             settings.rendering_method =
                 std::string(config::toString(device.exoskeleton().rendering.method));

@@ -272,7 +272,7 @@ TEST(DeviceRuntime, DeviceFaultReportIsRaisedWithItsCode) {
 }
 
 // hapticd stalls (SIGSTOP, a starved VM) while rendering: the devices' own command timeout
-// makes them safe without it, and when it wakes it latches their report instead of resuming.
+// makes them safe without it, and when it wakes it latches its own stall instead of resuming.
 TEST(DeviceRuntime, AStalledDaemonIsCaughtByTheDevicesOwnTimeoutAndLatchesAFault) {
     RuntimeRig rig;
     renderWithContact(rig);
@@ -286,11 +286,13 @@ TEST(DeviceRuntime, AStalledDaemonIsCaughtByTheDevicesOwnTimeoutAndLatchesAFault
         rig.tick();
         ASSERT_EQ(rig.emulators[kExo]->exoskeletonModel()->forceN(), 0.0) << "tick " << i;
     }
+    // The stall is hapticd's own fault; the devices' timeout is its consequence, not theirs.
     ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
-    ASSERT_GE(rig.core.stateMachine().faultCount(), 1U);
-    EXPECT_EQ(rig.core.stateMachine().fault(0).code, runtime::kFaultDeviceReported);
+    ASSERT_EQ(rig.core.stateMachine().faultCount(), 1U);
+    EXPECT_EQ(rig.core.stateMachine().fault(0).code, daemon::kFaultLoopStalled);
+    EXPECT_EQ(rig.core.stateMachine().fault(0).device_id.view(), "hapticd");
     EXPECT_THAT(std::string(rig.core.stateMachine().fault(0).message.view()),
-                HasSubstr("command timeout"));
+                HasSubstr("loop stalled 13 ms (limit 10 ms)"));
     // FAULT sends the safe command, which acknowledges the devices' timeout: at once for the
     // exoskeleton (disable), for the thimble once hapticd's servo limiter has walked its
     // targets back to the retract pose. The daemon stays latched until an operator clears it,
@@ -332,6 +334,7 @@ TEST(DeviceRuntime, ACommandTimeoutLeftByThePreviousHostIsAcknowledgedAtStart) {
     rig.devicesOnly(100);  // the previous host died after that command
     ASSERT_TRUE(rig.emulators[kExo]->commandTimedOut());
     ASSERT_TRUE(rig.emulators[kThimble]->commandTimedOut());
+    rig.core.markStarted(rig.now);  // this hapticd's loop starts now
     rig.ticks(100);
     EXPECT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
     EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U);

@@ -17,6 +17,7 @@ daemon::CoreSettings coreSettings() {
         settings.known_methods.emplace_back(entry.name);
     }
     settings.rendering_method = "linearized_subspace";
+    settings.stall_limit_ns = 10'000'000;  // can.command_timeout_ms of the shipped devices
     return settings;
 }
 

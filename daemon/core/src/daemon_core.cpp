@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 namespace haptic::daemon {
@@ -91,7 +92,17 @@ void DaemonCore::update(std::int64_t now_ns, const TickTiming& timing) noexcept 
     const double period_s = 1.0 / settings_.rate_hz;
     const double dt_s =
         std::clamp(static_cast<double>(now_ns - last_tick_ns_) * 1e-9, 0.0, period_s);
+    const std::int64_t gap_ns = now_ns - last_tick_ns_;
     last_tick_ns_ = now_ns;
+    if (settings_.stall_limit_ns > 0 && gap_ns > settings_.stall_limit_ns) {
+        last_stall_end_ns_ = now_ns;
+        char message[msgs::kShortTextCapacity];  // no allocation on the RT thread
+        std::snprintf(message, sizeof(message),
+                      "loop stalled %lld ms (limit %lld ms); devices safe by their timeout",
+                      static_cast<long long>(gap_ns / 1'000'000),
+                      static_cast<long long>(settings_.stall_limit_ns / 1'000'000));
+        machine_.raiseFault(kFaultLoopStalled, "hapticd", message);
+    }
     const double timeout_ms = static_cast<double>(settings_.sim_timeout_ns) * 1e-6;
     const double fade_in_s = std::max(1e-9, static_cast<double>(settings_.fade_in_ns) * 1e-9);
 

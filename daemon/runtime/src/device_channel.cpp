@@ -124,10 +124,15 @@ void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noe
     // is already safe, and the safe command this channel sends while it is held safe
     // acknowledges it. Raising it would make a restarted daemon come up in FAULT for a stop
     // that was handled. Any later one, and every other device fault, latches.
+    // Likewise one reported within heartbeat_timeout_ms after this daemon's own loop stalled:
+    // the stall is raised as hapticd's fault (kFaultLoopStalled), the device only obeyed it.
+    const bool after_own_silence =
+        now_ns - first_supervise_ns_ <= heartbeat_timeout_ns_ ||
+        (core.lastStallEndNs() > 0 && now_ns - core.lastStallEndNs() <= heartbeat_timeout_ns_);
     if ((active & devices::kDeviceFault) != 0 &&
         deviceFaultCode() ==
             static_cast<std::uint8_t>(protocol::DeviceFaultCode::kCommandTimeout) &&
-        now_ns - first_supervise_ns_ <= heartbeat_timeout_ns_) {
+        after_own_silence) {
         active &= ~static_cast<std::uint32_t>(devices::kDeviceFault);
     }
     const std::uint32_t raised = active & ~latched_;

@@ -28,6 +28,10 @@ struct DeviceDescriptor {
     std::uint16_t actuator_count{0};
 };
 
+// hapticd's own fault codes in haptic/status, next to the device link codes 100-103
+// (runtime::DaemonFaultCode).
+inline constexpr std::uint32_t kFaultLoopStalled = 110;
+
 struct CoreSettings {
     double rate_hz{1000.0};
     std::int64_t sim_timeout_ns{20'000'000};
@@ -39,6 +43,11 @@ struct CoreSettings {
     msgs::SimTransport sim_transport{msgs::SimTransport::kIceoryx};
     // Names a set-method command may choose from (the configured method must be one).
     std::vector<std::string> known_methods;
+    // A gap between ticks longer than this is hapticd's own fault (kFaultLoopStalled): by then
+    // the devices have gone safe on their own command timeout, and what they report about it
+    // is the stall's consequence, not their fault. hapticd sets it to the smallest
+    // can.command_timeout_ms of its devices; 0 turns the check off.
+    std::int64_t stall_limit_ns{0};
 };
 
 class DaemonCore {
@@ -110,6 +119,9 @@ class DaemonCore {
     // An operator command: applies it to the state machine and fills the reply.
     CommandOutcome applyCommand(const msgs::HapticCommand& command, std::int64_t now_ns,
                                 msgs::HapticCommandReply& reply) noexcept;
+    // When the loop last came back from a stall (kFaultLoopStalled), 0 if never.
+    [[nodiscard]] std::int64_t lastStallEndNs() const noexcept { return last_stall_end_ns_; }
+
     // A safety fault (device, bus, loop); latches FAULT. See DaemonStateMachine::raiseFault.
     void raiseFault(std::uint32_t code, std::string_view device_id,
                     std::string_view message) noexcept {
@@ -147,6 +159,7 @@ class DaemonCore {
     std::uint64_t reply_seq_{0};
     std::int64_t started_ns_{0};
     std::int64_t last_tick_ns_{0};
+    std::int64_t last_stall_end_ns_{0};
     LoopStatisticsCollector statistics_;
     std::uint64_t window_ticks_;
     msgs::LoopStatistics last_window_{};
