@@ -62,22 +62,11 @@ RuntimeRig::RuntimeRig()
 
 void RuntimeRig::devicesOnly(int milliseconds) {
     for (int i = 0; i < milliseconds; ++i) {
-        now += kMs;
-        host.setTime(now);
-        target.setTime(now);
-        can::CanFrame frame;
-        while (target.read(frame) == can::IoResult::kOk) {
-            for (auto& emulator : emulators) {
-                emulator->handleFrame(frame, now);
-            }
-        }
-        for (auto& emulator : emulators) {
-            emulator->tick(now);
-        }
+        advanceDevices();
     }
 }
 
-void RuntimeRig::tick() {
+void RuntimeRig::advanceDevices() {
     now += kMs;
     host.setTime(now);
     target.setTime(now);
@@ -90,7 +79,10 @@ void RuntimeRig::tick() {
     for (auto& emulator : emulators) {
         emulator->tick(now);
     }
+}
 
+void RuntimeRig::tick() {
+    advanceDevices();
     runtime.read(now);
     daemon::TickTiming timing;
     core.update(now, timing);

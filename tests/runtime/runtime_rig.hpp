@@ -34,6 +34,8 @@ class RuntimeRig {
     }
     // Time passes for the devices only: hapticd is stalled, stopped or not started.
     void devicesOnly(int milliseconds);
+    // One millisecond for the emulated devices: they take what the bus holds, then tick.
+    void advanceDevices();
     // Sim input as handsim would send it (valid; contact on both devices).
     void offerContact();
     bool command(msgs::CommandKind kind, const char* argument = "");
