@@ -153,10 +153,17 @@ TEST_F(FailStopTest, SigkillLeavesBothDevicesSafeByThemselvesAndARestartRendersA
     std::printf("exoskeleton limp %.2f ms after SIGKILL (command_timeout_ms %d)\n", limp_after_ms,
                 exo_device_.can.command_timeout_ms);
     EXPECT_LE(first_limp->at_ns - kill_ns, timeout_ns + 2 * kTickNs + kSlackNs);
+    // From the timeout on (hapticd may have been fading out already, so limp can come
+    // first: under the sanitizers handsim's 4 Hz often leaves the sim input stale) it stays
+    // limp and reports itself faulted.
     for (auto it = first_limp; it != exo.end(); ++it) {
-        if (it->message.type == ExoType::kActuatorState) {
-            EXPECT_TRUE(limp(it->message)) << (it->at_ns - kill_ns) * 1e-6 << " ms after the kill";
-            EXPECT_NE(it->message.actuator.status & protocol::kExoFaulted, 0U);
+        if (it->message.type != ExoType::kActuatorState) {
+            continue;
+        }
+        EXPECT_TRUE(limp(it->message)) << (it->at_ns - kill_ns) * 1e-6 << " ms after the kill";
+        if (it->at_ns > kill_ns + timeout_ns + 2 * kTickNs + kSlackNs) {
+            EXPECT_NE(it->message.actuator.status & protocol::kExoFaulted, 0U)
+                << (it->at_ns - kill_ns) * 1e-6 << " ms after the kill";
         }
     }
     // The fault frame goes out in the tick that trips, just before that tick's state.

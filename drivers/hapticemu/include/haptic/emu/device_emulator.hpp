@@ -11,7 +11,8 @@
 //             device does; commands only change the setpoint.
 // Heartbeats follow the clock in both modes.
 //
-// Command timeout (can.command_timeout_ms, the device's own watchdog; docs/drivers.md):
+// Command timeout (can.command_timeout_ms, the device's own watchdog; docs/drivers.md), in
+// stream mode (lockstep time is the command count, so no command is ever late there):
 // armed by the first valid command. When no valid command has arrived for that long, the
 // device goes to its safe state by itself (exoskeleton disabled at 0 N, thimble driven to its
 // retract pose), reports fault 4 active (fault frame, heartbeat mode "fault", the
