@@ -17,9 +17,19 @@ using ::testing::Gt;
 
 constexpr std::int64_t kMs = 1'000'000;
 
+// Each message is newer than the last, as handsim's are (seq +1, later stamp).
+msgs::MessageHeader nextHeader(std::string_view device) {
+    static std::uint64_t seq = 0;
+    msgs::MessageHeader header;
+    header.seq = ++seq;
+    header.stamp_ns = static_cast<std::int64_t>(seq) * kMs;
+    header.source_id.assign(device);
+    return header;
+}
+
 msgs::ConstraintSet validConstraintSet(std::string_view device) {
     msgs::ConstraintSet message;
-    message.header.source_id.assign(device);
+    message.header = nextHeader(device);
     message.dof = 3;
     message.q_sim_rad = {0.1, 0.2, 0.3};
     msgs::LinearConstraint constraint;
@@ -31,7 +41,7 @@ msgs::ConstraintSet validConstraintSet(std::string_view device) {
 
 msgs::ContactSurface validContactSurface(std::string_view device) {
     msgs::ContactSurface message;
-    message.header.source_id.assign(device);
+    message.header = nextHeader(device);
     msgs::ContactSample sample;
     sample.normal_device = {0.0, 0.0, -1.0};
     sample.weight = 1.0;
@@ -103,6 +113,49 @@ TEST_F(DaemonCoreTest, StaleInputFadesToZeroWithinTheTimeoutAndNeverRises) {
             EXPECT_THAT(sut.simFade(0), Eq(0.0)) << "force left after the 20 ms timeout";
         }
     }
+}
+
+// Fresh by content, not by arrival: a replayed or delayed message (neither seq nor stamp
+// newer) is refused and does not hold the input alive; a restarted sim (seq from 1 again,
+// later stamp) is taken at once.
+TEST_F(DaemonCoreTest, AReplayedOrDelayedMessageIsRefusedAndDoesNotRenewTheInput) {
+    std::int64_t t = 0;
+    const msgs::ConstraintSet first = validConstraintSet("exo_index");
+    const msgs::ConstraintSet second = validConstraintSet("exo_index");
+    EXPECT_EQ(sut.offerConstraintSet(0, first, t), InputRejection::kNone);
+    EXPECT_EQ(sut.offerConstraintSet(0, second, t), InputRejection::kNone);
+    t = runTicks(t, 100);
+    EXPECT_EQ(sut.offerConstraintSet(0, second, t), InputRejection::kNotNewer) << "a duplicate";
+    EXPECT_EQ(sut.offerConstraintSet(0, first, t), InputRejection::kNotNewer) << "delayed";
+    EXPECT_EQ(sut.rejectedCount(0, InputRejection::kNotNewer), 2U);
+    EXPECT_EQ(sut.simFade(0), 0.0) << "the replays kept a stale input alive";
+    msgs::ConstraintSet restarted = validConstraintSet("exo_index");
+    restarted.header.seq = 1;
+    EXPECT_EQ(sut.offerConstraintSet(0, restarted, t), InputRejection::kNone);
+}
+
+// A stall longer than the devices' command timeout is hapticd's own fault, but only when a
+// device hears it: with every device offline there is no one to time out.
+TEST(DaemonCoreStall, AStallIsItsOwnFaultOnlyWhileADeviceIsOnline) {
+    CoreSettings settings;
+    settings.known_methods = {"subspace"};
+    settings.rendering_method = "subspace";
+    settings.stall_limit_ns = 10 * kMs;
+    DaemonCore core(settings, {DeviceDescriptor{"exo", msgs::DeviceKind::kExoskeleton, 3, 1}});
+    core.markStarted(0);
+    core.update(50 * kMs, TickTiming{});
+    EXPECT_EQ(core.stateMachine().faultCount(), 0U) << "no device online";
+    DeviceReport online;
+    online.status_bits = static_cast<std::uint32_t>(msgs::DeviceStatusBit::kOnline);
+    core.setDeviceReport(0, online);
+    core.update(51 * kMs, TickTiming{});
+    core.update(61 * kMs, TickTiming{});  // exactly the limit: not a stall
+    EXPECT_EQ(core.stateMachine().faultCount(), 0U);
+    core.update(72 * kMs, TickTiming{});
+    ASSERT_EQ(core.stateMachine().faultCount(), 1U);
+    EXPECT_EQ(core.stateMachine().fault(0).code, kFaultLoopStalled);
+    EXPECT_EQ(core.state(), msgs::DaemonState::kFault);
+    EXPECT_EQ(core.lastStallEndNs(), 72 * kMs);
 }
 
 TEST_F(DaemonCoreTest, AStalledTickDoesNotStepForceUp) {

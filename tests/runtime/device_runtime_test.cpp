@@ -292,7 +292,7 @@ TEST(DeviceRuntime, AStalledDaemonIsCaughtByTheDevicesOwnTimeoutAndLatchesAFault
     EXPECT_EQ(rig.core.stateMachine().fault(0).code, daemon::kFaultLoopStalled);
     EXPECT_EQ(rig.core.stateMachine().fault(0).device_id.view(), "hapticd");
     EXPECT_THAT(std::string(rig.core.stateMachine().fault(0).message.view()),
-                HasSubstr("loop stalled 13 ms (limit 10 ms)"));
+                HasSubstr("loop stalled 13.0 ms (limit 10.0 ms)"));
     // FAULT sends the safe command, which acknowledges the devices' timeout: at once for the
     // exoskeleton (disable), for the thimble once hapticd's servo limiter has walked its
     // targets back to the retract pose. The daemon stays latched until an operator clears it,

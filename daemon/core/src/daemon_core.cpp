@@ -42,11 +42,27 @@ CommandOutcome DaemonCore::applyCommand(const msgs::HapticCommand& command, std:
     return outcome;
 }
 
+// A message renews the sim input only when it is newer than the last accepted one: a higher
+// seq, or a later stamp. A replayed or delayed message has both older and is refused. A
+// restarted handsim starts its seq at 1 again but stamps later (CLOCK_MONOTONIC of its host
+// does not go back), so it is accepted at once. No absolute age check on the stamp: over DDS
+// the sim may run on another host, whose monotonic clock is not ours.
+bool DaemonCore::newer(const DeviceSlot& slot, const msgs::MessageHeader& header) noexcept {
+    return !slot.has_header || header.seq > slot.last_seq || header.stamp_ns > slot.last_stamp_ns;
+}
+
 InputRejection DaemonCore::account(DeviceSlot& slot, InputRejection reason,
+                                   const msgs::MessageHeader& header,
                                    std::int64_t now_ns) noexcept {
+    if (reason == InputRejection::kNone && !newer(slot, header)) {
+        reason = InputRejection::kNotNewer;
+    }
     if (reason == InputRejection::kNone) {
         ++slot.received;
         slot.last_accepted_ns = now_ns;
+        slot.last_seq = header.seq;
+        slot.last_stamp_ns = header.stamp_ns;
+        slot.has_header = true;
     } else {
         ++slot.rejected;
         ++slot.rejected_by[static_cast<std::size_t>(reason)];
@@ -59,7 +75,8 @@ InputRejection DaemonCore::offerConstraintSet(std::size_t device,
                                               std::int64_t now_ns) noexcept {
     DeviceSlot& slot = devices_[device];
     const InputRejection reason =
-        account(slot, validate(message, slot.descriptor.name, slot.descriptor.joint_count), now_ns);
+        account(slot, validate(message, slot.descriptor.name, slot.descriptor.joint_count),
+                message.header, now_ns);
     if (reason == InputRejection::kNone) {
         slot.constraint_set = message;
         slot.has_constraint_set = true;
@@ -71,7 +88,8 @@ InputRejection DaemonCore::offerContactSurface(std::size_t device,
                                                const msgs::ContactSurface& message,
                                                std::int64_t now_ns) noexcept {
     DeviceSlot& slot = devices_[device];
-    const InputRejection reason = account(slot, validate(message, slot.descriptor.name), now_ns);
+    const InputRejection reason =
+        account(slot, validate(message, slot.descriptor.name), message.header, now_ns);
     if (reason == InputRejection::kNone) {
         slot.contact_surface = message;
         slot.has_contact_surface = true;
@@ -94,13 +112,22 @@ void DaemonCore::update(std::int64_t now_ns, const TickTiming& timing) noexcept 
         std::clamp(static_cast<double>(now_ns - last_tick_ns_) * 1e-9, 0.0, period_s);
     const std::int64_t gap_ns = now_ns - last_tick_ns_;
     last_tick_ns_ = now_ns;
-    if (settings_.stall_limit_ns > 0 && gap_ns > settings_.stall_limit_ns) {
+    // Only a device that hears us can time out on our silence: with none online (hapticd may
+    // start before the devices) a stall has no one to endanger and is only counted as an
+    // overrun by the loop statistics.
+    bool any_online = false;
+    for (const auto& slot : devices_) {
+        any_online =
+            any_online || (slot.report.status_bits &
+                           static_cast<std::uint32_t>(msgs::DeviceStatusBit::kOnline)) != 0;
+    }
+    if (settings_.stall_limit_ns > 0 && gap_ns > settings_.stall_limit_ns && any_online) {
         last_stall_end_ns_ = now_ns;
         char message[msgs::kShortTextCapacity];  // no allocation on the RT thread
         std::snprintf(message, sizeof(message),
-                      "loop stalled %lld ms (limit %lld ms); devices safe by their timeout",
-                      static_cast<long long>(gap_ns / 1'000'000),
-                      static_cast<long long>(settings_.stall_limit_ns / 1'000'000));
+                      "loop stalled %.1f ms (limit %.1f ms); devices safe by their timeout",
+                      static_cast<double>(gap_ns) * 1e-6,
+                      static_cast<double>(settings_.stall_limit_ns) * 1e-6);
         machine_.raiseFault(kFaultLoopStalled, "hapticd", message);
     }
     const double timeout_ms = static_cast<double>(settings_.sim_timeout_ns) * 1e-6;

@@ -37,6 +37,8 @@ std::string_view describe(InputRejection reason) noexcept {
             return "constraint normal has zero length";
         case InputRejection::kBadNormal:
             return "contact normal is not unit length";
+        case InputRejection::kNotNewer:
+            return "neither seq nor stamp newer than the last accepted (replayed or delayed)";
         case InputRejection::kNegativeWeight:
             return "negative sample weight";
         case InputRejection::kCount_:

@@ -138,6 +138,11 @@ class DaemonCore {
     struct DeviceSlot {
         DeviceDescriptor descriptor;
         std::int64_t last_accepted_ns{-1};
+        // Header of the last accepted message: a message is fresh by its content, not by
+        // when it arrived (see DaemonCore::newer()).
+        std::uint64_t last_seq{0};
+        std::int64_t last_stamp_ns{0};
+        bool has_header{false};
         std::uint64_t received{0};
         std::uint64_t rejected{0};
         std::array<std::uint64_t, static_cast<std::size_t>(InputRejection::kCount_)> rejected_by{};
@@ -150,7 +155,10 @@ class DaemonCore {
         msgs::ContactSurface contact_surface{};
     };
 
-    InputRejection account(DeviceSlot& slot, InputRejection reason, std::int64_t now_ns) noexcept;
+    InputRejection account(DeviceSlot& slot, InputRejection reason,
+                           const msgs::MessageHeader& header, std::int64_t now_ns) noexcept;
+    [[nodiscard]] static bool newer(const DeviceSlot& slot,
+                                    const msgs::MessageHeader& header) noexcept;
     [[nodiscard]] double ageMs(const DeviceSlot& slot, std::int64_t now_ns) const noexcept;
 
     CoreSettings settings_;

@@ -18,6 +18,7 @@ enum class InputRejection : std::uint8_t {
     kDegenerateConstraint,  // a constraint normal of zero length
     kBadNormal,             // a contact normal that is not unit length
     kNegativeWeight,
+    kNotNewer,  // neither its header.seq nor its stamp_ns advances: a replay or a duplicate
     kCount_,
 };
 
