@@ -134,6 +134,7 @@ TrackingConfig readTracking(MapReader map, const std::vector<SceneObject>& objec
             break;
         case TrackingSource::kTopic:
             out.topic = map.optional("topic", std::string("tracking/hand"), spec::Text{});
+            out.timeout_ms = map.optional("timeout_ms", 100, spec::Integer<int>::closed(10, 10000));
             break;
     }
     map.finish();

@@ -147,6 +147,10 @@ int runSim(const SimOptions& options) {
     std::vector<double> step_times_us;
     step_times_us.reserve(static_cast<std::size_t>(cfg.scene.rate_hz) + 1);
 
+    const bool topic_tracking = cfg.scene.tracking.source == config::TrackingSource::kTopic;
+    const auto tracking_timeout = std::chrono::milliseconds(cfg.scene.tracking.timeout_ms);
+    std::optional<std::chrono::steady_clock::time_point> last_pose_time;
+    bool withholding = false;
     while (!process::shutdownRequested()) {
         next += period;
         std::this_thread::sleep_until(next);
@@ -158,6 +162,23 @@ int runSim(const SimOptions& options) {
         if (const auto pose = tracking->poll(t_s, rejection)) {
             if (const auto reason = physics.setHandPose(*pose)) {
                 rejection = *reason;
+            } else {
+                last_pose_time = step_start;
+            }
+        }
+        // A silent tracker (topic only; scripts and replays never fall silent) freezes the
+        // hand; its targets would go on being rendered with fresh stamps. Withhold them
+        // instead: hapticd's sim timeout then fades the force out.
+        const bool tracking_silent =
+            topic_tracking && (!last_pose_time || step_start - *last_pose_time > tracking_timeout);
+        if (tracking_silent != withholding) {
+            withholding = tracking_silent;
+            if (withholding) {
+                spdlog::warn("tracking: no valid pose on '{}' for {} ms: device outputs withheld",
+                             cfg.scene.tracking.topic, cfg.scene.tracking.timeout_ms);
+            } else {
+                spdlog::info("tracking: poses on '{}' again: device outputs resumed",
+                             cfg.scene.tracking.topic);
             }
         }
         const softhand::StepReport report = physics.step(dt_s);
@@ -177,6 +198,16 @@ int runSim(const SimOptions& options) {
         for (std::size_t index = 0; index < links.size(); ++index) {
             auto& link = links[index];
             const std::string& name = link.device->name;
+            if (withholding) {
+                if (dds_link) {
+                    link.states_received += dds_link->takeDeviceStates(index, dds_state);
+                } else {
+                    while (link.device_states->take().and_then(
+                        [&](const auto&) { ++link.states_received; })) {
+                    }
+                }
+                continue;
+            }
             if (dds_link) {
                 if (link.device->isExoskeleton()) {
                     dds_constraints = msgs::ConstraintSet{};

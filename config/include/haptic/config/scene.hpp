@@ -153,7 +153,10 @@ struct TrackingConfig {
     std::string target_object;                               // scripted: an object's name
     std::filesystem::path replay_file;                       // replay: absolute
     std::string topic;                                       // topic: DDS topic of HandPose
-    bool loop{true};                                         // scripted, replay
+    // topic: no valid pose for this long and handsim withholds its device outputs, so that
+    // hapticd fades the force instead of rendering a frozen hand for ever.
+    int timeout_ms{100};
+    bool loop{true};  // scripted, replay
 };
 
 // YAML: devices: {<device name>: {finger}}
