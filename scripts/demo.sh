@@ -145,7 +145,7 @@ if ((COMPARE)); then
     "$HAPTICCTL" method "$method" >"$LOGS/method-$method.log" 2>&1 || {
       echo "demo: 'hapticctl method $method' failed: $(cat "$LOGS/method-$method.log")" >&2; exit 1; }
     sleep 1  # past the 200 ms blend into the new method
-    "$HAPTICCTL" record "$LOGS/method-$method.csv" --duration "$RECORD" >>"$LOGS/method-$method.log" 2>&1
+    "$HAPTICCTL" --timeout 10 record "$LOGS/method-$method.csv" --duration "$RECORD" >>"$LOGS/method-$method.log" 2>&1
     "$HAPTICCTL" plot "$LOGS/method-$method.csv" --output "$LOGS/method-$method.png" \
       >"$LOGS/method-$method.txt" 2>&1 || true
     echo "== $method"
@@ -158,7 +158,8 @@ fi
 if ((DURATION > 0 && RECORD > DURATION - 2)); then RECORD=$((DURATION > 4 ? DURATION - 2 : 2)); fi
 CSV="$LOGS/telemetry.csv"
 PNG="$LOGS/forces_and_timing.png"
-"$HAPTICCTL" record "$CSV" --duration "$RECORD" >"$LOGS/record.log" 2>&1 &
+# DDS discovery of a fresh participant takes seconds on a loaded machine (#19): wait for it.
+"$HAPTICCTL" --timeout 10 record "$CSV" --duration "$RECORD" >"$LOGS/record.log" 2>&1 &
 RECORD_PID=$!
 plotted=0
 plot_recording() {
