@@ -420,7 +420,8 @@ int runDaemon(const DaemonOptions& options) {
     const auto status_period = std::chrono::nanoseconds(1'000'000'000LL / cfg.loop.status_rate_hz);
     const auto started = std::chrono::steady_clock::now();
     std::uint64_t last_version = 0;
-    daemon::WatchdogGate watchdog_gate(static_cast<std::int64_t>(watchdog_usec) * 1000 / 2);
+    daemon::WatchdogGate watchdog_gate(static_cast<std::int64_t>(watchdog_usec) * 1000 / 2,
+                                       cfg.loop.rate_hz);
     auto last_roudi_check = started;
     int exit_code = EXIT_SUCCESS;
     msgs::HapticStatus status;
