@@ -95,6 +95,7 @@ ExoskeletonReport exoskeletonReport(const DeviceColumns& device,
     const auto& felt = device.column("exo_actuator_force_n");
     const auto& reference = device.column("exo_reference_actuator_force_n");
     const auto& energy = device.column("exo_energy_observer_j");
+    const auto& environment = device.column("exo_environment_work_j");
     report.quality = contactQuality(command, settings);
     double sum_reference = 0.0;
     double sum_squared_error = 0.0;
@@ -128,6 +129,7 @@ ExoskeletonReport exoskeletonReport(const DeviceColumns& device,
     }
     if (!energy.empty()) {
         report.delivered_energy_j = -(energy.back() - energy.front());
+        report.environment_work_j = environment.back() - environment.front();
     }
     const auto& tick = device.column("tick");
     for (std::size_t i = 1; i < command.size(); ++i) {
@@ -171,15 +173,16 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
                 "exoskeleton (device {}): {} ticks, {} in contact (|F| > {:.2f} N)\n"
                 "  felt vs reference: mean |reference| {:.3f} N, error RMS {:.3f} N ({:.1f}% of "
                 "it), peak {:.3f} N\n"
-                "  ghost torque RMS {:.5f} N m; net energy delivered {:.6f} J\n"
+                "  ghost torque RMS {:.5f} N m; net energy delivered {:.6f} J, work of the "
+                "moving objects {:.6f} J (excess {:.6f} J)\n"
                 "  command: at the {:.1f} N clamp {:.1f}% of contact ticks ({:.1f}% while the "
                 "reference is below 80% of it); chatter {:.3f} N RMS = {:.1f}% of the mean "
                 "|command| {:.3f} N\n"
                 "  largest step of the command {:.3f} N; {} steps above the {:.2f} N rate limit\n",
                 index, q.ticks, r.contact_ticks, settings.contact_threshold_n, r.mean_reference_n,
                 r.rms_error_n, 100.0 * r.errorFraction(), r.peak_error_n, r.rms_ghost_torque_nm,
-                r.delivered_energy_j, settings.clamp_n, 100.0 * q.clampFraction(),
-                100.0 * r.clampBelowReferenceFraction(), q.chatter_rms_n,
+                r.delivered_energy_j, r.environment_work_j, r.excessEnergy(), settings.clamp_n,
+                100.0 * q.clampFraction(), 100.0 * r.clampBelowReferenceFraction(), q.chatter_rms_n,
                 100.0 * q.chatterFraction(), q.mean_contact_force_n, r.largest_step_n,
                 r.steps_over_rate_limit, settings.max_step_n);
         } else if (device.kind == "thimble") {

@@ -13,7 +13,9 @@
 //   clamp      commanded force at the clamp while |reference| < 80 % of it (share of contact);
 //   chatter    contact_quality.hpp, on the commanded force;
 //   energy     net energy the device delivered to the finger: minus the change of the port's
-//              passivity observer over the run (> 0: the device gave energy);
+//              passivity observer over the run (> 0: the device gave energy); and the work the
+//              sim's moving objects did on the coupling (the passivity controller's credit):
+//              a passive rendering delivers at most that much;
 //   steps      the largest change of the command between consecutive ticks, and how many
 //              changes exceed the rate limit (the safety stage lets a force fall towards zero
 //              faster than that; a rise never).
@@ -48,6 +50,11 @@ struct ExoskeletonReport {
     double rms_ghost_torque_nm{0.0};
     std::size_t clamp_below_reference_ticks{0};
     double delivered_energy_j{0.0};
+    double environment_work_j{0.0};
+    // Delivered beyond what the moving objects put in: > 0 means the rendering was active.
+    [[nodiscard]] double excessEnergy() const noexcept {
+        return delivered_energy_j - environment_work_j;
+    }
     double largest_step_n{0.0};
     std::size_t steps_over_rate_limit{0};
     [[nodiscard]] double errorFraction() const noexcept {

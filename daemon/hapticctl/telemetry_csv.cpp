@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <stdexcept>
+#include <string_view>
+
 #include "haptic/msgs/names.hpp"
 
 namespace haptic::ctl {
@@ -40,7 +43,7 @@ std::string telemetryCsvHeader() {
     for (std::size_t i = 0; i < 3; ++i) {
         header += fmt::format(",exo_ghost_torque_{}_nm", i);
     }
-    header += ",exo_energy_observer_j";
+    header += ",exo_energy_observer_j,exo_environment_work_j";
     for (std::size_t i = 0; i < msgs::kThimbleServos; ++i) {
         header += fmt::format(",servo_angle_{}_rad", i);
     }
@@ -77,7 +80,7 @@ std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t or
     for (std::size_t i = 0; i < 3; ++i) {
         row += fmt::format(",{:.6f}", exo.ghost_torque_nm[i]);
     }
-    row += fmt::format(",{:.6f}", exo.energy_observer_j);
+    row += fmt::format(",{:.6f},{:.6f}", exo.energy_observer_j, exo.environment_work_j);
     for (const double angle : sample.thimble.servo_angle_rad) {
         row += fmt::format(",{:.4f}", angle);
     }
@@ -89,6 +92,30 @@ std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t or
     }
     return row + "\n";
 }
+
+namespace {
+
+// gnuplot's 1-based number of a header column, so that the plot follows the header when a
+// column is added (a fixed number once plotted a servo angle as the pad force).
+int columnNumber(std::string_view name) {
+    const std::string header = telemetryCsvHeader();
+    int number = 1;
+    std::size_t start = 0;
+    while (start <= header.size()) {
+        std::size_t end = header.find_first_of(",\n", start);
+        if (end == std::string::npos) {
+            end = header.size();
+        }
+        if (std::string_view(header).substr(start, end - start) == name) {
+            return number;
+        }
+        ++number;
+        start = end + 1;
+    }
+    throw std::logic_error("telemetry CSV has no column " + std::string(name));
+}
+
+}  // namespace
 
 std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path,
                                 double exo_clamp_n) {
@@ -105,20 +132,23 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
         "set xlabel 'time [s]'\n",
         fmt::arg("png", quoted(png_path)),
         fmt::arg("title", quoted("hapticd telemetry: " + csv_path)));
-    // Columns 19 and 23: the force the actuator reports (felt) and the sim's reference.
+    // The force the actuator reports (felt) and the sim's reference.
     script += fmt::format(
         "set ylabel 'exoskeleton actuator force [N]'\n"
         "set yrange [{low}:{high}]\n"
-        "plot {csv} every ::1 using (strcol(4) eq 'exoskeleton' ? $2 : 1/0):23 with points pt 7 "
-        "ps 0.3 title 'reference (sim, B^+ tau_ref)', "
-        "{csv} every ::1 using (strcol(4) eq 'exoskeleton' ? $2 : 1/0):5 with points pt 7 "
-        "ps 0.3 title 'commanded', "
-        "{csv} every ::1 using (strcol(4) eq 'exoskeleton' ? $2 : 1/0):19 with points pt 7 "
+        "plot {csv} every ::1 using (strcol(4) eq 'exoskeleton' ? $2 : 1/0):{reference} with "
+        "points pt 7 ps 0.3 title 'reference (sim, B^+ tau_ref)', "
+        "{csv} every ::1 using (strcol(4) eq 'exoskeleton' ? $2 : 1/0):{command} with points "
+        "pt 7 ps 0.3 title 'commanded', "
+        "{csv} every ::1 using (strcol(4) eq 'exoskeleton' ? $2 : 1/0):{felt} with points pt 7 "
         "ps 0.3 title 'felt (the actuator reports)'\n"
         "set yrange [*:*]\n",
         fmt::arg("csv", csv), fmt::arg("low", -2.0 * exo_clamp_n),
-        fmt::arg("high", 2.0 * exo_clamp_n));
-    // Columns 31-33: the sim's reference force on the pad, on the right axis.
+        fmt::arg("high", 2.0 * exo_clamp_n),
+        fmt::arg("reference", columnNumber("exo_reference_actuator_force_n")),
+        fmt::arg("command", columnNumber("actuator_force_cmd_n")),
+        fmt::arg("felt", columnNumber("exo_actuator_force_n")));
+    // The sim's reference force on the pad, on the right axis.
     script +=
         "set ylabel 'thimble servo angle command [rad]'\n"
         "set y2label 'thimble reference pad force [N]'\nset y2tics\nplot ";
@@ -127,14 +157,17 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
             "{sep}{csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):{column} with points "
             "pt 7 ps 0.3 title 'servo {servo}'",
             fmt::arg("sep", servo == 0 ? "" : ", "), fmt::arg("csv", csv),
-            fmt::arg("column", 6 + servo), fmt::arg("servo", servo));
+            fmt::arg("column", columnNumber(fmt::format("servo_angle_cmd_{}_rad", servo))),
+            fmt::arg("servo", servo));
     }
     script += fmt::format(
         ", {csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):"
-        "(sqrt($31**2 + $32**2 + $33**2)) axes x1y2 with points pt 7 ps 0.3 "
+        "(sqrt(${x}**2 + ${y}**2 + ${z}**2)) axes x1y2 with points pt 7 ps 0.3 "
         "title '|reference pad force|'"
         "\nunset y2label\nunset y2tics\n",
-        fmt::arg("csv", csv));
+        fmt::arg("csv", csv), fmt::arg("x", columnNumber("thimble_reference_force_x_n")),
+        fmt::arg("y", columnNumber("thimble_reference_force_y_n")),
+        fmt::arg("z", columnNumber("thimble_reference_force_z_n")));
     script += fmt::format(
         "set ylabel 'loop timing [us, log scale]'\n"
         "set logscale y\n"

@@ -1,8 +1,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 #include <vector>
 
 #include "closed_loop_report.hpp"
@@ -133,7 +135,8 @@ TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
               "exo_reference_torque_0_nm,exo_reference_torque_1_nm,exo_reference_torque_2_nm,"
               "exo_reference_actuator_force_n,"
               "exo_ghost_torque_0_nm,exo_ghost_torque_1_nm,exo_ghost_torque_2_nm,"
-              "exo_energy_observer_j,servo_angle_0_rad,servo_angle_1_rad,servo_angle_2_rad,"
+              "exo_energy_observer_j,exo_environment_work_j,servo_angle_0_rad,servo_angle_1_rad,"
+              "servo_angle_2_rad,"
               "thimble_reference_force_x_n,thimble_reference_force_y_n,"
               "thimble_reference_force_z_n,thimble_reference_moment_x_nm,"
               "thimble_reference_moment_y_nm,thimble_reference_moment_z_nm\n");
@@ -141,13 +144,40 @@ TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
               "1234,2.500000,1,thimble,2.0000,1.5000,-0.2500,0.0000,7.30,55.50,3.25,2.50,"
               "0.000000,0.000000,0.000000,0.000000,0.000000,0.000000,0.0000,"
               "0.000000,0.000000,0.000000,0.0000,0.000000,0.000000,0.000000,0.000000,"
-              "0.0000,0.0000,0.0000,0.2500,0.0000,-1.0000,0.000000,0.001000,0.000000\n");
+              "0.000000,0.0000,0.0000,0.0000,0.2500,0.0000,-1.0000,0.000000,0.001000,0.000000\n");
 }
 
 TEST(TelemetryCsv, PlotScriptQuotesPathsForGnuplot) {
     const auto script = telemetryPlotScript("/tmp/it's.csv", "/tmp/out.png");
     EXPECT_NE(script.find("set output '/tmp/out.png'"), std::string::npos) << script;
     EXPECT_NE(script.find("plot '/tmp/it''s.csv'"), std::string::npos) << script;
+}
+
+// The plot addresses columns by number; they must be the named ones, whatever was added.
+TEST(TelemetryCsv, PlotScriptPlotsTheNamedColumns) {
+    const std::string header = telemetryCsvHeader();
+    std::vector<std::string> names;
+    std::stringstream stream(header.substr(0, header.find('\n')));
+    for (std::string name; std::getline(stream, name, ',');) {
+        names.push_back(name);
+    }
+    auto number = [&names](const std::string& name) {
+        const auto it = std::find(names.begin(), names.end(), name);
+        EXPECT_NE(it, names.end()) << name;
+        return std::to_string(it - names.begin() + 1);
+    };
+    const auto script = telemetryPlotScript("t.csv", "t.png");
+    EXPECT_NE(script.find("(sqrt($" + number("thimble_reference_force_x_n") + "**2 + $" +
+                          number("thimble_reference_force_y_n") + "**2 + $" +
+                          number("thimble_reference_force_z_n") + "**2))"),
+              std::string::npos)
+        << script;
+    for (const char* name : {"exo_reference_actuator_force_n", "actuator_force_cmd_n",
+                             "exo_actuator_force_n", "servo_angle_cmd_2_rad"}) {
+        EXPECT_NE(script.find("? $2 : 1/0):" + number(name) + " with"), std::string::npos)
+            << name << "\n"
+            << script;
+    }
 }
 
 TEST(ClosedLoopReport, ReadsTheRecordingBackAndComparesFeltWithReference) {
@@ -163,7 +193,8 @@ TEST(ClosedLoopReport, ReadsTheRecordingBackAndComparesFeltWithReference) {
         sample.exoskeleton.actuator_force_n = contact ? -1.5 : 0.0;      // 0.5 N short
         sample.exoskeleton.actuator_force_cmd_n = contact ? -1.6 : 0.0;  // one 1.6 N step
         sample.exoskeleton.ghost_torque_nm = {contact ? 0.003 : 0.0, contact ? 0.004 : 0.0, 0.0};
-        sample.exoskeleton.energy_observer_j = -0.01 * i;  // the device gives energy
+        sample.exoskeleton.energy_observer_j = -0.01 * i;   // the device gives energy
+        sample.exoskeleton.environment_work_j = 0.004 * i;  // the moving objects put in less
         csv += telemetryCsvRow(sample, 0);
         sample.device_index = 1;
         sample.device_kind = msgs::DeviceKind::kThimble;
@@ -184,6 +215,8 @@ TEST(ClosedLoopReport, ReadsTheRecordingBackAndComparesFeltWithReference) {
     EXPECT_NEAR(exo.errorFraction(), 0.25, 1e-9);
     EXPECT_NEAR(exo.rms_ghost_torque_nm, 0.005, 1e-6);
     EXPECT_NEAR(exo.delivered_energy_j, 0.99, 1e-6);
+    EXPECT_NEAR(exo.environment_work_j, 0.396, 1e-6);
+    EXPECT_NEAR(exo.excessEnergy(), 0.594, 1e-6);
     EXPECT_EQ(exo.clamp_below_reference_ticks, 0U);
     EXPECT_NEAR(exo.largest_step_n, 1.6, 1e-9);
     EXPECT_EQ(exo.steps_over_rate_limit, 1U);

@@ -214,6 +214,7 @@ class Filler {
         fill(s.exoskeleton.reference_actuator_force_n);
         fill(s.exoskeleton.ghost_torque_nm);
         fill(s.exoskeleton.energy_observer_j);
+        fill(s.exoskeleton.environment_work_j);
         fill(s.thimble.servo_angle_cmd_rad);
         fill(s.thimble.servo_angle_rad);
         fill(s.thimble.platform_height_m);

@@ -410,6 +410,7 @@ idl::HapticTelemetry toIdl(const HapticTelemetry& in) {
         exoskeleton.reference_actuator_force_n(s.exoskeleton.reference_actuator_force_n);
         exoskeleton.ghost_torque_nm(s.exoskeleton.ghost_torque_nm);
         exoskeleton.energy_observer_j(s.exoskeleton.energy_observer_j);
+        exoskeleton.environment_work_j(s.exoskeleton.environment_work_j);
         item.exoskeleton(exoskeleton);
         idl::ThimbleTelemetry thimble;
         thimble.servo_angle_cmd_rad(s.thimble.servo_angle_cmd_rad);
@@ -453,6 +454,7 @@ ConversionResult fromIdl(const idl::HapticTelemetry& in, HapticTelemetry& out) {
         item.exoskeleton.reference_actuator_force_n = s.exoskeleton().reference_actuator_force_n();
         item.exoskeleton.ghost_torque_nm = s.exoskeleton().ghost_torque_nm();
         item.exoskeleton.energy_observer_j = s.exoskeleton().energy_observer_j();
+        item.exoskeleton.environment_work_j = s.exoskeleton().environment_work_j();
         item.thimble.servo_angle_cmd_rad = s.thimble().servo_angle_cmd_rad();
         item.thimble.servo_angle_rad = s.thimble().servo_angle_rad();
         item.thimble.platform_height_m = s.thimble().platform_height_m();

@@ -201,7 +201,8 @@ struct ExoskeletonTelemetry {
     double reference_actuator_force_n{0.0};  // B^+ reference_torque_nm: the force to compare
     // The felt joint torque (J^T F of the reported actuator force) orthogonal to the reference.
     std::array<double, kMaxJointDofs> ghost_torque_nm{};
-    double energy_observer_j{0.0};  // the port's passivity observer
+    double energy_observer_j{0.0};   // the port's passivity observer
+    double environment_work_j{0.0};  // work the sim's moving objects did on the coupling
     friend bool operator==(const ExoskeletonTelemetry&, const ExoskeletonTelemetry&) = default;
 };
 
