@@ -72,6 +72,82 @@ TEST(PassivityController, AccountsZeroOrderHoldEnergy) {
     EXPECT_DOUBLE_EQ(sut.limit(-1.5), -1.5);
 }
 
+// A wall the sim moves into a finger that holds still: the port does no work, so without the
+// environment's credit nothing can push (the demo's exoskeleton felt 0 N); with it the force is
+// bounded by what the wall's motion put in, and a wall that goes back takes it back.
+TEST(PassivityController, AMovingEnvironmentCreditsItsWorkSignedAndNoMore) {
+    constexpr double kPeriodS = 1e-3;
+    constexpr double kPortMassKg = 0.1;
+    PassivityController sut(kPeriodS, kPortMassKg);
+    sut.observe(0.01);
+    sut.observe(0.01);  // at rest
+    EXPECT_DOUBLE_EQ(sut.limit(-4.0), 0.0);
+    // At rest the bound is b u^2 <= E with b = T^2 / m: 4 N needs 1.6e-4 J.
+    sut.creditEnvironmentWork(1.0e-4);
+    const double allowed = std::sqrt(1.0e-4 * kPortMassKg) / kPeriodS;
+    EXPECT_NEAR(sut.limit(-4.0), -allowed, 1e-6);
+    sut.creditEnvironmentWork(1.0e-3);
+    EXPECT_DOUBLE_EQ(sut.limit(-4.0), -4.0);
+    EXPECT_DOUBLE_EQ(sut.observedEnergy(), 0.0);  // the port's own account is untouched
+    EXPECT_NEAR(sut.environmentWork(), 1.1e-3, 1e-15);
+    // The wall retreats as far as it came: nothing left to spend.
+    sut.creditEnvironmentWork(-1.1e-3);
+    EXPECT_DOUBLE_EQ(sut.limit(-4.0), 0.0);
+    // Spending the credit is booked at the port: 4 N over 1 mm along the force.
+    sut.creditEnvironmentWork(1.0e-2);
+    sut.record(-4.0);
+    sut.observe(0.009);
+    EXPECT_NEAR(sut.observedEnergy(), -4.0e-3, 1e-12);
+    sut.creditEnvironmentWork(std::numeric_limits<double>::quiet_NaN());
+    EXPECT_NEAR(sut.environmentWork(), 1.0e-2, 1e-15);
+    sut.reset();
+    EXPECT_DOUBLE_EQ(sut.environmentWork(), 0.0);
+}
+
+// The environment's work, seen from the actuator: a spring of stiffness k whose far end the
+// sim moves. Loading it credits the spring's energy change (beyond the clamp the port feels only
+// the clamp); unloading it debits that change, but never more than the force the port held
+// times the shift.
+TEST(ActuatorPortGuard, EnvironmentWorkIsThatOfTheSpringCutOffAtTheClampAndTheForceHeld) {
+    PortGuardConfig config;
+    config.max_force_n = 10.0;
+    config.passivity_enabled = false;  // the port follows its command: the held force is known
+    ActuatorPortGuard sut(config);
+    constexpr double kStiffness = 2000.0;  // N/m
+    // 0 -> 4 N: the far end moved 2 mm, work 1/2 * 4 N * 2 mm.
+    sut.creditEnvironmentMotion(0.0, -4.0, kStiffness);
+    EXPECT_NEAR(sut.passivity().environmentWork(), 4.0e-3, 1e-15);
+    // 4 -> 16 N: 4 -> 10 N as a spring (21 mJ), then 10 N over 3 mm more (30 mJ).
+    sut.creditEnvironmentMotion(-4.0, -16.0, kStiffness);
+    EXPECT_NEAR(sut.passivity().environmentWork(), 55.0e-3, 1e-12);
+    // The port has held nothing yet: unloading debits nothing.
+    sut.creditEnvironmentMotion(-16.0, -4.0, kStiffness);
+    EXPECT_NEAR(sut.passivity().environmentWork(), 55.0e-3, 1e-12);
+    // Now it holds 10 N (after the 100 ms fade-in), then the spring unloads fully: all of the
+    // 16 N spring's 55 mJ, since 10 N over the 8 mm shift is more than that.
+    for (int i = 0; i < 150; ++i) {
+        (void)sut.apply(-16.0, 0.0, true);
+    }
+    sut.creditEnvironmentMotion(-16.0, 0.0, kStiffness);
+    EXPECT_NEAR(sut.passivity().environmentWork(), 0.0, 1e-12);
+    // Holding 1 N, an unload 10 -> 4 N debits 1 N * 3 mm, not the spring's 21 mJ.
+    for (int i = 0; i < 30; ++i) {
+        (void)sut.apply(-1.0, 0.0, true);
+    }
+    sut.creditEnvironmentMotion(-10.0, -4.0, kStiffness);
+    EXPECT_NEAR(sut.passivity().environmentWork(), -3.0e-3, 1e-12);
+    // Through zero: unload 2 N to zero (held 1 N over 1 mm), load 2 N the other way (1 mJ).
+    sut.creditEnvironmentMotion(-2.0, 2.0, kStiffness);
+    EXPECT_NEAR(sut.passivity().environmentWork(), -3.0e-3, 1e-12);
+    // Garbage in, nothing credited.
+    sut.creditEnvironmentMotion(0.0, std::numeric_limits<double>::quiet_NaN(), kStiffness);
+    sut.creditEnvironmentMotion(0.0, -4.0, 0.0);
+    sut.creditEnvironmentMotion(0.0, -4.0, -kStiffness);
+    EXPECT_NEAR(sut.passivity().environmentWork(), -3.0e-3, 1e-12);
+    sut.creditStoredEnergy(2.0, kStiffness);
+    EXPECT_NEAR(sut.passivity().environmentWork(), -2.0e-3, 1e-12);
+}
+
 TEST(ActuatorPortGuard, PassivityActsAfterTheRateLimitAndOnlyReducesTheForce) {
     PortGuardConfig config;
     config.max_force_rate_n_per_s = 500.0;  // 0.5 N per tick

@@ -18,6 +18,7 @@ PassivityController::PassivityController(double period_s, double port_mass_kg) n
 
 void PassivityController::reset() noexcept {
     energy_ = 0.0;
+    environment_work_ = 0.0;
     velocity_ = 0.0;
     reversed_ = false;
     u_applied_ = 0.0;
@@ -37,6 +38,12 @@ double PassivityController::observe(double ell) noexcept {
     return velocity_;
 }
 
+void PassivityController::creditEnvironmentWork(double work_j) noexcept {
+    if (std::isfinite(work_j)) {
+        environment_work_ += work_j;
+    }
+}
+
 double PassivityController::limit(double u_desired) const noexcept {
     if (!enabled_ || u_desired == 0.0) {
         return u_desired;
@@ -50,7 +57,7 @@ double PassivityController::limit(double u_desired) const noexcept {
         spending ? (1.0 + kPredictionMargin) * last : -last / (1.0 + kPredictionMargin);
     const double b = period_s_ * period_s_ / port_mass_kg_;
     const double magnitude = std::abs(u_desired);
-    const double reserve = energy_ - kRoundingReserveJ;
+    const double reserve = energy_ + environment_work_ - kRoundingReserveJ;
     // In deficit nothing may be spent: only a force too small to carry the port along itself
     // (d <= 0) passes, and it repays the deficit. Otherwise the largest |u| with
     // b u^2 + a u <= reserve.
@@ -114,6 +121,41 @@ ActuatorPortGuard::ActuatorPortGuard(const PortGuardConfig& config)
             "mass must be finite and > 0");
     }
     passivity_.setEnabled(config.passivity_enabled);
+}
+
+double ActuatorPortGuard::clampedSpringEnergy(double spring_force_n,
+                                              double stiffness_n_per_m) const noexcept {
+    const double magnitude = std::abs(spring_force_n);
+    const double cap = config_.max_force_n;
+    if (magnitude <= cap) {
+        return magnitude * magnitude / (2.0 * stiffness_n_per_m);
+    }
+    return (cap * cap / 2.0 + cap * (magnitude - cap)) / stiffness_n_per_m;
+}
+
+void ActuatorPortGuard::creditEnvironmentMotion(double spring_force_before_n,
+                                                double spring_force_after_n,
+                                                double stiffness_n_per_m) noexcept {
+    if (!std::isfinite(spring_force_before_n) || !std::isfinite(spring_force_after_n) ||
+        !std::isfinite(stiffness_n_per_m) || !(stiffness_n_per_m > 0.0)) {
+        return;
+    }
+    const double k = stiffness_n_per_m;
+    double before = spring_force_before_n;
+    if (before * spring_force_after_n < 0.0) {
+        creditEnvironmentMotion(before, 0.0, k);
+        before = 0.0;
+    }
+    const double after = spring_force_after_n;
+    const double released = clampedSpringEnergy(before, k) - clampedSpringEnergy(after, k);
+    if (released <= 0.0) {
+        passivity_.creditEnvironmentWork(-released);
+        return;
+    }
+    // The force the port held along the spring's force, over the far end's shift.
+    const double held_along = std::copysign(1.0, before) * previous_force_n_;
+    const double carried = std::max(0.0, held_along) * (std::abs(before) - std::abs(after)) / k;
+    passivity_.creditEnvironmentWork(-std::min(released, carried));
 }
 
 PortCommand ActuatorPortGuard::apply(double u_desired, double ell, bool input_fresh,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace haptic::runtime {
@@ -109,7 +110,7 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
             const auto used = set->constraints.used();
             constraints = used.first(std::min(used.size(), max_constraints_));
         }
-        renderer_.tick(q_, q_dot_, constraints, out_);
+        renderAndCreditEnvironment(constraints);
         desired_n = out_.actuator_force.size() > 0 ? out_.actuator_force[0] : 0.0;
     }
     // Without a fresh device state the guard fades the last good force out (never a step).
@@ -126,6 +127,7 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     }
     const kinesthetic::PortCommand port = guard_.apply(desired_n, stroke_m_, state_fresh, gain);
     const double force_n = port.force_n;
+    port_flags_ = port.flags;
     command_.force_n = force_n;
     command_.enable = gain > 0.0;
     // A disabled port is disconnected from the virtual environment and stores nothing: the
@@ -134,6 +136,7 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     // fault, an E-stop) would block every later enable for the rest of the run.
     if (!command_.enable && force_n == 0.0) {
         guard_.passivity().reset();
+        credit_stored_energy_ = true;
     }
 
     fillLinkReport(core.state(), gain, now_ns);
@@ -148,7 +151,45 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     report_.actuator_force[0] = state.actuator.force_n;
     report_.exoskeleton.actuator_force_cmd_n = force_n;
     report_.exoskeleton.energy_observer_j = guard_.passivity().observedEnergy();
+    report_.exoskeleton.environment_work_j = guard_.passivity().environmentWork();
     reportFeltAgainstReference(set, state.actuator.force_n);
+}
+
+void ExoskeletonChannel::renderAndCreditEnvironment(
+    std::span<const msgs::LinearConstraint> constraints) noexcept {
+    const bool moved =
+        constraints.size() != rendered_constraints_.size() ||
+        !std::equal(constraints.begin(), constraints.end(), rendered_constraints_.begin());
+    // Along range(B) the coupling K acts as k_a for every method, so in actuator space it is
+    // a spring of k_a / (B^T B) whose force is B^+ K (q_p - q) (damping is not part of it).
+    model_.actuationMatrix(q_, felt_actuation_);
+    const double gram = felt_actuation_.col(0).squaredNorm();
+    const double stiffness = gram > 0.0 ? renderer_.parameters().tracking_stiffness / gram : 0.0;
+    auto spring_force = [&](const kinesthetic::RenderOutput& out) {
+        return out.fault == kinesthetic::RenderFault::kNone && gram > 0.0
+                   ? felt_actuation_.col(0).dot(out.coupling_force) / gram
+                   : std::numeric_limits<double>::quiet_NaN();
+    };
+    // No constraints: no spring force. A render that failed gives NaN, and no credit.
+    double force_before_n = 0.0;
+    if (moved && !rendered_constraints_.empty()) {
+        renderer_.tick(q_, q_dot_, rendered_constraints_.used(), previous_environment_out_);
+        force_before_n = spring_force(previous_environment_out_);
+    }
+    renderer_.tick(q_, q_dot_, constraints, out_);
+    if (credit_stored_energy_) {
+        guard_.creditStoredEnergy(spring_force(out_), stiffness);
+        credit_stored_energy_ = false;
+    } else if (moved) {
+        guard_.creditEnvironmentMotion(force_before_n, spring_force(out_), stiffness);
+    }
+    if (!moved) {
+        return;
+    }
+    rendered_constraints_.clear();
+    for (const auto& constraint : constraints) {
+        rendered_constraints_.push_back(constraint);
+    }
 }
 
 void ExoskeletonChannel::reportFeltAgainstReference(const msgs::ConstraintSet* set,

@@ -26,6 +26,15 @@ namespace haptic::kinesthetic {
 // capped so that |u| d(|u|) <= E_k. The guarantee holds as long as the port moves at least
 // `port_mass` and the other forces (the user) change the displacement by less than the margin
 // per tick. In deficit only forces with d <= 0 (they can only earn) pass.
+//
+// A virtual environment that moves is a source: when the sim moves an object into a finger
+// that holds still (the hand translating into a wall), the port does no work, yet the coupling
+// must push. The budget is therefore E_k plus the work the environment's own motion did on the
+// coupling, credited by the caller (creditEnvironmentWork; ActuatorPortGuard computes it). It
+// is signed, so a wall that jitters in and out credits nothing on balance, and one that
+// retreats takes back what its approach gave. Passivity then holds for the port and the
+// environment's motion together: the device never gives the finger more than the port
+// absorbed plus what the moving objects put in.
 // It must be the last stage before the actuator (after force and rate saturation), and
 // record() must get the force actually applied: a limiter after it could hold a force the
 // controller wanted gone. The cost is the classic one of passivity control: a wall that has
@@ -43,18 +52,24 @@ class PassivityController {
     [[nodiscard]] double limit(double u_desired) const noexcept;
     // End of a tick: the force actually applied.
     void record(double u_applied) noexcept { u_applied_ = u_applied; }
+    // Work (J, signed) the virtual environment's own motion did on the coupling since the
+    // last call; non-finite values are ignored.
+    void creditEnvironmentWork(double work_j) noexcept;
 
     void setEnabled(bool enabled) noexcept { enabled_ = enabled; }
     [[nodiscard]] bool enabled() const noexcept { return enabled_; }
     void reset() noexcept;
 
-    // Energy absorbed by the environment so far (J); its negative is what the device generated.
+    // Energy absorbed at the port so far (J); its negative is what the device delivered.
     [[nodiscard]] double observedEnergy() const noexcept { return energy_; }
+    // The environment's own work credited so far (J).
+    [[nodiscard]] double environmentWork() const noexcept { return environment_work_; }
 
   private:
     double period_s_;
     double port_mass_kg_;
     double energy_{0.0};
+    double environment_work_{0.0};
     double ell_previous_{0.0};
     double velocity_{0.0};
     bool reversed_{false};  // the last displacement reversed the one before
@@ -122,6 +137,31 @@ class ActuatorPortGuard {
     // make the force sent step faster than max_force_rate_n_per_s.
     PortCommand apply(double u_desired, double ell, bool input_fresh,
                       double output_gain = 1.0) noexcept;
+
+    // The environment's side of the passivity budget. Seen from the actuator, the coupling is
+    // a spring of stiffness k (N/m) whose far end the environment moves: its force
+    // u = k (ell_p - ell) is the renderer's spring force (damping excluded). When the sim moves
+    // its objects at a fixed ell, from spring force u_before to u_after:
+    //   loading (|u| grows): the credit is psi(u_after) - psi(u_before), the work that loads
+    //     the spring, where psi is the energy of the spring cut off at max_force_n (beyond the
+    //     clamp the port feels max_force_n): u^2 / 2k up to the clamp, then linear;
+    //   unloading (|u| shrinks): the debit is that energy drop, but at most the force the port
+    //     held times the far end's shift: a port that the rate limit, a fade or this controller
+    //     kept below the spring never received the spring's energy, so it cannot owe it.
+    // A sign change unloads to zero, then loads. So a wall that jitters about a loaded state
+    // credits nothing on balance once the port carries the spring's force, and at most lets
+    // the port catch up with the spring before. Non-finite input or k <= 0: no credit.
+    void creditEnvironmentMotion(double spring_force_before_n, double spring_force_after_n,
+                                 double stiffness_n_per_m) noexcept;
+    // A new passivity interval (after reset, e.g. the port was disabled) starts with what the
+    // spring holds: passivity allows a system to give back its initial storage, and the finger
+    // may have entered the wall while the port was off.
+    void creditStoredEnergy(double spring_force_n, double stiffness_n_per_m) noexcept {
+        creditEnvironmentMotion(0.0, spring_force_n, stiffness_n_per_m);
+    }
+    // psi above.
+    [[nodiscard]] double clampedSpringEnergy(double spring_force_n,
+                                             double stiffness_n_per_m) const noexcept;
 
     [[nodiscard]] PassivityController& passivity() noexcept { return passivity_; }
     [[nodiscard]] const PassivityController& passivity() const noexcept { return passivity_; }

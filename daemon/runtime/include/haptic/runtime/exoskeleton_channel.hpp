@@ -44,6 +44,8 @@ class ExoskeletonChannel final
         return renderer_.parameters().method;
     }
     [[nodiscard]] const kinesthetic::RenderOutput& renderOutput() const noexcept { return out_; }
+    // What the port guard did to the last command (kinesthetic::PortFlag bits).
+    [[nodiscard]] std::uint8_t portFlags() const noexcept { return port_flags_; }
 
   protected:
     [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
@@ -61,6 +63,12 @@ class ExoskeletonChannel final
     // B(q) F of the force the actuator reports, split into its part along the reference and
     // the rest, the ghost torque (docs/hapticd.md, "Reference and ghost torque").
     void reportFeltAgainstReference(const msgs::ConstraintSet* set, double felt_force_n) noexcept;
+    // Renders `constraints` at the current q; when they differ from those of the last render,
+    // credits the port's passivity budget with the work the sim's moving objects did on the
+    // coupling (ActuatorPortGuard::creditEnvironmentMotion): the spring force under the old
+    // constraints and under the new, both at this q, so the port's own motion is not counted
+    // twice. The first render of a passivity interval credits what the spring holds.
+    void renderAndCreditEnvironment(std::span<const msgs::LinearConstraint> constraints) noexcept;
 
     kinesthetic::ExoskeletonDevice model_;  // before renderer_, which keeps a reference
     kinesthetic::KinestheticRenderer renderer_;
@@ -75,6 +83,11 @@ class ExoskeletonChannel final
     std::uint64_t encoder_updates_{0};
     std::int64_t encoder_time_ns_{0};
     kinesthetic::RenderOutput out_;
+    // The constraints of the last render, and scratch for re-rendering them at a new q.
+    msgs::BoundedArray<msgs::LinearConstraint, msgs::kMaxConstraints> rendered_constraints_{};
+    kinesthetic::RenderOutput previous_environment_out_;
+    bool credit_stored_energy_{true};  // the passivity interval (re)starts at the next render
+    std::uint8_t port_flags_{kinesthetic::kPortOk};
     kinesthetic::ActuationMatrix felt_actuation_;  // B(q) for the felt joint torque
 };
 
