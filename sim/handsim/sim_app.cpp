@@ -159,7 +159,8 @@ int runSim(const SimOptions& options) {
         // slow step shows up as a lower rate, not as a jump in the motion.
         const double t_s = static_cast<double>(steps + 1) * dt_s;
         std::string rejection;
-        if (const auto pose = tracking->poll(t_s, rejection)) {
+        const auto pose = tracking->poll(t_s, rejection);
+        if (pose) {
             if (const auto reason = physics.setHandPose(*pose)) {
                 rejection = *reason;
             } else {
@@ -177,8 +178,19 @@ int runSim(const SimOptions& options) {
                 spdlog::warn("tracking: no valid pose on '{}' for {} ms: device outputs withheld",
                              cfg.scene.tracking.topic, cfg.scene.tracking.timeout_ms);
             } else {
-                spdlog::info("tracking: poses on '{}' again: device outputs resumed",
-                             cfg.scene.tracking.topic);
+                // The hand stood still while the tracker was silent (or since start, in its
+                // initial pose): pulling it to where the tracker is now would drag it through
+                // whatever lies between, and the devices would render that transient (the
+                // demo's first contact rang at the 10 N clamp in both directions). Nothing was
+                // published meanwhile, so there is no continuity to keep: place it there.
+                if (pose) {  // always: the pose accepted this step ended the silence
+                    physics.reset(*pose);
+                    (void)physics.setHandPose(*pose);
+                }
+                spdlog::info(
+                    "tracking: poses on '{}' again: hand placed at the tracked pose, "
+                    "device outputs resumed",
+                    cfg.scene.tracking.topic);
             }
         }
         const softhand::StepReport report = physics.step(dt_s);
