@@ -175,6 +175,17 @@ ExoskeletonRenderingConfig readExoRendering(MapReader map) {
     out.method = map.required("method", spec::Enum<RenderingMethod>{});
     out.max_constraints =
         map.optional("max_constraints", 8, spec::Integer<int>::closed(1, kMaxConstraints));
+    const ExoskeletonRenderingConfig defaults;
+    out.tracking_stiffness_nm_per_rad =
+        map.optional("tracking_stiffness_nm_per_rad", defaults.tracking_stiffness_nm_per_rad,
+                     Real::positive(100.0));
+    out.user_stiffness_nm_per_rad = map.optional(
+        "user_stiffness_nm_per_rad", defaults.user_stiffness_nm_per_rad, Real::positive(100.0));
+    out.actuator_damping_n_s_per_m =
+        map.optional("actuator_damping_n_s_per_m", defaults.actuator_damping_n_s_per_m,
+                     Real::closed(0.0, 1000.0));
+    out.passivity_port_mass_kg = map.optional(
+        "passivity_port_mass_kg", defaults.passivity_port_mass_kg, Real::positive(100.0));
     map.finish();
     return out;
 }

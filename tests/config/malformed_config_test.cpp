@@ -249,6 +249,14 @@ TEST(ConfigOutOfRange, CommandTimeoutLongerThanTheDeviceMayWait) {
                  "expected an integer in [2, 100], got 250"});
 }
 
+// Negative damping along the actuator would feed energy into the finger.
+TEST(ConfigOutOfRange, NegativeActuatorDamping) {
+    const auto file = kDataDir / "devices/negative_actuator_damping.yaml";
+    expectError(deviceError("negative_actuator_damping.yaml"),
+                {file.string(), lineOf(file, "actuator_damping_n_s_per_m"), 31,
+                 "rendering.actuator_damping_n_s_per_m", "expected a number in [0, 1000], got -5"});
+}
+
 TEST(ConfigOutOfRange, NonStandardBitrate) {
     const auto file = kDataDir / "devices/bad_bitrate.yaml";
     expectError(deviceError("bad_bitrate.yaml"),
@@ -529,6 +537,19 @@ TEST(ConfigReferences, ExoskeletonNeedsFingerJoints) {
     expectError(simError("sim_exoskeleton_on_fingertip.yaml"),
                 {file.string(), lineOf(file, "exo_ok"), 5, "devices[0]",
                  "got exoskeleton 'exo' with hand.model fingertip (no joints)"});
+}
+
+// The coupling keys are optional; set, they replace the defaults (their effect on the
+// rendering: DeviceRuntime.EveryCouplingKeyOfTheDeviceFileChangesTheRendering).
+TEST(ConfigCoupling, KeysReplaceTheDefaults) {
+    const auto exo = loadDeviceConfig(kDataDir / "devices/exo_coupling.yaml").exoskeleton();
+    EXPECT_DOUBLE_EQ(exo.rendering.tracking_stiffness_nm_per_rad, 3.5);
+    EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_nm_per_rad, 0.9);
+    EXPECT_DOUBLE_EQ(exo.rendering.actuator_damping_n_s_per_m, 12.5);
+    EXPECT_DOUBLE_EQ(exo.rendering.passivity_port_mass_kg, 0.25);
+    const auto defaults = loadDeviceConfig(kDataDir / "devices/exo_ok.yaml").exoskeleton();
+    EXPECT_DOUBLE_EQ(defaults.rendering.tracking_stiffness_nm_per_rad, 2.0);
+    EXPECT_DOUBLE_EQ(defaults.rendering.passivity_port_mass_kg, 0.1);
 }
 
 }  // namespace

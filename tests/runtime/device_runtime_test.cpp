@@ -6,8 +6,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
+#include <vector>
 
 #include "haptic/emu/device_models.hpp"
+#include "haptic/kinesthetic/anisotropic.hpp"
 #include "haptic/protocol/exoskeleton_protocol.hpp"
 #include "haptic/protocol/thimble_protocol.hpp"
 #include "haptic/runtime/exoskeleton_channel.hpp"
@@ -139,6 +142,83 @@ TEST(DeviceRuntime, SwitchingAmongAllSixMethodsWhileRenderingNeverStepsTheForce)
                 largest_passivity_cut_n);
     EXPECT_GT(pushing_ticks, ticks / 2) << "the wall is felt while the methods change";
     EXPECT_LT(clamped_ticks, ticks / 10) << "below the clamp, where the methods differ";
+}
+
+// Each coupling key of the device file changes what the channel renders. The rigs stay IDLE
+// (no force is sent), so the emulated finger moves the same in both and the renderer's outputs
+// compare tick by tick; the wall sits 0.01 rad inside the finger, re-placed every 10 ticks.
+TEST(DeviceRuntime, EveryCouplingKeyOfTheDeviceFileChangesTheRendering) {
+    auto rig_with = [](double k_a, double k_u, double b_v, double mass_kg,
+                       config::RenderingMethod method) {
+        return std::make_unique<RuntimeRig>([=](std::vector<config::DeviceConfig>& devices) {
+            auto& rendering = std::get<config::ExoskeletonConfig>(devices[kExo].params).rendering;
+            rendering.tracking_stiffness_nm_per_rad = k_a;
+            rendering.user_stiffness_nm_per_rad = k_u;
+            rendering.actuator_damping_n_s_per_m = b_v;
+            rendering.passivity_port_mass_kg = mass_kg;
+            rendering.method = method;
+        });
+    };
+    const auto linearized = config::RenderingMethod::kLinearizedSubspace;
+    const auto anisotropic = config::RenderingMethod::kAnisotropic;
+    auto base = rig_with(2.0, 0.6, 40.0, 0.1, linearized);
+    auto stiffer = rig_with(4.0, 0.6, 40.0, 0.1, linearized);
+    auto undamped = rig_with(2.0, 0.6, 0.0, 0.1, linearized);
+    auto heavier = rig_with(2.0, 0.6, 40.0, 0.4, linearized);
+    auto soft_user = rig_with(2.0, 0.6, 40.0, 0.1, anisotropic);
+    auto stiff_user = rig_with(2.0, 6.0, 40.0, 0.1, anisotropic);
+    // The channel follows the daemon's method (hapticd starts it from the device file; this
+    // rig's core starts with linearized_subspace).
+    ASSERT_TRUE(soft_user->command(msgs::CommandKind::kSetMethod, "anisotropic"));
+    ASSERT_TRUE(stiff_user->command(msgs::CommandKind::kSetMethod, "anisotropic"));
+    std::vector<RuntimeRig*> rigs{base.get(),    stiffer.get(),   undamped.get(),
+                                  heavier.get(), soft_user.get(), stiff_user.get()};
+    auto channel = [](RuntimeRig& rig) -> const runtime::ExoskeletonChannel& {
+        return static_cast<runtime::ExoskeletonChannel&>(rig.runtime.channel(kExo));
+    };
+    int compared = 0;
+    double damping_difference_n = 0.0;
+    for (int i = 0; i < 400; ++i) {
+        for (RuntimeRig* rig : rigs) {
+            if (i % 10 == 0) {
+                const auto& q = rig->core.deviceReport(kExo).joint_position_rad;
+                msgs::LinearConstraint& wall = rig->constraint_set.constraints[0];
+                wall.a = {-1.0, -0.5, 0.0};
+                wall.b = -(q[0] + 0.5 * q[1]) + 0.01;
+                rig->offerContact();
+            }
+            rig->tick();
+        }
+        const auto& out = channel(*base).renderOutput();
+        if (i < 20 || !out.in_contact) {
+            continue;
+        }
+        ++compared;
+        // k_a: the coupling force doubles with it (same finger, same wall).
+        EXPECT_NEAR(channel(*stiffer).renderOutput().coupling_force.norm(),
+                    2.0 * out.coupling_force.norm(), 1e-9 * (1.0 + out.coupling_force.norm()));
+        // b_v: only the damping part of the actuator force differs.
+        damping_difference_n = std::max(
+            damping_difference_n,
+            std::abs(channel(*undamped).renderOutput().actuator_force[0] - out.actuator_force[0]));
+        // k_u: anisotropic's closed-form rho* follows it.
+        EXPECT_NEAR(channel(*soft_user).renderOutput().rho,
+                    kinesthetic::optimalRhoIsotropic(2.0, 0.6), 1e-12);
+        EXPECT_NEAR(channel(*stiff_user).renderOutput().rho,
+                    kinesthetic::optimalRhoIsotropic(2.0, 6.0), 1e-12);
+    }
+    EXPECT_GT(compared, 100);
+    EXPECT_GT(damping_difference_n, 0.01) << "the finger moves, so b_v must show";
+    // The port mass bounds what the passivity controller lets through at rest: b = T^2 / m.
+    EXPECT_DOUBLE_EQ(channel(*heavier).portGuard().config().passivity_port_mass_kg, 0.4);
+    kinesthetic::PassivityController light(1e-3, 0.1);
+    kinesthetic::PassivityController heavy(1e-3, 0.4);
+    for (auto* controller : {&light, &heavy}) {
+        controller->observe(0.01);
+        controller->observe(0.01);
+        controller->creditEnvironmentWork(1e-5);
+    }
+    EXPECT_NEAR(std::abs(heavy.limit(-10.0)), 2.0 * std::abs(light.limit(-10.0)), 1e-9);
 }
 
 // One tick of hapticd's way out (daemon_app.cpp, after the loop): the emulators run, the

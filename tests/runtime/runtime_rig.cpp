@@ -28,8 +28,14 @@ std::vector<daemon::DeviceDescriptor> descriptors() {
 
 }  // namespace
 
-RuntimeRig::RuntimeRig()
-    : devices(shippedDevices()),
+RuntimeRig::RuntimeRig() : RuntimeRig([](std::vector<config::DeviceConfig>&) {}) {}
+
+RuntimeRig::RuntimeRig(const std::function<void(std::vector<config::DeviceConfig>&)>& adjust)
+    : devices([&adjust] {
+          auto shipped = shippedDevices();
+          adjust(shipped);
+          return shipped;
+      }()),
       core(coreSettings(), descriptors()),
       runtime(devices, {&host, &host}, runtime::ChannelSettings{}) {
     host.connect(target);

@@ -5,6 +5,7 @@
 // both shipped devices on the other end. Time is synthetic (1 ms per tick), so tests are
 // exact and fast.
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -24,6 +25,8 @@ inline constexpr std::size_t kThimble = 1;
 class RuntimeRig {
   public:
     RuntimeRig();
+    // The shipped devices, changed by `adjust` before anything is built from them.
+    explicit RuntimeRig(const std::function<void(std::vector<config::DeviceConfig>&)>& adjust);
 
     // One 1 kHz tick: emulators, bus, then hapticd's read / update / compute / write order.
     void tick();

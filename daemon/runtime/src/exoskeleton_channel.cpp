@@ -20,6 +20,7 @@ kinesthetic::PortGuardConfig portGuardConfig(const config::DeviceConfig& device,
     guard.max_force_n = std::min(device.safety.max_force_n, exo.actuator.max_force_n);
     guard.max_force_rate_n_per_s = device.safety.max_force_rate_n_per_s;
     guard.fade_time_s = static_cast<double>(device.safety.fade_out_ms) * 1e-3;
+    guard.passivity_port_mass_kg = exo.rendering.passivity_port_mass_kg;
     return guard;
 }
 
@@ -28,11 +29,9 @@ kinesthetic::PortGuardConfig portGuardConfig(const config::DeviceConfig& device,
 kinesthetic::RenderParameters exoskeletonRenderParameters(const config::ExoskeletonConfig& exo) {
     kinesthetic::RenderParameters parameters;
     parameters.method = exo.rendering.method;
-    // The kinesthetic benchmark's joint-space values (docs/kinesthetic.md):
-    // assumptions, like the device geometry, until a lab identifies its finger and linkage.
-    parameters.tracking_stiffness = 2.0;  // k_a, N m/rad
-    parameters.user_stiffness = 0.6;      // k_u, N m/rad
-    parameters.actuator_damping = 0.5;    // b_v, N s/m along the actuator
+    parameters.tracking_stiffness = exo.rendering.tracking_stiffness_nm_per_rad;
+    parameters.user_stiffness = exo.rendering.user_stiffness_nm_per_rad;
+    parameters.actuator_damping = exo.rendering.actuator_damping_n_s_per_m;
     return parameters;
 }
 
@@ -110,7 +109,8 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
             const auto used = set->constraints.used();
             constraints = used.first(std::min(used.size(), max_constraints_));
         }
-        renderAndCreditEnvironment(constraints);
+        // Between the sim's frames, a contact that moves is approached, not stepped to.
+        renderAndCreditEnvironment(blend_.update(constraints));
         desired_n = out_.actuator_force.size() > 0 ? out_.actuator_force[0] : 0.0;
     }
     // Without a fresh device state the guard fades the last good force out (never a step).

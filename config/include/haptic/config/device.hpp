@@ -131,6 +131,15 @@ struct LinkageConfig {
 struct ExoskeletonRenderingConfig {
     RenderingMethod method{RenderingMethod::kLinearizedSubspace};
     int max_constraints{8};  // linearised constraints used per tick (<= msgs kMaxConstraints)
+    // The coupling (docs/kinesthetic.md): k_a pulls the finger towards the proxy in joint
+    // space, k_u is the user's stiffness that the closed-form rho* assumes, b_v damps the
+    // actuator while in contact.
+    double tracking_stiffness_nm_per_rad{2.0};
+    double user_stiffness_nm_per_rad{0.6};
+    double actuator_damping_n_s_per_m{0.5};
+    // A lower bound on the mass the actuator moves with a finger in the device (reflected to
+    // the stroke): the passivity controller's worst case for how far its force carries it.
+    double passivity_port_mass_kg{0.1};
 };
 
 struct ExoskeletonConfig {

@@ -166,6 +166,7 @@ class ActuatorPortGuard {
     [[nodiscard]] PassivityController& passivity() noexcept { return passivity_; }
     [[nodiscard]] const PassivityController& passivity() const noexcept { return passivity_; }
     [[nodiscard]] double fadeGain() const noexcept { return fade_.gain(); }
+    [[nodiscard]] const PortGuardConfig& config() const noexcept { return config_; }
 
   private:
     PortGuardConfig config_;

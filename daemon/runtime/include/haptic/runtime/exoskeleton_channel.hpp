@@ -18,6 +18,7 @@
 #include <cstdint>
 
 #include "haptic/devices/exoskeleton_driver.hpp"
+#include "haptic/kinesthetic/constraint_blend.hpp"
 #include "haptic/kinesthetic/device_model.hpp"
 #include "haptic/kinesthetic/port_safety.hpp"
 #include "haptic/kinesthetic/renderer.hpp"
@@ -44,6 +45,9 @@ class ExoskeletonChannel final
         return renderer_.parameters().method;
     }
     [[nodiscard]] const kinesthetic::RenderOutput& renderOutput() const noexcept { return out_; }
+    [[nodiscard]] const kinesthetic::ActuatorPortGuard& portGuard() const noexcept {
+        return guard_;
+    }
     // What the port guard did to the last command (kinesthetic::PortFlag bits).
     [[nodiscard]] std::uint8_t portFlags() const noexcept { return port_flags_; }
 
@@ -83,6 +87,7 @@ class ExoskeletonChannel final
     std::uint64_t encoder_updates_{0};
     std::int64_t encoder_time_ns_{0};
     kinesthetic::RenderOutput out_;
+    kinesthetic::ConstraintBlend blend_;
     // The constraints of the last render, and scratch for re-rendering them at a new q.
     msgs::BoundedArray<msgs::LinearConstraint, msgs::kMaxConstraints> rendered_constraints_{};
     kinesthetic::RenderOutput previous_environment_out_;
