@@ -1,3 +1,5 @@
+#include <algorithm>
+
 #include "haptic/config/daemon.hpp"
 #include "schema.hpp"
 
@@ -12,6 +14,12 @@ LoopConfig readLoop(MapReader map) {
     out.priority = map.optional("priority", 80, Integer<int>::closed(1, 99));
     out.cpu_affinity = map.optional("cpu_affinity", -1, Integer<int>::closed(-1, 1023));
     out.sim_timeout_ms = map.required("sim_timeout_ms", Integer<int>::closed(1, 1000));
+    if (auto field = map.take("sim_rearm_after_ms")) {
+        // Shorter than the timeout would demand an enable after every fade.
+        out.sim_rearm_after_ms = Integer<int>::closed(out.sim_timeout_ms, 60'000).parse(*field);
+    } else {
+        out.sim_rearm_after_ms = std::max(out.sim_rearm_after_ms, out.sim_timeout_ms);
+    }
     out.status_rate_hz = map.optional("status_rate_hz", 20, Integer<int>::closed(1, 100));
     out.telemetry_decimation =
         map.optional("telemetry_decimation", 10, Integer<int>::closed(1, 1000));

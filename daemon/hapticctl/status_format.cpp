@@ -59,6 +59,11 @@ std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s) 
             device.device_id.view(), toString(device.kind), toString(device.state),
             toString(device.can.bus_state), device.can.rx_frames, device.can.tx_frames,
             device.can.rx_errors, device.can.tx_errors, device.can.rejected_frames, frame_age);
+        if (device.awaiting_enable) {
+            out +=
+                "                             AWAITING ENABLE: its sim input was lost longer "
+                "than loop.sim_rearm_after_ms; `hapticctl enable` re-arms it\n";
+        }
     }
 
     if (status.faults.empty()) {

@@ -53,6 +53,8 @@ daemon::CoreSettings coreSettings(const config::DaemonConfig& cfg) {
     daemon::CoreSettings settings;
     settings.rate_hz = cfg.loop.rate_hz;
     settings.sim_timeout_ns = static_cast<std::int64_t>(cfg.loop.sim_timeout_ms) * 1'000'000;
+    settings.sim_rearm_after_ns =
+        static_cast<std::int64_t>(cfg.loop.sim_rearm_after_ms) * 1'000'000;
     settings.status_period_ns = 1'000'000'000LL / cfg.loop.status_rate_hz;
     settings.sim_transport = cfg.sim_link.transport == config::SimTransport::kDds
                                  ? msgs::SimTransport::kDds

@@ -127,7 +127,8 @@ TEST(ConfigUnknownKeys, NestedTypoHasDottedPath) {
                 {data("unknown_key_nested.yaml"),
                  lineOf(kDataDir / "unknown_key_nested.yaml", "rate_hx"), 3, "loop.rate_hx",
                  "unknown key 'loop.rate_hx' (allowed: rate_hz, realtime, priority, "
-                 "cpu_affinity, sim_timeout_ms, status_rate_hz, telemetry_decimation)"});
+                 "cpu_affinity, sim_timeout_ms, sim_rearm_after_ms, status_rate_hz, "
+                 "telemetry_decimation)"});
 }
 
 TEST(ConfigUnknownKeys, ThimbleKeyInExoskeletonFile) {
@@ -247,6 +248,14 @@ TEST(ConfigOutOfRange, CommandTimeoutLongerThanTheDeviceMayWait) {
     expectError(deviceError("command_timeout_too_long.yaml"),
                 {file.string(), lineOf(file, "command_timeout_ms"), 23, "can.command_timeout_ms",
                  "expected an integer in [2, 100], got 250"});
+}
+
+// A re-arm limit below the sim timeout would demand an enable after every fade.
+TEST(ConfigOutOfRange, RearmLimitShorterThanTheSimTimeout) {
+    const auto file = kDataDir / "rearm_shorter_than_timeout.yaml";
+    expectError(daemonError("rearm_shorter_than_timeout.yaml"),
+                {file.string(), lineOf(file, "sim_rearm_after_ms"), 23, "loop.sim_rearm_after_ms",
+                 "expected an integer in [20, 60000], got 10"});
 }
 
 // Negative damping along the actuator would feed energy into the finger.

@@ -158,6 +158,66 @@ TEST(DaemonCoreStall, AStallIsItsOwnFaultOnlyWhileADeviceIsOnline) {
     EXPECT_EQ(core.lastStallEndNs(), 72 * kMs);
 }
 
+// The re-arm policy (loop.sim_rearm_after_ms): a short outage fades out and back in by itself;
+// after a longer one the device renders again only after a new enable, however fresh its
+// input is; input that was never fresh since the enable is not an outage.
+TEST(DaemonCoreRearm, ALongSimOutageWhileRenderingNeedsANewEnable) {
+    CoreSettings settings;
+    settings.known_methods = {"subspace"};
+    settings.rendering_method = "subspace";
+    settings.sim_rearm_after_ns = 250 * kMs;
+    DaemonCore core(settings, {DeviceDescriptor{"exo", msgs::DeviceKind::kExoskeleton, 3, 1}});
+    core.markStarted(0);
+    msgs::HapticCommand enable;
+    enable.kind = msgs::CommandKind::kEnable;
+    msgs::HapticCommandReply reply;
+    std::int64_t t = 0;
+    auto run = [&](int ticks, bool feed) {
+        for (int i = 0; i < ticks; ++i) {
+            if (feed) {
+                (void)core.offerConstraintSet(0, validConstraintSet("exo"), t);
+            }
+            t += kMs;
+            core.update(t, TickTiming{});
+        }
+    };
+    ASSERT_TRUE(core.applyCommand(enable, t, reply).accepted);
+    run(400, false);  // the sim starts late: not an outage
+    EXPECT_FALSE(core.awaitingEnable(0));
+    run(200, true);
+    EXPECT_DOUBLE_EQ(core.outputGain(0), 1.0);
+    run(200, false);  // 200 ms: fades out, comes back by itself
+    EXPECT_EQ(core.outputGain(0), 0.0);
+    run(200, true);
+    EXPECT_FALSE(core.awaitingEnable(0));
+    EXPECT_DOUBLE_EQ(core.outputGain(0), 1.0);
+    run(300, false);  // 300 ms: past the re-arm limit
+    EXPECT_TRUE(core.awaitingEnable(0));
+    run(300, true);  // fresh again, but no force without the operator
+    EXPECT_EQ(core.outputGain(0), 0.0);
+    EXPECT_EQ(core.state(), msgs::DaemonState::kRendering);
+    msgs::HapticStatus status;
+    core.fillStatus(t, status);
+    EXPECT_TRUE(status.devices[0].awaiting_enable);
+    ASSERT_TRUE(core.applyCommand(enable, t, reply).accepted) << "enable while RENDERING re-arms";
+    EXPECT_FALSE(core.awaitingEnable(0));
+    double previous = core.outputGain(0);
+    for (int i = 0; i < 150; ++i) {
+        run(1, true);
+        EXPECT_LE(core.outputGain(0) - previous, 1.0 / 100.0 + 1e-12) << "fades in, no step";
+        previous = core.outputGain(0);
+    }
+    EXPECT_DOUBLE_EQ(core.outputGain(0), 1.0);
+    // Leaving RENDERING forgets a pending re-arm: IDLE needs an enable anyway.
+    run(300, false);
+    ASSERT_TRUE(core.awaitingEnable(0));
+    msgs::HapticCommand disable;
+    disable.kind = msgs::CommandKind::kDisable;
+    ASSERT_TRUE(core.applyCommand(disable, t, reply).accepted);
+    run(1, false);
+    EXPECT_FALSE(core.awaitingEnable(0));
+}
+
 TEST_F(DaemonCoreTest, AStalledTickDoesNotStepForceUp) {
     (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), 0);
     sut.update(kMs, TickTiming{});

@@ -87,6 +87,18 @@ TEST(StatusFormat, ShowsStateLoopSimLinkDevicesAndFaults) {
     EXPECT_THAT(text, HasSubstr("[7] exo_index: heartbeat missing for 50 ms"));
 }
 
+TEST(StatusFormat, ADeviceAwaitingEnableSaysWhyAndHowToReArm) {
+    msgs::HapticStatus status;
+    msgs::DeviceStatus device;
+    device.device_id.assign("exo");
+    status.devices.push_back(device);
+    EXPECT_THAT(formatStatus(status, 0.05), Not(HasSubstr("AWAITING ENABLE")));
+    status.devices[0].awaiting_enable = true;
+    EXPECT_THAT(formatStatus(status, 0.05),
+                HasSubstr("AWAITING ENABLE: its sim input was lost longer than "
+                          "loop.sim_rearm_after_ms; `hapticctl enable` re-arms it"));
+}
+
 TEST(StatusFormat, LateSimInputIsShownOnlyWhenItHappened) {
     msgs::HapticStatus status;
     status.sim_link.connected = true;

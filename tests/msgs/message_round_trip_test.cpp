@@ -179,6 +179,7 @@ class Filler {
         fill(d.can.tx_errors);
         fill(d.can.rejected_frames);
         fill(d.last_frame_age_ms);
+        fill(d.awaiting_enable);
     }
     void fill(Fault& f) {
         fill(f.code);

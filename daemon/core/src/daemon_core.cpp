@@ -32,6 +32,13 @@ void DaemonCore::markStarted(std::int64_t now_ns) noexcept {
 CommandOutcome DaemonCore::applyCommand(const msgs::HapticCommand& command, std::int64_t now_ns,
                                         msgs::HapticCommandReply& reply) noexcept {
     const CommandOutcome outcome = machine_.apply(command.kind, command.argument.view());
+    // An accepted enable (also while RENDERING) is the operator's re-arm.
+    if (outcome.accepted && command.kind == msgs::CommandKind::kEnable) {
+        for (auto& slot : devices_) {
+            slot.awaiting_enable = false;
+            slot.fed_while_rendering = false;
+        }
+    }
     reply = msgs::HapticCommandReply{};
     reply.header.seq = ++reply_seq_;
     reply.header.stamp_ns = now_ns;
@@ -133,14 +140,31 @@ void DaemonCore::update(std::int64_t now_ns, const TickTiming& timing) noexcept 
     const double timeout_ms = static_cast<double>(settings_.sim_timeout_ns) * 1e-6;
     const double fade_in_s = std::max(1e-9, static_cast<double>(settings_.fade_in_ns) * 1e-9);
 
+    const double rearm_after_ms = static_cast<double>(settings_.sim_rearm_after_ns) * 1e-6;
     bool late = false;
     for (auto& slot : devices_) {
         const double age_ms = ageMs(slot, now_ns);
+        // Re-arm policy: an outage longer than sim_rearm_after_ns is the operator's to end.
+        // Input that has never been fresh since the enable (the sim starting after it) is not
+        // an outage.
+        if (!machine_.rendering()) {
+            slot.fed_while_rendering = false;
+            slot.awaiting_enable = false;
+        } else {
+            slot.fed_while_rendering = slot.fed_while_rendering || age_ms < timeout_ms;
+            if (slot.fed_while_rendering && settings_.sim_rearm_after_ns > 0 &&
+                age_ms > rearm_after_ms) {
+                slot.awaiting_enable = true;
+            }
+        }
         // Full force up to 3/4 of the timeout, zero at the timeout. Starting the fade late
         // keeps normal sim jitter (a 100 Hz sim delivers every ~10 ms) from modulating force.
         const double fade_start_ms = (1.0 - kFadeFraction) * timeout_ms;
         const double target =
-            std::clamp(1.0 - (age_ms - fade_start_ms) / (kFadeFraction * timeout_ms), 0.0, 1.0);
+            slot.awaiting_enable
+                ? 0.0
+                : std::clamp(1.0 - (age_ms - fade_start_ms) / (kFadeFraction * timeout_ms), 0.0,
+                             1.0);
         // Falling follows the target at once; rising is rate limited so force never steps up.
         slot.fade = std::min(target, slot.fade + dt_s / fade_in_s);
         late = late || (target > 0.0 && target < 1.0);
@@ -230,6 +254,7 @@ void DaemonCore::fillStatus(std::int64_t now_ns, msgs::HapticStatus& out) noexce
         status.kind = slot.descriptor.kind;
         status.state = slot.report.run_state;
         status.last_frame_age_ms = slot.report.last_frame_age_ms;
+        status.awaiting_enable = slot.awaiting_enable;
         status.can = slot.report.can;
         out.devices.push_back(status);
         received += slot.received;

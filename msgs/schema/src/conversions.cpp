@@ -303,6 +303,7 @@ idl::HapticStatus toIdl(const HapticStatus& in) {
         can.rejected_frames(d.can.rejected_frames);
         item.can(can);
         item.last_frame_age_ms(d.last_frame_age_ms);
+        item.awaiting_enable(d.awaiting_enable);
         out.devices().push_back(item);
     }
 
@@ -367,6 +368,7 @@ ConversionResult fromIdl(const idl::HapticStatus& in, HapticStatus& out) {
         item.can.tx_errors = d.can().tx_errors();
         item.can.rejected_frames = d.can().rejected_frames();
         item.last_frame_age_ms = d.last_frame_age_ms();
+        item.awaiting_enable = d.awaiting_enable();
         out.devices.push_back(item);
     }
 

@@ -30,9 +30,12 @@ struct EnumTraits<RealtimeMode> {
 struct LoopConfig {
     int rate_hz{1000};  // 100..4000
     RealtimeMode realtime{RealtimeMode::kEnforce};
-    int priority{80};              // SCHED_FIFO priority, 1..99
-    int cpu_affinity{-1};          // core index for the RT thread, -1 = no pinning
-    int sim_timeout_ms{20};        // older sim input fades the force out
+    int priority{80};        // SCHED_FIFO priority, 1..99
+    int cpu_affinity{-1};    // core index for the RT thread, -1 = no pinning
+    int sim_timeout_ms{20};  // older sim input fades the force out
+    // Sim input lost this long while RENDERING: the device renders again only after a new
+    // `enable`, not by itself when the input returns.
+    int sim_rearm_after_ms{1000};
     int status_rate_hz{20};        // haptic/status publication rate, 1..100
     int telemetry_decimation{10};  // haptic/telemetry every N ticks
 };

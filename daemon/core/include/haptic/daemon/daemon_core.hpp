@@ -48,6 +48,10 @@ struct CoreSettings {
     // is the stall's consequence, not their fault. hapticd sets it to the smallest
     // can.command_timeout_ms of its devices; 0 turns the check off.
     std::int64_t stall_limit_ns{0};
+    // Re-arm policy: a device whose sim input, once fresh while RENDERING, is then older than
+    // this renders again only after a new `enable` (DeviceStatus.awaiting_enable meanwhile);
+    // a shorter outage fades out and back in by itself. 0 turns the policy off.
+    std::int64_t sim_rearm_after_ns{0};
 };
 
 class DaemonCore {
@@ -133,6 +137,11 @@ class DaemonCore {
     [[nodiscard]] double outputGain(std::size_t device) const noexcept {
         return machine_.rendering() ? devices_[device].fade : 0.0;
     }
+    // The device lost its sim input for longer than sim_rearm_after_ns while RENDERING and
+    // waits for an operator's `enable` (its gain stays 0 until then).
+    [[nodiscard]] bool awaitingEnable(std::size_t device) const noexcept {
+        return devices_[device].awaiting_enable;
+    }
 
   private:
     struct DeviceSlot {
@@ -148,6 +157,8 @@ class DaemonCore {
         std::array<std::uint64_t, static_cast<std::size_t>(InputRejection::kCount_)> rejected_by{};
         std::uint64_t state_seq{0};
         double fade{0.0};
+        bool fed_while_rendering{false};  // fresh input arrived since the last enable
+        bool awaiting_enable{false};      // see CoreSettings::sim_rearm_after_ns
         DeviceReport report{};
         bool has_constraint_set{false};
         bool has_contact_surface{false};

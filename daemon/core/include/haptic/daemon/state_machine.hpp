@@ -14,6 +14,12 @@
 // - FAULT is latched: the fault stays listed and the daemon stays safe until an operator
 //   clears it, even if the cause is gone. Clearing re-arms to IDLE, never straight to
 //   RENDERING: rendering always needs an explicit enable.
+// - Re-arm after an outage (DaemonCore, CoreSettings::sim_rearm_after_ns, daemon.yaml
+//   loop.sim_rearm_after_ms): while RENDERING, a device whose sim input was fresh and then
+//   stayed stale for longer than that renders again only after a new `enable` (accepted while
+//   RENDERING for exactly this), however fresh its input has become; a shorter outage fades out
+//   and back in by itself. A device that goes offline while RENDERING raises a latched fault
+//   (heartbeat lost), so it too comes back only through clear and enable.
 // - E-STOP wins over everything and is left only by clear (then IDLE). A fault raised during
 //   E-STOP is recorded but does not leave E-STOP.
 // - The rendering method may change in IDLE and while RENDERING (the exoskeleton's channel

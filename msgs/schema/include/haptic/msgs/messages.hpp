@@ -154,6 +154,9 @@ struct DeviceStatus {
     DeviceRunState state{DeviceRunState::kOffline};
     CanCounters can{};
     double last_frame_age_ms{0.0};
+    // Its sim input was lost longer than loop.sim_rearm_after_ms while RENDERING: it renders
+    // again only after a new `enable`.
+    bool awaiting_enable{false};
     friend bool operator==(const DeviceStatus&, const DeviceStatus&) = default;
 };
 
