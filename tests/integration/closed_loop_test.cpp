@@ -151,14 +151,23 @@ TEST(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitches
     }
     EXPECT_GT(free_count, 1500U) << "the script lifts the finger for ~2 s per period";
     EXPECT_LT(largest_free_force, 0.05);
+    // And force while the sim reports contact: the passivity budget credits the sim's moving
+    // objects, so the hand moving onto the block is felt (before, the port refused it: 0 N).
+    // Not every such tick: a method switch, a contact's first ticks and the controller's cuts
+    // pass less. Demo runs of 2026-11-26: 98 % of contact ticks above 0.05 N.
+    std::size_t pushing = 0;
+    for (std::size_t i = 0; i < command.size(); ++i) {
+        pushing += std::abs(exo_reference[i]) > 0.5 && std::abs(command[i]) > 0.05 ? 1U : 0U;
+    }
+    EXPECT_GT(static_cast<double>(pushing), 0.8 * static_cast<double>(contact_ticks))
+        << pushing << " of " << contact_ticks << " contact ticks with force";
 
     // In contact: never pinned at the clamp (the demo's old failure: 61 % of contact ticks),
     // and passive. NOT asserted, because it does not hold yet (docs/benchmarks.md, "Closed
-    // loop"): that the force is present in contact and chatters by at most 5 % of its mean.
-    // The rendered force is 0-20 % of the sim's reference; the port's passivity controller
-    // refuses most of it, since the demo's press comes from the wrist and puts no energy into
-    // the actuator port, and from run to run the mean force is 0.1-0.9 N with chatter of
-    // 5-80 % of that mean. The report above prints both for every run.
+    // loop", 2026-11-26): chatter at most 5 % of the mean force. Since the passivity budget
+    // credits the sim's moving objects the force is present in every contact window (1.1-1.5 N
+    // against a 4-5 N reference), but a 15-60 Hz ripple of the finger, the coupling and the
+    // actuator's lag keeps the chatter at 20-50 %. The report above prints both for every run.
     const ctl::ExoskeletonReport report = ctl::exoskeletonReport(exo, settings);
     EXPECT_LE(report.quality.clampFraction(), 0.05);
     // Passive with respect to the port and the sim's moving objects together: the device gave
