@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "allocation_counter.hpp"
 
@@ -136,12 +137,20 @@ TEST_F(DaemonCoreTest, AReplayedOrDelayedMessageIsRefusedAndDoesNotRenewTheInput
 
 // A stall longer than the devices' command timeout is hapticd's own fault, but only when a
 // device hears it: with every device offline there is no one to time out.
-TEST(DaemonCoreStall, AStallIsItsOwnFaultOnlyWhileADeviceIsOnline) {
+// One exoskeleton rendered with `subspace`; the caller sets what its test is about.
+CoreSettings oneMethodSettings() {
     CoreSettings settings;
     settings.known_methods = {"subspace"};
     settings.rendering_method = "subspace";
+    return settings;
+}
+const std::vector<DeviceDescriptor> kOneExoskeleton{
+    DeviceDescriptor{"exo", msgs::DeviceKind::kExoskeleton, 3, 1}};
+
+TEST(DaemonCoreStall, AStallIsItsOwnFaultOnlyWhileADeviceIsOnline) {
+    CoreSettings settings = oneMethodSettings();
     settings.stall_limit_ns = 10 * kMs;
-    DaemonCore core(settings, {DeviceDescriptor{"exo", msgs::DeviceKind::kExoskeleton, 3, 1}});
+    DaemonCore core(settings, kOneExoskeleton);
     core.markStarted(0);
     core.update(50 * kMs, TickTiming{});
     EXPECT_EQ(core.stateMachine().faultCount(), 0U) << "no device online";
@@ -162,11 +171,9 @@ TEST(DaemonCoreStall, AStallIsItsOwnFaultOnlyWhileADeviceIsOnline) {
 // after a longer one the device renders again only after a new enable, however fresh its
 // input is; input that was never fresh since the enable is not an outage.
 TEST(DaemonCoreRearm, ALongSimOutageWhileRenderingNeedsANewEnable) {
-    CoreSettings settings;
-    settings.known_methods = {"subspace"};
-    settings.rendering_method = "subspace";
+    CoreSettings settings = oneMethodSettings();
     settings.sim_rearm_after_ns = 250 * kMs;
-    DaemonCore core(settings, {DeviceDescriptor{"exo", msgs::DeviceKind::kExoskeleton, 3, 1}});
+    DaemonCore core(settings, kOneExoskeleton);
     core.markStarted(0);
     msgs::HapticCommand enable;
     enable.kind = msgs::CommandKind::kEnable;

@@ -104,6 +104,10 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     const msgs::ConstraintSet* set = core.latestConstraintSet(index);
     if (state_fresh) {
         measure();
+    }
+    // B(q) once per tick: the environment's credit and the felt torque both use it.
+    model_.actuationMatrix(q_, felt_actuation_);
+    if (state_fresh) {
         std::span<const msgs::LinearConstraint> constraints;
         if (set != nullptr) {
             const auto used = set->constraints.used();
@@ -162,7 +166,6 @@ void ExoskeletonChannel::renderAndCreditEnvironment(
         !std::equal(constraints.begin(), constraints.end(), rendered_constraints_.begin());
     // Along range(B) the coupling K acts as k_a for every method, so in actuator space it is
     // a spring of k_a / (B^T B) whose force is B^+ K (q_p - q) (damping is not part of it).
-    model_.actuationMatrix(q_, felt_actuation_);
     const double gram = felt_actuation_.col(0).squaredNorm();
     const double stiffness = gram > 0.0 ? renderer_.parameters().tracking_stiffness / gram : 0.0;
     auto spring_force = [&](const kinesthetic::RenderOutput& out) {
@@ -204,7 +207,6 @@ void ExoskeletonChannel::reportFeltAgainstReference(const msgs::ConstraintSet* s
             exo.reference_torque_nm[i] = set->reference_torque_nm[i];
         }
     }
-    model_.actuationMatrix(q_, felt_actuation_);
     double reference_squared = 0.0;
     double felt_along_reference = 0.0;
     double actuation_squared = 0.0;
