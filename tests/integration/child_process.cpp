@@ -1,6 +1,7 @@
 #include "child_process.hpp"
 
 #include <fcntl.h>
+#include <sched.h>
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
@@ -130,6 +131,25 @@ CommandResult runCommand(const std::vector<std::string>& argv, std::chrono::mill
     result.out = child.stdoutText();
     result.err = child.stderrText();
     return result;
+}
+
+std::vector<std::string> withFifoPriority(std::vector<std::string> argv, int priority) {
+    // Probed on a thread of its own, so the test process keeps its normal policy.
+    static const bool permitted = [] {
+        bool ok = false;
+        std::thread probe([&] {
+            sched_param param{};
+            param.sched_priority = 1;
+            ok = ::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &param) == 0;
+        });
+        probe.join();
+        return ok && ::access("/usr/bin/chrt", X_OK) == 0;
+    }();
+    if (!permitted) {
+        return argv;
+    }
+    argv.insert(argv.begin(), {"/usr/bin/chrt", "--fifo", std::to_string(priority)});
+    return argv;
 }
 
 }  // namespace haptic::testing

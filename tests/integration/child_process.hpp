@@ -44,4 +44,10 @@ struct CommandResult {
 };
 CommandResult runCommand(const std::vector<std::string>& argv, std::chrono::milliseconds timeout);
 
+// `argv` run under SCHED_FIFO `priority` (util-linux's chrt) where this host allows it, as is.
+// For the emulated devices: their firmware runs on its own microcontroller, so a device that
+// misses its state or heartbeat period because a loaded CI machine starved a normal-priority
+// process is a test artefact that hapticd would rightly report as a device fault.
+std::vector<std::string> withFifoPriority(std::vector<std::string> argv, int priority);
+
 }  // namespace haptic::testing

@@ -74,9 +74,11 @@ TEST(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitches
         ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
         std::this_thread::sleep_for(20ms);
     }
-    ChildProcess user(
-        {HAPTICEMU_PATH, "--user", kConfigDir + "/user.yaml", "--dds-domain", domainArgument()},
-        "hapticemu");
+    // The devices' firmware and the user's hand run at FIFO priority below hapticd's (80).
+    ChildProcess user(withFifoPriority({HAPTICEMU_PATH, "--user", kConfigDir + "/user.yaml",
+                                        "--dds-domain", domainArgument()},
+                                       70),
+                      "hapticemu");
     ChildProcess daemon({HAPTICD_PATH, "--realtime", "ignore", "--dds-domain", domainArgument()},
                         "hapticd");
     ChildProcess sim(

@@ -102,8 +102,20 @@ struct TestConfig {
     int thimble_port{0};
 };
 
+// Below hapticd's loop.priority (80): the devices' firmware never preempts the daemon.
+inline constexpr int kEmulatorPriority = 70;
+
 inline std::string domain() {
     return std::to_string(100 + (::getpid() + 37) % 100);
+}
+
+// "[code] message" of each fault a status lists, for failure messages.
+inline std::string faultsOf(const msgs::HapticStatus& status) {
+    std::string text;
+    for (const auto& fault : status.faults) {
+        text += "[" + std::to_string(fault.code) + "] " + std::string(fault.message.view()) + "\n";
+    }
+    return text.empty() ? "no faults\n" : text;
 }
 
 class DeviceSafetyTest : public ::testing::Test {
@@ -168,8 +180,9 @@ class DeviceSafetyTest : public ::testing::Test {
 
     // The emulator takes the port block from the device file, as hapticd does.
     std::unique_ptr<EmulatorProcess> startEmulator(const std::string& device) {
-        return std::make_unique<EmulatorProcess>(std::vector<std::string>{
-            HAPTICEMU_PATH, "-d", (config_.dir / device).string(), "--bus", "udp"});
+        return std::make_unique<EmulatorProcess>(withFifoPriority(
+            {HAPTICEMU_PATH, "-d", (config_.dir / device).string(), "--bus", "udp"},
+            kEmulatorPriority));
     }
 
     void startSim() {

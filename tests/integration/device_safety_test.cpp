@@ -69,6 +69,8 @@ TEST_F(BadSimInputTest, RejectedCountedAndDoesNotChangeTheOutput) {
     }
     ASSERT_TRUE(steady) << "the thimble's targets never settled";
     const auto before = waitForStatus("a fresh status", [](const auto&) { return true; });
+    ASSERT_EQ(before.state, msgs::DaemonState::kRendering)
+        << "before any bad input: " << faultsOf(before) << daemon_->stderrText();
     drainTelemetry();
 
     ASSERT_TRUE(injector.sendCommand("bad on"));
@@ -91,7 +93,8 @@ TEST_F(BadSimInputTest, RejectedCountedAndDoesNotChangeTheOutput) {
     const std::uint64_t rejected = after.sim_link.rejected - before.sim_link.rejected;
     EXPECT_LE(rejected, sent);
     EXPECT_GE(rejected, sent - sent / 50);
-    EXPECT_EQ(after.state, msgs::DaemonState::kRendering) << "bad input is not a device fault";
+    EXPECT_EQ(after.state, msgs::DaemonState::kRendering)
+        << "bad input is not a device fault: " << faultsOf(after) << daemon_->stderrText();
     // The thimble's targets depend only on the accepted surfaces: not one bad message may
     // move them. An accepted one would have sent the plate towards the retract pose for the
     // 5 ms until the next good one, a full servo-rate step (400 deg/s: 6.98 mrad) per tick.
