@@ -22,7 +22,7 @@ LoopConfig readLoop(MapReader map) {
     }
     out.status_rate_hz = map.optional("status_rate_hz", 20, Integer<int>::closed(1, 100));
     out.telemetry_decimation =
-        map.optional("telemetry_decimation", 10, Integer<int>::closed(1, 1000));
+        map.optional("telemetry_decimation", 1, Integer<int>::closed(1, 1000));
     map.finish();
     return out;
 }
@@ -35,7 +35,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& path) {
     out.source = path;
     out.log_level = detail::readLogLevel(root);
     out.loop = readLoop(root.requiredMap("loop"));
-    out.devices = detail::readDeviceList(detail::requiredDeviceList(root));
+    out.devices = detail::readDeviceList(detail::requiredDeviceList(root), out.loop.rate_hz);
     detail::readTransports(root, out);
     root.finish();
     return out;

@@ -52,6 +52,7 @@ struct DeviceEndpoints {
 daemon::CoreSettings coreSettings(const config::DaemonConfig& cfg) {
     daemon::CoreSettings settings;
     settings.rate_hz = cfg.loop.rate_hz;
+    settings.telemetry_decimation = static_cast<std::uint32_t>(cfg.loop.telemetry_decimation);
     settings.sim_timeout_ns = static_cast<std::int64_t>(cfg.loop.sim_timeout_ms) * 1'000'000;
     settings.sim_rearm_after_ns =
         static_cast<std::int64_t>(cfg.loop.sim_rearm_after_ms) * 1'000'000;
@@ -254,6 +255,9 @@ class RealtimeLoop {
 
     void queueTelemetry(std::uint64_t tick, std::int64_t now_ns,
                         const daemon::TickTiming& timing) noexcept {
+        if (!core_.telemetryDue(tick)) {
+            return;
+        }
         for (std::size_t i = 0; i < endpoints_.size(); ++i) {
             core_.fillTelemetry(i, tick, now_ns, timing, telemetry_scratch_);
             if (!telemetry_.tryPush(telemetry_scratch_)) {

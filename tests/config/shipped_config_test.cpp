@@ -73,7 +73,7 @@ TEST(ShippedConfig, Daemon) {
     EXPECT_EQ(cfg.loop.sim_timeout_ms, 20);
     EXPECT_EQ(cfg.loop.sim_rearm_after_ms, 1000);
     EXPECT_EQ(cfg.loop.status_rate_hz, 20);
-    EXPECT_EQ(cfg.loop.telemetry_decimation, 10);
+    EXPECT_EQ(cfg.loop.telemetry_decimation, 1);
     ASSERT_EQ(cfg.devices.size(), 2U);
     EXPECT_EQ(cfg.devices[0].name, "exo");
     EXPECT_EQ(cfg.devices[0].type(), DeviceType::kExoskeleton);
@@ -105,7 +105,6 @@ TEST(ShippedConfig, Exoskeleton) {
     EXPECT_EQ(cfg.name, "exo");
     ASSERT_TRUE(cfg.isExoskeleton());
     EXPECT_EQ(cfg.can.interface, "can0");
-    EXPECT_EQ(cfg.can.bitrate, 1'000'000U);
     EXPECT_FALSE(cfg.can.fd);
     EXPECT_EQ(cfg.can.command_id, 0x101U);
     EXPECT_EQ(cfg.can.state_id, 0x181U);
@@ -118,7 +117,7 @@ TEST(ShippedConfig, Exoskeleton) {
     EXPECT_EQ(cfg.can.udp_port, 47000);
     EXPECT_EQ(cfg.can.udp_slots, 4);
     EXPECT_DOUBLE_EQ(cfg.safety.max_force_n, 10.0);
-    EXPECT_DOUBLE_EQ(cfg.safety.max_stiffness_n_per_m, 2000.0);
+    EXPECT_DOUBLE_EQ(cfg.safety.max_stiffness_n_per_m, 15000.0);
     EXPECT_EQ(cfg.safety.fade_out_ms, 100);
 
     const ExoskeletonConfig& exo = cfg.exoskeleton();

@@ -17,6 +17,7 @@
 #include <functional>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <memory>
 #include <regex>
 #include <sstream>
@@ -257,7 +258,12 @@ class DeviceSafetyTest : public ::testing::Test {
             args.push_back(argument);
         }
         const auto result = hapticctl(args);
-        EXPECT_EQ(result.exit_code, 0) << verb << ": " << result.out << result.err;
+        if (result.exit_code != 0) {
+            const auto status = waitForStatus("a status", [](const auto&) { return true; });
+            ADD_FAILURE() << verb << ": " << result.out << result.err
+                          << "faults: " << faultsOf(status) << "hapticd log:\n"
+                          << daemon_->stderrText();
+        }
         return result.exit_code == 0;
     }
 

@@ -36,8 +36,8 @@ struct LoopConfig {
     // Sim input lost this long while RENDERING: the device renders again only after a new
     // `enable`, not by itself when the input returns.
     int sim_rearm_after_ms{1000};
-    int status_rate_hz{20};        // haptic/status publication rate, 1..100
-    int telemetry_decimation{10};  // haptic/telemetry every N ticks
+    int status_rate_hz{20};       // haptic/status publication rate, 1..100
+    int telemetry_decimation{1};  // haptic/telemetry every N ticks
 };
 
 struct DaemonConfig {

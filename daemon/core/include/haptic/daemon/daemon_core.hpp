@@ -52,6 +52,8 @@ struct CoreSettings {
     // this renders again only after a new `enable` (DeviceStatus.awaiting_enable meanwhile);
     // a shorter outage fades out and back in by itself. 0 turns the policy off.
     std::int64_t sim_rearm_after_ns{0};
+    // haptic/telemetry carries every Nth tick (loop.telemetry_decimation); 1 = every tick.
+    std::uint32_t telemetry_decimation{1};
 };
 
 class DaemonCore {
@@ -107,6 +109,12 @@ class DaemonCore {
     }
     [[nodiscard]] std::uint64_t rejectedCount(std::size_t device,
                                               InputRejection reason) const noexcept;
+
+    // Whether this tick's telemetry is published (every telemetry_decimation-th tick,
+    // starting with the first).
+    [[nodiscard]] bool telemetryDue(std::uint64_t tick) const noexcept {
+        return settings_.telemetry_decimation <= 1 || tick % settings_.telemetry_decimation == 0;
+    }
 
     // One telemetry sample for the device at this tick: what the device report says was
     // commanded (the rendered force times outputGain(), after the safety stage).
