@@ -135,12 +135,13 @@ ListReader requiredDeviceList(MapReader& root) {
     return root.requiredList("devices", 1, kMaxDevices, "a path to a device file");
 }
 
-std::vector<DeviceConfig> readDeviceList(const ListReader& list) {
+std::vector<DeviceConfig> readDeviceList(const ListReader& list,
+                                         std::optional<int> control_rate_hz) {
     std::vector<DeviceConfig> devices;
     for (std::size_t i = 0; i < list.size(); ++i) {
         const Field entry = list.at(i);
         const fs::path path = entry.as(spec::File{});
-        DeviceConfig device = readDevice(MapReader::openFile(path), path);
+        DeviceConfig device = readDevice(MapReader::openFile(path), path, control_rate_hz);
 
         for (std::size_t j = 0; j < devices.size(); ++j) {
             const DeviceConfig& other = devices[j];

@@ -16,8 +16,6 @@ namespace {
 using spec::Real;
 
 // Standard CAN nominal bit rates; anything else is almost certainly a typo.
-constexpr std::array<std::uint32_t, 9> kBitrates{10'000,  20'000,  50'000,  100'000,  125'000,
-                                                 250'000, 500'000, 800'000, 1'000'000};
 // Matches msgs kMaxConstraints and kMaxContactSamples: the RT path has fixed capacities.
 constexpr int kMaxConstraints = 16;
 constexpr int kMaxPadSamples = 128;
@@ -44,14 +42,14 @@ CanConfig readCan(MapReader can) {
     CanConfig out;
     out.interface = readInterface(can);
 
-    auto [bitrate, bitrate_field] =
-        can.requiredWithField("bitrate", spec::Integer<std::uint32_t>::closed(10'000, 1'000'000));
-    if (std::find(kBitrates.begin(), kBitrates.end(), bitrate) == kBitrates.end()) {
-        bitrate_field.fail(
-            "a standard CAN bit rate (10000, 20000, 50000, 100000, 125000, 250000, 500000, "
-            "800000 or 1000000)");
+    // The bit rate is the interface's (ip link, or systemd-networkd's [CAN] BitRate=): hapticd
+    // neither sets nor can check it, so a key here would only look like a setting.
+    if (auto bitrate = can.take("bitrate")) {
+        bitrate->failWith(
+            "not a hapticd setting; the bit rate is the interface's (ip link set "
+            "<interface> type can bitrate ..., or systemd-networkd's [CAN] BitRate=), remove "
+            "the key");
     }
-    out.bitrate = bitrate;
     out.fd = can.optional("fd", false, spec::Boolean{});
 
     // 11-bit standard ids; each must be distinct or frames of one kind would be parsed as
@@ -108,7 +106,8 @@ CanConfig readCan(MapReader can) {
 
 struct Safety {
     SafetyLimits limits;
-    std::optional<Field> max_force_field;  // for the check against the actuator
+    std::optional<Field> max_force_field;      // for the check against the actuator
+    std::optional<Field> max_stiffness_field;  // for the passivity margin
 };
 
 Safety readSafety(MapReader safety) {
@@ -116,13 +115,15 @@ Safety readSafety(MapReader safety) {
     auto [max_force, max_force_field] =
         safety.requiredWithField("max_force_n", Real::positive(100.0));
     out.max_force_n = max_force;
-    out.max_stiffness_n_per_m = safety.required("max_stiffness_n_per_m", Real::positive(20'000.0));
+    auto [max_stiffness, max_stiffness_field] =
+        safety.requiredWithField("max_stiffness_n_per_m", Real::positive(20'000.0));
+    out.max_stiffness_n_per_m = max_stiffness;
     out.max_velocity_m_per_s = safety.required("max_velocity_m_per_s", Real::positive(5.0));
     out.max_force_rate_n_per_s =
         safety.required("max_force_rate_n_per_s", Real::positive(100'000.0));
     out.fade_out_ms = safety.required("fade_out_ms", spec::Integer<int>::closed(1, 2000));
     safety.finish();
-    return Safety{out, std::move(max_force_field)};
+    return Safety{out, std::move(max_force_field), std::move(max_stiffness_field)};
 }
 
 // --- exoskeleton ---
@@ -140,6 +141,7 @@ ActuatorConfig readActuator(MapReader map) {
     out.max_force_n = map.required("max_force_n", Real::positive(500.0));
     out.max_speed_m_per_s = map.required("max_speed_m_per_s", Real::positive(5.0));
     out.lag_time_constant_s = map.required("lag_time_constant_s", Real::closed(0.0, 1.0));
+    out.damping_n_s_per_m = map.required("damping_n_s_per_m", Real::closed(0.0, 10'000.0));
     map.finish();
     return out;
 }
@@ -190,7 +192,8 @@ ExoskeletonRenderingConfig readExoRendering(MapReader map) {
     return out;
 }
 
-ExoskeletonConfig readExoskeleton(MapReader& root, const Safety& safety) {
+ExoskeletonConfig readExoskeleton(MapReader& root, const Safety& safety,
+                                  std::optional<int> control_rate_hz) {
     ExoskeletonConfig out;
     out.actuator = readActuator(root.requiredMap("actuator"));
     out.finger = readFinger(root.requiredMap("finger"));
@@ -200,6 +203,22 @@ ExoskeletonConfig readExoskeleton(MapReader& root, const Safety& safety) {
     if (safety.limits.max_force_n > out.actuator.max_force_n) {
         safety.max_force_field->fail("a number no greater than actuator.max_force_n (" +
                                      formatNumber(out.actuator.max_force_n) + ")");
+    }
+    // Colgate and Schenkel's sampled-data passivity along the actuator (docs/algorithms.md
+    // §1.5, §6.9): b > K T / 2 + |b_v|, with K the stiffness the rendering is clamped to, b the
+    // actuator's own damping and b_v the rendered damping.
+    if (control_rate_hz) {
+        const double period_s = 1.0 / static_cast<double>(*control_rate_hz);
+        const double needed = 0.5 * safety.limits.max_stiffness_n_per_m * period_s +
+                              out.rendering.actuator_damping_n_s_per_m;
+        if (!(out.actuator.damping_n_s_per_m > needed)) {
+            safety.max_stiffness_field->failWith(
+                "not passive at loop.rate_hz " + std::to_string(*control_rate_hz) +
+                ": needs actuator.damping_n_s_per_m (" +
+                formatNumber(out.actuator.damping_n_s_per_m) +
+                ") > max_stiffness_n_per_m * T / 2 + rendering.actuator_damping_n_s_per_m (" +
+                formatNumber(needed) + "); lower the stiffness or raise the loop rate");
+        }
     }
     return out;
 }
@@ -282,7 +301,8 @@ ThimbleConfig readThimble(MapReader& root) {
 
 }  // namespace
 
-DeviceConfig readDevice(MapReader root, const std::filesystem::path& source) {
+DeviceConfig readDevice(MapReader root, const std::filesystem::path& source,
+                        std::optional<int> control_rate_hz) {
     DeviceConfig out;
     out.source = source;
     out.name = root.required("name", spec::Identifier{});
@@ -292,7 +312,7 @@ DeviceConfig readDevice(MapReader root, const std::filesystem::path& source) {
     out.safety = safety.limits;
     switch (type) {
         case DeviceType::kExoskeleton:
-            out.params = readExoskeleton(root, safety);
+            out.params = readExoskeleton(root, safety, control_rate_hz);
             break;
         case DeviceType::kThimble:
             out.params = readThimble(root);

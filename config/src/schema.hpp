@@ -40,13 +40,17 @@ Pose readPose(MapReader map);
 // {translation_m: [x, y, z], rpy_deg: [r, p, y]}; both required.
 Transform readTransform(MapReader map);
 
-// Reads one device file's root map (the body of loadDeviceConfig).
-DeviceConfig readDevice(MapReader root, const std::filesystem::path& source);
+// Reads one device file's root map (the body of loadDeviceConfig). With the rate of the loop
+// that will render it (hapticd's loop.rate_hz), an exoskeleton's safety.max_stiffness_n_per_m
+// must also pass the sampled-data passivity margin at that rate.
+DeviceConfig readDevice(MapReader root, const std::filesystem::path& source,
+                        std::optional<int> control_rate_hz = std::nullopt);
 
 // The `devices: [paths]` list of daemon and sim files.
 ListReader requiredDeviceList(MapReader& root);
 // Loads every listed file and checks names and CAN ids across devices.
-std::vector<DeviceConfig> readDeviceList(const ListReader& list);
+std::vector<DeviceConfig> readDeviceList(const ListReader& list,
+                                         std::optional<int> control_rate_hz = std::nullopt);
 
 // Every listed device needs a simulated finger of the scene to take its targets from (a
 // binding in the scene's `devices`), and an exoskeleton needs finger joints, which the

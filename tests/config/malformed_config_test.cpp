@@ -258,6 +258,18 @@ TEST(ConfigOutOfRange, RearmLimitShorterThanTheSimTimeout) {
                  "expected an integer in [20, 60000], got 10"});
 }
 
+// exo_ok.yaml (2000 N/m, the actuator's own damping 10 N s/m) is passive at 1 kHz (b must
+// exceed K T / 2 = 1 N s/m plus the rendered damping) but not at 100 Hz (10 N s/m plus it):
+// the error names the device file's stiffness key, since that is what to lower.
+TEST(ConfigPassivityMargin, AStiffnessNotPassiveAtTheLoopRateNamesTheDeviceKey) {
+    const auto device = kDataDir / "devices/exo_ok.yaml";
+    expectError(daemonError("not_passive_at_loop_rate.yaml"),
+                {device.string(), lineOf(device, "max_stiffness_n_per_m"), 26,
+                 "safety.max_stiffness_n_per_m", "not passive at loop.rate_hz 100"});
+    // The same device file alone (hapticemu, the sim) has no loop rate to check against.
+    EXPECT_NO_THROW((void)config::loadDeviceConfig(device));
+}
+
 // Negative damping along the actuator would feed energy into the finger.
 TEST(ConfigOutOfRange, NegativeActuatorDamping) {
     const auto file = kDataDir / "devices/negative_actuator_damping.yaml";
@@ -266,11 +278,12 @@ TEST(ConfigOutOfRange, NegativeActuatorDamping) {
                  "rendering.actuator_damping_n_s_per_m", "expected a number in [0, 1000], got -5"});
 }
 
-TEST(ConfigOutOfRange, NonStandardBitrate) {
+// The bit rate is the interface's: the key is refused with where to set it instead.
+TEST(ConfigOutOfRange, BitrateIsNotAHapticdSetting) {
     const auto file = kDataDir / "devices/bad_bitrate.yaml";
     expectError(deviceError("bad_bitrate.yaml"),
                 {file.string(), lineOf(file, "bitrate"), 12, "can.bitrate",
-                 "expected a standard CAN bit rate"});
+                 "not a hapticd setting; the bit rate is the interface's"});
 }
 
 TEST(ConfigOutOfRange, UdpPortWithoutUdpTransport) {

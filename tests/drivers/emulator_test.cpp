@@ -56,6 +56,28 @@ TEST(ExoskeletonModel, TheFingerFollowsTheIntentAndYieldsToTheActuator) {
     }
 }
 
+// actuator.damping_n_s_per_m is the rod's own damping: released at rest away from the user's
+// intent, the finger of a more damped device has moved less 20 ms later.
+TEST(ExoskeletonModel, TheRodsOwnDampingSlowsTheFinger) {
+    auto damped_device = exoskeletonDevice();
+    auto free_device = exoskeletonDevice();
+    std::get<config::ExoskeletonConfig>(free_device.params).actuator.damping_n_s_per_m = 0.0;
+    std::get<config::ExoskeletonConfig>(damped_device.params).actuator.damping_n_s_per_m = 200.0;
+    ExoskeletonModel free_finger(free_device), damped_finger(damped_device);
+    const std::array<double, 3> start{-0.3, 0.0, 0.0};  // extended: the rod moves with MCP
+    free_finger.placeFinger(start);
+    damped_finger.placeFinger(start);
+    const double free_start_m = free_finger.strokeM();
+    const double damped_start_m = damped_finger.strokeM();
+    for (int i = 0; i < 20; ++i) {
+        free_finger.step(1e-3, 0.0, false);
+        damped_finger.step(1e-3, 0.0, false);
+    }
+    const double free_travel_m = std::abs(free_finger.strokeM() - free_start_m);
+    EXPECT_GT(free_travel_m, 1e-4) << "the user moves the finger";
+    EXPECT_LT(std::abs(damped_finger.strokeM() - damped_start_m), 0.5 * free_travel_m);
+}
+
 TEST(ExoskeletonModel, LinkageGradientMatchesFiniteDifferences) {
     const auto device = exoskeletonDevice();
     ExoskeletonModel model(device);

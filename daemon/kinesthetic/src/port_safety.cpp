@@ -97,6 +97,10 @@ const char* describePortFlag(PortFlag flag) noexcept {
             return "force rate limited";
         case kPortPassivityActive:
             return "passivity controller reduced the force";
+        case kPortStiffnessLimited:
+            return "coupling stiffness clamped to the device's maximum";
+        case kPortVelocityLimited:
+            return "actuator faster than its velocity limit, force fading";
     }
     return "unknown";
 }

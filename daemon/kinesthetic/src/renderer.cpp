@@ -112,6 +112,14 @@ const char* KinestheticRenderer::setParameters(const RenderParameters& parameter
     return nullptr;
 }
 
+bool KinestheticRenderer::setTrackingStiffness(double k_a) noexcept {
+    if (!(k_a > 0.0) || !std::isfinite(k_a)) {
+        return false;
+    }
+    parameters_.tracking_stiffness = k_a;
+    return true;
+}
+
 void KinestheticRenderer::setMethod(RenderingMethod method) noexcept {
     parameters_.method = method;
     reset();

@@ -44,7 +44,10 @@ ExoskeletonChannel::ExoskeletonChannel(const config::DeviceConfig& device, can::
       max_constraints_(static_cast<std::size_t>(device.exoskeleton().rendering.max_constraints)),
       max_force_step_n_(device.safety.max_force_rate_n_per_s * settings.period_s),
       q_(kinesthetic::ConfigVector::Zero(model_.dofs())),
-      q_dot_(kinesthetic::ConfigVector::Zero(model_.dofs())) {
+      q_dot_(kinesthetic::ConfigVector::Zero(model_.dofs())),
+      tracking_stiffness_(device.exoskeleton().rendering.tracking_stiffness_nm_per_rad),
+      max_stiffness_n_per_m_(device.safety.max_stiffness_n_per_m),
+      max_velocity_m_per_s_(device.safety.max_velocity_m_per_s) {
     applied_method_.assign(config::toString(device.exoskeleton().rendering.method));
     report_.kind = msgs::DeviceKind::kExoskeleton;
 }
@@ -101,6 +104,7 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
                              state.encoder_updates > 0 && state.actuator_updates > 0;
 
     double desired_n = 0.0;
+    std::uint8_t channel_flags = kinesthetic::kPortOk;
     const msgs::ConstraintSet* set = core.latestConstraintSet(index);
     if (state_fresh) {
         measure();
@@ -116,6 +120,16 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
         // Between the sim's frames, a contact that moves is approached, not stepped to.
         renderAndCreditEnvironment(blend_.update(constraints));
         desired_n = out_.actuator_force.size() > 0 ? out_.actuator_force[0] : 0.0;
+        std::uint8_t limits = kinesthetic::kPortOk;
+        if (renderer_.parameters().tracking_stiffness < tracking_stiffness_) {
+            limits |= kinesthetic::kPortStiffnessLimited;
+        }
+        rod_speed_ = std::abs(felt_actuation_.col(0).dot(q_dot_));
+        if (rod_speed_ > max_velocity_m_per_s_) {
+            desired_n *= std::max(0.0, 2.0 - rod_speed_ / max_velocity_m_per_s_);
+            limits |= kinesthetic::kPortVelocityLimited;
+        }
+        channel_flags = limits;
     }
     // Without a fresh device state the guard fades the last good force out (never a step).
     // The output gain goes through the guard too, so that its rate limit and the passivity
@@ -131,7 +145,7 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     }
     const kinesthetic::PortCommand port = guard_.apply(desired_n, stroke_m_, state_fresh, gain);
     const double force_n = port.force_n;
-    port_flags_ = port.flags;
+    port_flags_ = static_cast<std::uint8_t>(port.flags | channel_flags);
     command_.force_n = force_n;
     command_.enable = gain > 0.0;
     // A disabled port is disconnected from the virtual environment and stores nothing: the
@@ -166,8 +180,14 @@ void ExoskeletonChannel::renderAndCreditEnvironment(
         !std::equal(constraints.begin(), constraints.end(), rendered_constraints_.begin());
     // Along range(B) the coupling K acts as k_a for every method, so in actuator space it is
     // a spring of k_a / (B^T B) whose force is B^+ K (q_p - q) (damping is not part of it).
+    // Where the linkage makes that stiffer than the device's maximum, k_a is lowered for this
+    // tick so that it is not (before the solve: the subspace methods clamp their force).
     const double gram = felt_actuation_.col(0).squaredNorm();
-    const double stiffness = gram > 0.0 ? renderer_.parameters().tracking_stiffness / gram : 0.0;
+    const double k_a = gram > 0.0 ? std::min(tracking_stiffness_, max_stiffness_n_per_m_ * gram)
+                                  : tracking_stiffness_;
+    (void)renderer_.setTrackingStiffness(k_a);
+    const double stiffness = gram > 0.0 ? k_a / gram : 0.0;
+    actuator_stiffness_ = stiffness;
     auto spring_force = [&](const kinesthetic::RenderOutput& out) {
         return out.fault == kinesthetic::RenderFault::kNone && gram > 0.0
                    ? felt_actuation_.col(0).dot(out.coupling_force) / gram

@@ -99,6 +99,13 @@ void ExoskeletonModel::step(double dt_s, double force_command_n, bool enable) no
     std::array<double, 3> jacobian{};
     (void)linkageStrokeM(q_rad_, &jacobian);
     const double phase = std::sin(2.0 * std::numbers::pi * intent_.frequency_hz * time_s_);
+    // The rod's own damping b, reflected to the joints as b B B^T: its diagonal is implicit
+    // with the finger's damping, the coupling between joints explicit (one step behind).
+    const double rod_damping = actuator_.damping_n_s_per_m;
+    double rod_speed_m_per_s = 0.0;
+    for (std::size_t j = 0; j < 3; ++j) {
+        rod_speed_m_per_s += jacobian[j] * qd_rad_per_s_[j];
+    }
     for (std::size_t j = 0; j < 3; ++j) {
         const config::Interval& limits = finger_.joint_limits_rad[j];
         const double mid = 0.5 * (limits.min + limits.max);
@@ -106,10 +113,12 @@ void ExoskeletonModel::step(double dt_s, double force_command_n, bool enable) no
             user_intent_ ? user_intent_rad_[j]
                          : mid + intent_.amplitude_fraction * (limits.max - limits.min) * phase;
         // Spring and actuator explicitly, damping implicitly: stable for stiff fingers.
-        const double torque =
-            hand_.stiffness_nm_per_rad[j] * (intent_rad - q_rad_[j]) + jacobian[j] * force_n_;
+        const double other_joints_rod_speed = rod_speed_m_per_s - jacobian[j] * qd_rad_per_s_[j];
+        const double torque = hand_.stiffness_nm_per_rad[j] * (intent_rad - q_rad_[j]) +
+                              jacobian[j] * (force_n_ - rod_damping * other_joints_rod_speed);
         const double inertia = hand_.inertia_kg_m2[j];
-        const double damping = hand_.damping_nms_per_rad[j];
+        const double damping =
+            hand_.damping_nms_per_rad[j] + rod_damping * jacobian[j] * jacobian[j];
         qd_rad_per_s_[j] =
             (inertia * qd_rad_per_s_[j] + dt_s * torque) / (inertia + dt_s * damping);
         q_rad_[j] += dt_s * qd_rad_per_s_[j];

@@ -29,7 +29,6 @@ config::CanConfig canConfig(std::uint32_t command, std::uint32_t state, std::uin
                             std::uint32_t fault) {
     config::CanConfig can;
     can.interface = "can0";
-    can.bitrate = 1000000;
     can.command_id = command;
     can.state_id = state;
     can.heartbeat_id = heartbeat;

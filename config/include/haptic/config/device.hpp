@@ -68,7 +68,6 @@ struct CanConfig {
     CanTransport transport{CanTransport::kSocketCan};
     std::uint16_t udp_port{47000};  // first port of the UDP bus's port block
     std::uint16_t udp_slots{8};     // parties on the UDP bus (2..32)
-    std::uint32_t bitrate{0};       // nominal bit/s; the interface is configured outside us
     bool fd{false};                 // CAN FD frames (needs an FD-capable interface, MTU 72)
     std::uint32_t command_id{0};    // host -> device setpoints
     std::uint32_t state_id{0};      // device -> host sensed state
@@ -85,7 +84,7 @@ struct CanConfig {
 // YAML: safety: {...}. Hard limits enforced by hapticd after rendering, whatever the method.
 struct SafetyLimits {
     double max_force_n{0.0};             // at the device's interaction point
-    double max_stiffness_n_per_m{0.0};   // largest rendered stiffness at 1 kHz
+    double max_stiffness_n_per_m{0.0};   // exo: the coupling along the actuator is clamped to it
     double max_velocity_m_per_s{0.0};    // exo: actuator rod; thimble: contact plate
     double max_force_rate_n_per_s{0.0};  // slew limit on the commanded force
     int fade_out_ms{0};                  // ramp to zero force on stale input or disable
@@ -101,6 +100,9 @@ struct ActuatorConfig {
     double max_force_n{0.0};
     double max_speed_m_per_s{0.0};
     double lag_time_constant_s{0.0};  // first-order force response, used by the emulator
+    // Viscous damping of the unpowered rod (motor and screw), what keeps a sampled spring
+    // passive (the margin check on safety.max_stiffness_n_per_m); the emulator applies it.
+    double damping_n_s_per_m{0.0};
 };
 
 // YAML: finger: {phalanx_lengths_m: [l1, l2, l3], joint_limits_deg: [[min, max] x 3]}.

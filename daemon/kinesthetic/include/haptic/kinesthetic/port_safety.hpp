@@ -117,6 +117,9 @@ enum PortFlag : std::uint8_t {
     kPortForceSaturated = 1U << 3,
     kPortRateLimited = 1U << 4,
     kPortPassivityActive = 1U << 5,  // the passivity controller reduced the force
+    // Set by the device's channel, before the guard:
+    kPortStiffnessLimited = 1U << 6,  // the coupling along the actuator clamped to max stiffness
+    kPortVelocityLimited = 1U << 7,   // the actuator moved faster than its limit: force faded
 };
 
 struct PortCommand {

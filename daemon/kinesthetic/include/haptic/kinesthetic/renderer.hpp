@@ -90,6 +90,9 @@ class KinestheticRenderer {
     const char* setParameters(const RenderParameters& parameters) noexcept;
     // RT-safe method switch (haptic/command set-method); resets the warm start.
     void setMethod(RenderingMethod method) noexcept;
+    // RT: k_a for the next ticks (a device's stiffness clamp lowers it as its linkage
+    // stiffens); false, and nothing changes, unless finite and > 0.
+    bool setTrackingStiffness(double k_a) noexcept;
 
     void tick(const ConfigVector& q, const ConfigVector& q_dot, const ConstraintMatrix& C,
               const ConstraintVector& d, RenderOutput& out) noexcept;

@@ -6,8 +6,12 @@
 // limit, passivity) -> x DaemonCore::outputGain (sim fade, state machine; 0 while the device is
 // held safe) -> force command. Enable is off whenever the gain is zero.
 //
-// Renderer stiffnesses are the kinesthetic benchmark's joint-space values (N m/rad, assumed,
-// like the device geometry); the port guard uses min(safety.max_force_n, actuator.max_force_n),
+// The coupling (rendering.tracking_stiffness_nm_per_rad and the rest, assumed like the device
+// geometry) is a spring of k_a / |B|^2 along the actuator, which the linkage makes stiffer as
+// the finger flexes; k_a is lowered, tick by tick, so that this never exceeds
+// safety.max_stiffness_n_per_m (the value the configuration's passivity margin was checked
+// for). The force fades linearly from full at safety.max_velocity_m_per_s of rod speed to zero
+// at twice that. The port guard then uses min(safety.max_force_n, actuator.max_force_n),
 // safety.max_force_rate_n_per_s and safety.fade_out_ms.
 //
 // A method switch (allowed while RENDERING) is bumpless: for kMethodTransitionTicks after it,
@@ -50,6 +54,10 @@ class ExoskeletonChannel final
     }
     // What the port guard did to the last command (kinesthetic::PortFlag bits).
     [[nodiscard]] std::uint8_t portFlags() const noexcept { return port_flags_; }
+    // The last render's coupling stiffness along the actuator, k_a / |B|^2 after the clamp
+    // (N/m), and the rod speed |B^T q_dot| the velocity limit judged (m/s).
+    [[nodiscard]] double actuatorStiffness() const noexcept { return actuator_stiffness_; }
+    [[nodiscard]] double rodSpeed() const noexcept { return rod_speed_; }
 
   protected:
     [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
@@ -94,6 +102,11 @@ class ExoskeletonChannel final
     bool credit_stored_energy_{true};  // the passivity interval (re)starts at the next render
     std::uint8_t port_flags_{kinesthetic::kPortOk};
     kinesthetic::ActuationMatrix felt_actuation_;  // B(q) for the felt joint torque
+    double tracking_stiffness_;  // k_a as configured; the renderer's is lowered by the clamp
+    double max_stiffness_n_per_m_;
+    double max_velocity_m_per_s_;
+    double actuator_stiffness_{0.0};
+    double rod_speed_{0.0};
 };
 
 }  // namespace haptic::runtime

@@ -1,0 +1,115 @@
+// The exoskeleton's safety keys that act in hapticd's channel, each changed from the shipped
+// value and its effect read off the channel and the emulated device: the stiffness clamp
+// (safety.max_stiffness_n_per_m) and the velocity fade (safety.max_velocity_m_per_s). The
+// clamp's value is also what the configuration's passivity margin is checked for
+// (config_test's ConfigPassivityMargin).
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "haptic/runtime/exoskeleton_channel.hpp"
+#include "runtime_rig.hpp"
+
+namespace haptic::testing {
+namespace {
+
+const runtime::ExoskeletonChannel& exoChannel(RuntimeRig& rig) {
+    return static_cast<runtime::ExoskeletonChannel&>(rig.runtime.channel(kExo));
+}
+
+// A wall `depth_rad` inside the emulated finger's current pose, re-placed at the sim's 100 Hz
+// as the finger follows its own sine, so the renderer always has a shallow contact.
+void placeWall(RuntimeRig& rig, double depth_rad) {
+    const auto& q = rig.core.deviceReport(kExo).joint_position_rad;
+    msgs::LinearConstraint& wall = rig.constraint_set.constraints[0];
+    wall.a = {-1.0, -0.5, 0.0};
+    wall.b = -(q[0] + 0.5 * q[1]) + depth_rad;
+    rig.offerContact();
+}
+
+std::unique_ptr<RuntimeRig> exoRig(double max_stiffness_n_per_m, double max_velocity_m_per_s) {
+    return std::make_unique<RuntimeRig>([=](std::vector<config::DeviceConfig>& devices) {
+        devices[kExo].safety.max_stiffness_n_per_m = max_stiffness_n_per_m;
+        devices[kExo].safety.max_velocity_m_per_s = max_velocity_m_per_s;
+        // Without the rendered damping the actuator force is the spring alone.
+        std::get<config::ExoskeletonConfig>(devices[kExo].params)
+            .rendering.actuator_damping_n_s_per_m = 0.0;
+    });
+}
+
+// The shipped 15 kN/m, and half of it. The rigs stay IDLE (nothing is sent), so both emulated
+// fingers move alike and the renderers see the same poses.
+TEST(ExoskeletonSafetyKeys, TheCouplingAlongTheActuatorIsClampedToMaxStiffness) {
+    const double shipped = 15000.0;
+    auto rig = exoRig(shipped, 0.2);
+    auto half = exoRig(0.5 * shipped, 0.2);
+    int clamped_in_both = 0;
+    for (int i = 0; i < 2000; ++i) {
+        for (RuntimeRig* r : {rig.get(), half.get()}) {
+            if (i % 10 == 0) {
+                placeWall(*r, 0.01);
+            }
+            r->tick();
+        }
+        const auto& channel = exoChannel(*rig);
+        const auto& halved = exoChannel(*half);
+        if (i < 20 || !channel.renderOutput().in_contact) {
+            continue;
+        }
+        ASSERT_LE(channel.actuatorStiffness(), shipped * (1.0 + 1e-12)) << "tick " << i;
+        ASSERT_LE(halved.actuatorStiffness(), 0.5 * shipped * (1.0 + 1e-12)) << "tick " << i;
+        const bool clamped = (channel.portFlags() & kinesthetic::kPortStiffnessLimited) != 0;
+        if (clamped) {
+            EXPECT_NEAR(channel.actuatorStiffness(), shipped, 1e-9 * shipped) << "tick " << i;
+            // Clamped in both: the same pose and wall give half the force.
+            ++clamped_in_both;
+            EXPECT_NEAR(halved.renderOutput().actuator_force[0],
+                        0.5 * channel.renderOutput().actuator_force[0],
+                        1e-9 * (1.0 + std::abs(channel.renderOutput().actuator_force[0])))
+                << "tick " << i;
+        }
+    }
+    // With the shipped k_a (2 N m/rad) the coupling along the actuator is 15.5 kN/m at the
+    // most extended pose and far more when flexed: the clamp acts on every pose the finger
+    // sweeps.
+    EXPECT_GT(clamped_in_both, 1000);
+}
+
+// A limit a few mm/s: the emulated finger's own sine moves the rod faster than that in its
+// middle and slower near its turning points, so the force fades and returns.
+TEST(ExoskeletonSafetyKeys, TheForceFadesAsTheRodOutrunsMaxVelocity) {
+    const double limit = 0.004;
+    auto rig = exoRig(15000.0, limit);
+    rig->offerContact();
+    rig->ticks(20);
+    ASSERT_TRUE(rig->command(msgs::CommandKind::kEnable));
+    int fast_ticks = 0;
+    int slow_pushing_ticks = 0;
+    for (int i = 0; i < 3000; ++i) {
+        if (i % 10 == 0) {
+            placeWall(*rig, 0.03);
+        }
+        rig->tick();
+        const auto& channel = exoChannel(*rig);
+        if (i < 200 || !channel.renderOutput().in_contact) {
+            continue;
+        }
+        const bool limited = (channel.portFlags() & kinesthetic::kPortVelocityLimited) != 0;
+        EXPECT_EQ(limited, channel.rodSpeed() > limit) << "tick " << i;
+        if (channel.rodSpeed() > 2.0 * limit) {
+            ++fast_ticks;
+            EXPECT_EQ(rig->exoForce(), 0.0)
+                << "tick " << i << ", rod at " << channel.rodSpeed() << " m/s";
+        } else if (channel.rodSpeed() < 0.5 * limit && std::abs(rig->exoForce()) > 0.1) {
+            ++slow_pushing_ticks;
+        }
+    }
+    EXPECT_GT(fast_ticks, 50);
+    EXPECT_GT(slow_pushing_ticks, 50) << "the force returns when the rod slows down";
+}
+
+}  // namespace
+}  // namespace haptic::testing
