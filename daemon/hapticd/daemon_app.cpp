@@ -19,6 +19,7 @@
 #include "haptic/daemon/command_channel.hpp"
 #include "haptic/daemon/daemon_core.hpp"
 #include "haptic/daemon/seqlock.hpp"
+#include "haptic/daemon/spsc_queue.hpp"
 #include "haptic/daemon/watchdog_gate.hpp"
 #include "haptic/ipc/dds_participant.hpp"
 #include "haptic/ipc/iceoryx_channels.hpp"
@@ -38,7 +39,7 @@ using common::monotonicNowNs;
 // One sample per device per tick, drained every ~10 ms by the non-RT thread. Telemetry is
 // best effort (the RT thread never waits for it): 2048 slots hold about one second of two
 // devices, so only a non-RT thread stalled that long loses samples, and they are counted.
-using TelemetryQueue = iox::concurrent::LockFreeQueue<msgs::TelemetrySample, 2048>;
+using TelemetryQueue = daemon::SpscQueue<msgs::TelemetrySample, 2048>;
 
 // The iceoryx endpoints of one device. Exactly one of the two subscribers exists, matching
 // the device kind; none exist when the sim link is DDS (see dds_sim_link.hpp). The RT
@@ -260,7 +261,7 @@ class RealtimeLoop {
         }
         for (std::size_t i = 0; i < endpoints_.size(); ++i) {
             core_.fillTelemetry(i, tick, now_ns, timing, telemetry_scratch_);
-            if (!telemetry_.tryPush(telemetry_scratch_)) {
+            if (!telemetry_.push(telemetry_scratch_)) {
                 telemetry_dropped_.fetch_add(1, std::memory_order_relaxed);
             }
         }
@@ -355,12 +356,9 @@ int runDaemon(const DaemonOptions& options) {
     const auto publishTelemetry = [&] {
         while (true) {
             batch = msgs::HapticTelemetry{};
-            while (batch.samples.size() < msgs::kMaxTelemetrySamples) {
-                auto sample = telemetry->pop();
-                if (!sample.has_value()) {
-                    break;
-                }
-                batch.samples.push_back(*sample);
+            msgs::TelemetrySample sample;
+            while (batch.samples.size() < msgs::kMaxTelemetrySamples && telemetry->pop(sample)) {
+                batch.samples.push_back(sample);
             }
             if (batch.samples.size() == 0) {
                 return;

@@ -1,13 +1,14 @@
 #pragma once
 
 // Operator commands between hapticd's non-RT thread (DDS) and the RT thread. Two bounded
-// lock-free queues from iceoryx_hoofs: commands in, replies out. Neither side ever blocks or
+// single-producer single-consumer queues (spsc_queue.hpp): commands in, replies out. Each has
+// one thread on either end (the command relay, the RT thread). Neither side ever blocks or
 // allocates; a full queue refuses the push and the caller answers for it.
 
 #include <cstdint>
 
+#include "haptic/daemon/spsc_queue.hpp"
 #include "haptic/msgs/messages.hpp"
-#include "iceoryx_hoofs/concurrent/lockfree_queue.hpp"
 
 namespace haptic::daemon {
 
@@ -17,29 +18,17 @@ class CommandChannel {
     static constexpr std::uint64_t kCapacity = 16;
 
     // Non-RT side. False when the RT thread has not drained the queue (it is stalled).
-    bool submit(const msgs::HapticCommand& command) noexcept { return commands_.tryPush(command); }
-    bool takeReply(msgs::HapticCommandReply& reply) noexcept { return take(replies_, reply); }
+    bool submit(const msgs::HapticCommand& command) noexcept { return commands_.push(command); }
+    bool takeReply(msgs::HapticCommandReply& reply) noexcept { return replies_.pop(reply); }
 
     // RT side.
-    bool takeCommand(msgs::HapticCommand& command) noexcept { return take(commands_, command); }
+    bool takeCommand(msgs::HapticCommand& command) noexcept { return commands_.pop(command); }
     // False only if the non-RT side stopped reading replies; the command still took effect.
-    bool postReply(const msgs::HapticCommandReply& reply) noexcept {
-        return replies_.tryPush(reply);
-    }
+    bool postReply(const msgs::HapticCommandReply& reply) noexcept { return replies_.push(reply); }
 
   private:
-    template <typename Queue, typename T>
-    static bool take(Queue& queue, T& out) noexcept {
-        auto value = queue.pop();
-        if (!value.has_value()) {
-            return false;
-        }
-        out = *value;
-        return true;
-    }
-
-    iox::concurrent::LockFreeQueue<msgs::HapticCommand, kCapacity> commands_;
-    iox::concurrent::LockFreeQueue<msgs::HapticCommandReply, kCapacity> replies_;
+    SpscQueue<msgs::HapticCommand, kCapacity> commands_;
+    SpscQueue<msgs::HapticCommandReply, kCapacity> replies_;
 };
 
 }  // namespace haptic::daemon
