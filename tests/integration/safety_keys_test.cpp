@@ -1,6 +1,7 @@
 // The daemon-wide keys of daemon.yaml whose effect only the running daemon shows, each changed
-// from the shipped value and its effect read off what hapticd publishes. (The per-device
-// safety keys are covered where they act: runtime_test's DeviceRuntime key tests.)
+// from the shipped value and its effect read off what hapticd publishes (the per-device safety
+// keys are covered where they act: runtime_test's ExoskeletonSafetyKeys), and a device that
+// restarts under a running daemon (runtime_test's Plausibility has the rest of item 4).
 
 #include "device_safety_rig.hpp"
 
@@ -32,6 +33,34 @@ TEST_F(TelemetryDecimationTest, TelemetryCarriesEveryTenthTickOfBothDevices) {
         EXPECT_GT(device_ticks.size(), span * 9 / 10) << "device " << device;
         EXPECT_LE(device_ticks.size(), span) << "device " << device;
     }
+}
+
+// The emulated thimble restarts (hapticemu's `reboot`): its heartbeat's uptime goes back,
+// hapticd latches fault 104 naming it, and only clear + enable render again.
+TEST_F(DeviceSafetyTest, ADeviceThatRebootsLatchesItsOwnFault) {
+    ASSERT_TRUE(command("enable"));
+    waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kRendering;
+    });
+    ASSERT_TRUE(thimble_emu_->sendCommand("reboot"));
+    const auto status = waitForStatus("FAULT", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kFault && !s.faults.empty();
+    });
+    ASSERT_EQ(status.faults.size(), 1U) << faultsOf(status);
+    EXPECT_EQ(status.faults[0].code, 104U);
+    EXPECT_EQ(status.faults[0].device_id.view(), "thimble");
+    EXPECT_EQ(status.devices[kThimble].state, msgs::DeviceRunState::kFault);
+    const auto text = hapticctl({"status"});
+    EXPECT_THAT(text.out, ::testing::HasSubstr("[104] thimble: device rebooted (uptime "));
+
+    // The restarted device runs normally; the fault stays until an operator clears it.
+    std::this_thread::sleep_for(200ms);
+    EXPECT_EQ(waitForStatus("a status", [](const auto&) { return true; }).state,
+              msgs::DaemonState::kFault);
+    ASSERT_TRUE(command("clear"));
+    waitForStatus("IDLE after clear", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kIdle && s.faults.empty();
+    });
 }
 
 }  // namespace

@@ -8,8 +8,9 @@ namespace haptic::runtime {
 namespace {
 
 // Faults that stop the link: the device cannot be driven until an operator clears them.
-constexpr std::uint32_t kLatchingFaults =
-    devices::kHeartbeatLost | devices::kBusOff | devices::kDeviceFault | devices::kTransmitFailed;
+constexpr std::uint32_t kLatchingFaults = devices::kHeartbeatLost | devices::kBusOff |
+                                          devices::kDeviceFault | devices::kTransmitFailed |
+                                          devices::kDeviceRebooted | kImplausibleFeedback;
 // Faults that hold the device safe while present, latched or not.
 constexpr std::uint32_t kHoldSafe = kLatchingFaults | devices::kNoHeartbeatYet;
 
@@ -96,6 +97,17 @@ void DeviceChannel::raise(daemon::DaemonCore& core, std::uint32_t fault_bit) noe
                           static_cast<unsigned>(reported), deviceFaultName(reported));
             break;
         }
+        case devices::kDeviceRebooted:
+            code = kFaultDeviceRebooted;
+            std::snprintf(message, sizeof(message),
+                          "device rebooted (uptime %u ms after %u ms); held safe",
+                          static_cast<unsigned>(link().uptimeAfterRebootMs()),
+                          static_cast<unsigned>(link().uptimeBeforeRebootMs()));
+            break;
+        case kImplausibleFeedback:
+            code = kFaultImplausibleFeedback;
+            std::snprintf(message, sizeof(message), "%s; held safe", implausibleMessage());
+            break;
         default:
             code = kFaultTransmitFailed;
             std::snprintf(message, sizeof(message),
@@ -108,6 +120,7 @@ void DeviceChannel::raise(daemon::DaemonCore& core, std::uint32_t fault_bit) noe
 
 void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noexcept {
     link_bits_ = driverFaults(now_ns) & ~devices::kTransmitFailed;
+    link_bits_ |= plausibilityFaults(now_ns);  // may read this tick's linkFaults()
     if (failed_transmits_ >= settings_.transmit_fault_ticks) {
         link_bits_ |= devices::kTransmitFailed;
     }
@@ -136,10 +149,12 @@ void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noe
         active &= ~static_cast<std::uint32_t>(devices::kDeviceFault);
     }
     const std::uint32_t raised = active & ~latched_;
-    for (const std::uint32_t fault_bit : {static_cast<std::uint32_t>(devices::kHeartbeatLost),
-                                          static_cast<std::uint32_t>(devices::kBusOff),
-                                          static_cast<std::uint32_t>(devices::kDeviceFault),
-                                          static_cast<std::uint32_t>(devices::kTransmitFailed)}) {
+    for (const std::uint32_t fault_bit :
+         {static_cast<std::uint32_t>(devices::kHeartbeatLost),
+          static_cast<std::uint32_t>(devices::kBusOff),
+          static_cast<std::uint32_t>(devices::kDeviceFault),
+          static_cast<std::uint32_t>(devices::kTransmitFailed),
+          static_cast<std::uint32_t>(devices::kDeviceRebooted), kImplausibleFeedback}) {
         if ((raised & fault_bit) != 0) {
             raise(core, fault_bit);
         }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -58,6 +59,34 @@ std::uint8_t ExoskeletonChannel::deviceFaultCode() const noexcept {
         return static_cast<std::uint8_t>(state.last_fault.code);
     }
     return state.heartbeat.active_fault;
+}
+
+std::uint32_t ExoskeletonChannel::plausibilityFaults(std::int64_t now_ns) noexcept {
+    const auto& state = driver_.state();
+    const bool reports_enabled = (state.actuator.status & protocol::kExoEnabled) != 0;
+    const bool reports_fault = (state.actuator.status & protocol::kExoFaulted) != 0;
+    // The command of the last write(), which the device has had one state period to show;
+    // judged only on a fresh state (a silent device is the link monitor's to report).
+    const bool fresh = (linkFaults() & (devices::kStateStale | devices::kNoHeartbeatYet |
+                                        devices::kHeartbeatLost)) == 0;
+    const bool mismatch =
+        fresh && state.actuator_updates > 0 && !reports_fault && reports_enabled != command_.enable;
+    if (!mismatch) {
+        enable_mismatch_since_ns_ = -1;
+        return 0;
+    }
+    if (enable_mismatch_since_ns_ < 0) {
+        enable_mismatch_since_ns_ = now_ns;
+    }
+    const std::int64_t for_ns = now_ns - enable_mismatch_since_ns_;
+    if (for_ns <= heartbeatTimeoutNs()) {
+        return 0;
+    }
+    std::snprintf(implausible_message_, sizeof(implausible_message_),
+                  command_.enable ? "device reports disabled %.0f ms after enable"
+                                  : "device reports enabled %.0f ms after disable",
+                  static_cast<double>(for_ns) * 1e-6);
+    return kImplausibleFeedback;
 }
 
 void ExoskeletonChannel::followMethod(const msgs::DeviceId& method) noexcept {

@@ -16,6 +16,8 @@ const char* linkFaultName(LinkFault fault) noexcept {
             return "bus-off";
         case kTransmitFailed:
             return "transmit failed";
+        case kDeviceRebooted:
+            return "device rebooted";
     }
     return "unknown";
 }
@@ -25,6 +27,15 @@ LinkMonitor::LinkMonitor(const config::CanConfig& can) noexcept
       state_timeout_ns_(static_cast<std::int64_t>(can.state_timeout_ms) * 1'000'000) {}
 
 void LinkMonitor::onHeartbeat(const protocol::Heartbeat& heartbeat, std::int64_t now_ns) noexcept {
+    // Uptime only grows while the device runs (u32 ms wraps after 49 days: a wrap is not a
+    // restart, which starts near zero).
+    const bool wrapped = last_uptime_ms_ > 0xF0000000U && heartbeat.uptime_ms < 0x10000000U;
+    if (heartbeat_seen_ && heartbeat.uptime_ms < last_uptime_ms_ && !wrapped) {
+        ++reboots_;
+        uptime_before_ms_ = last_uptime_ms_;
+        uptime_after_ms_ = heartbeat.uptime_ms;
+    }
+    last_uptime_ms_ = heartbeat.uptime_ms;
     heartbeat_seen_ = true;
     last_heartbeat_ns_ = now_ns;
     device_fault_ = heartbeat.mode == protocol::DeviceMode::kFault || heartbeat.active_fault != 0;
@@ -66,6 +77,10 @@ std::uint32_t LinkMonitor::faults(std::int64_t now_ns, can::BusState bus_state) 
     }
     if (transmit_failed_) {
         faults |= kTransmitFailed;
+    }
+    if (reboots_ != reboots_reported_) {
+        reboots_reported_ = reboots_;
+        faults |= kDeviceRebooted;
     }
     return faults;
 }

@@ -12,6 +12,13 @@ namespace haptic::emu {
 
 void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
     bool first_tick = false;
+    if (faults_.takeReboot()) {
+        // What a power cycle leaves: a device that has heard no command and holds nothing.
+        started_ = false;
+        command_seen_ = false;
+        timed_out_ = false;
+        onReboot();
+    }
     if (!started_) {
         started_ = true;
         first_tick = true;
@@ -135,6 +142,9 @@ class ExoskeletonEmulator final : private CodecOwner<protocol::ExoskeletonCodec>
         // Set before the lockstep tick inside onCommandAccepted(), undone if it refuses.
         const protocol::ExoskeletonCommand previous = command_;
         command_ = message.command;
+        if (faults().stuckEnable() && previous.enable) {
+            command_.enable = true;
+        }
         if (!onCommandAccepted(now_ns, !message.command.enable)) {
             command_ = previous;
         }
@@ -145,6 +155,7 @@ class ExoskeletonEmulator final : private CodecOwner<protocol::ExoskeletonCodec>
     void stepModel(double dt_s) noexcept override {
         model_.step(dt_s, command_.force_n, command_.enable && activeFault() == 0);
     }
+    void onReboot() noexcept override { command_ = protocol::ExoskeletonCommand{}; }
     void sendState(std::int64_t now_ns) noexcept override {
         protocol::ExoskeletonActuatorState actuator;
         actuator.stroke_m = model_.strokeM();
@@ -218,6 +229,8 @@ class ThimbleEmulator final : private CodecOwner<protocol::ThimbleCodec>, public
             model_.step(dt_s, commandTimedOut() ? retract_rad_ : target_.servo_target_rad);
         }
     }
+    // The firmware starts at home: the retract pose.
+    void onReboot() noexcept override { target_.servo_target_rad = retract_rad_; }
     void sendState(std::int64_t now_ns) noexcept override {
         protocol::ThimbleState state;
         state.servo_angle_rad = model_.angleRad();

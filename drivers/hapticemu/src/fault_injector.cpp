@@ -82,6 +82,12 @@ void FaultInjector::flush(can::CanBus& bus, std::int64_t now_ns) noexcept {
     }
 }
 
+bool FaultInjector::takeReboot() noexcept {
+    const bool reboot = reboot_;
+    reboot_ = false;
+    return reboot;
+}
+
 bool FaultInjector::takeFaultChange() noexcept {
     const bool changed = fault_changed_;
     fault_changed_ = false;
@@ -115,12 +121,17 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
     } else if (verb == "fault" && has_number && number <= 6) {
         device_fault_ = static_cast<std::uint8_t>(number);
         fault_changed_ = true;
+    } else if (verb == "reboot" && argument.empty()) {
+        reboot_ = true;
+    } else if (verb == "stuck-enable" && (argument == "on" || argument == "off")) {
+        stuck_enable_ = argument == "on";
     } else if (verb == "clear" && argument.empty()) {
         drop_next_ = 0;
         drop_every_ = 0;
         delay_ns_ = 0;
         corrupt_next_ = 0;
         heartbeat_stopped_ = false;
+        stuck_enable_ = false;
         if (bus_off_) {
             bus_off_ = false;
             pending_restart_report_ = true;
@@ -132,7 +143,7 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
     } else {
         error = "unknown fault command '" + std::string(line) +
                 "' (drop N, drop-every N, delay MS, corrupt N, heartbeat stop|start, busoff, "
-                "recover, fault CODE, clear)";
+                "recover, fault CODE, reboot, stuck-enable on|off, clear)";
         return false;
     }
     return true;

@@ -45,7 +45,13 @@ enum DaemonFaultCode : std::uint32_t {
     kFaultBusOff = 101,
     kFaultDeviceReported = 102,
     kFaultTransmitFailed = 103,
+    kFaultDeviceRebooted = 104,       // a heartbeat's uptime went back
+    kFaultImplausibleFeedback = 105,  // the device's feedback contradicts the command
 };
+
+// A channel's own fault bit next to devices::LinkFault's: the device's feedback contradicts
+// what it was commanded (the message says how); set by the device type's checks.
+inline constexpr std::uint32_t kImplausibleFeedback = 1U << 16;
 
 struct ChannelSettings {
     double period_s{1e-3};
@@ -89,6 +95,11 @@ class DeviceChannel {
 
     virtual bool driverHandleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept = 0;
     virtual std::uint32_t driverFaults(std::int64_t now_ns) noexcept = 0;
+    // kImplausibleFeedback when the device's feedback has contradicted its command for longer
+    // than can.heartbeat_timeout_ms (then implausibleMessage() says how); 0 by default.
+    virtual std::uint32_t plausibilityFaults(std::int64_t /*now_ns*/) noexcept { return 0; }
+    [[nodiscard]] virtual const char* implausibleMessage() const noexcept { return ""; }
+    [[nodiscard]] std::int64_t heartbeatTimeoutNs() const noexcept { return heartbeat_timeout_ns_; }
     virtual can::IoResult sendCommand() noexcept = 0;
     // Sets the command the next write() sends to the device's safe state.
     virtual void commandSafe() noexcept = 0;

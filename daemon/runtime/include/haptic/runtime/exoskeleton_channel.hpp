@@ -61,6 +61,13 @@ class ExoskeletonChannel final
 
   protected:
     [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
+    // The enabled bit of the device's state against the enable last commanded: a device that
+    // stays enabled after a disable, or never enables, for longer than
+    // can.heartbeat_timeout_ms (and is not reporting a fault of its own).
+    std::uint32_t plausibilityFaults(std::int64_t now_ns) noexcept override;
+    [[nodiscard]] const char* implausibleMessage() const noexcept override {
+        return implausible_message_;
+    }
     void commandSafe() noexcept override {
         command_.force_n = 0.0;
         command_.enable = false;
@@ -107,6 +114,8 @@ class ExoskeletonChannel final
     double max_velocity_m_per_s_;
     double actuator_stiffness_{0.0};
     double rod_speed_{0.0};
+    std::int64_t enable_mismatch_since_ns_{-1};
+    char implausible_message_[msgs::kShortTextCapacity]{};
 };
 
 }  // namespace haptic::runtime

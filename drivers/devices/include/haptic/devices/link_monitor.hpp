@@ -20,6 +20,9 @@ enum LinkFault : std::uint32_t {
     kDeviceFault = 1U << 3,     // the device reports a fault (fault frame or heartbeat mode)
     kBusOff = 1U << 4,          // the CAN controller is bus-off
     kTransmitFailed = 1U << 5,  // the last command could not be queued (back-pressure, error)
+    // The device restarted: a heartbeat's uptime went back. Reported once per restart (it is
+    // an event; the daemon latches it), by the faults() call after the heartbeat.
+    kDeviceRebooted = 1U << 6,
 };
 
 [[nodiscard]] const char* linkFaultName(LinkFault fault) noexcept;
@@ -68,6 +71,10 @@ class LinkMonitor {
     [[nodiscard]] std::uint64_t staleCount() const noexcept { return stale_events_; }
     [[nodiscard]] std::int64_t lastHeartbeatNs() const noexcept { return last_heartbeat_ns_; }
     [[nodiscard]] std::int64_t lastStateNs() const noexcept { return last_state_ns_; }
+    [[nodiscard]] std::uint64_t rebootCount() const noexcept { return reboots_; }
+    // The uptimes of the last restart: the one before it, and the first one after (ms).
+    [[nodiscard]] std::uint32_t uptimeBeforeRebootMs() const noexcept { return uptime_before_ms_; }
+    [[nodiscard]] std::uint32_t uptimeAfterRebootMs() const noexcept { return uptime_after_ms_; }
 
   private:
     std::int64_t heartbeat_timeout_ns_;
@@ -81,6 +88,11 @@ class LinkMonitor {
     bool transmit_failed_{false};
     std::uint64_t heartbeat_losses_{0};
     std::uint64_t stale_events_{0};
+    std::uint32_t last_uptime_ms_{0};
+    std::uint64_t reboots_{0};
+    std::uint64_t reboots_reported_{0};
+    std::uint32_t uptime_before_ms_{0};
+    std::uint32_t uptime_after_ms_{0};
 };
 
 }  // namespace haptic::devices

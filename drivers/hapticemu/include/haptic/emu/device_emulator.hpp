@@ -76,6 +76,8 @@ class DeviceEmulator {
           command_timeout_ns_(static_cast<std::int64_t>(device.can.command_timeout_ms) * 1'000'000),
           codec_base_(codec) {}
     virtual void stepModel(double dt_s) noexcept = 0;
+    // A restart (the `reboot` fault command): the device forgets the last command.
+    virtual void onReboot() noexcept = 0;
     virtual void sendState(std::int64_t now_ns) noexcept = 0;
     // A valid command arrived; `asks_safe` when it commands the safe state. Returns whether
     // its setpoint may be applied (false while the command timeout holds the device safe).

@@ -10,6 +10,9 @@
 //   busoff          report bus-off (an error frame where the bus can carry one) and go silent
 //   recover         report the controller restart and transmit again
 //   fault CODE      report device fault CODE (1-6) as active; `fault 0` clears it
+//   reboot          the device restarts: uptime from 0, disabled, no command seen yet
+//   stuck-enable on|off  the exoskeleton's firmware ignores a disable once enabled (a stuck
+//                   drive enable: it keeps following the force setpoint)
 //   clear           all of the above off
 // Fixed-size delay queue: no allocation while running.
 
@@ -39,6 +42,9 @@ class FaultInjector {
     [[nodiscard]] std::uint8_t deviceFault() const noexcept { return device_fault_; }
     // Set when a fault frame must go out (fault raised or cleared); the emulator resets it.
     bool takeFaultChange() noexcept;
+    // Set by `reboot`; the emulator restarts its device and resets it.
+    bool takeReboot() noexcept;
+    [[nodiscard]] bool stuckEnable() const noexcept { return stuck_enable_; }
     [[nodiscard]] std::uint64_t droppedFrames() const noexcept { return dropped_; }
     [[nodiscard]] std::uint64_t corruptedFrames() const noexcept { return corrupted_; }
 
@@ -61,6 +67,8 @@ class FaultInjector {
     bool pending_restart_report_{false};
     std::uint8_t device_fault_{0};
     bool fault_changed_{false};
+    bool reboot_{false};
+    bool stuck_enable_{false};
     std::array<Delayed, kDelayCapacity> delayed_{};
     std::size_t delayed_head_{0};
     std::size_t delayed_size_{0};

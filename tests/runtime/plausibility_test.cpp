@@ -1,0 +1,118 @@
+// Device feedback that contradicts the command, or a device that restarted, raises a fault of
+// its own that latches and holds the device safe until an operator clears it and enables
+// again (#18 item 4). The emulated devices inject the misbehaviour (hapticemu's fault
+// commands `reboot` and `stuck-enable on`).
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "haptic/runtime/device_channel.hpp"
+#include "runtime_rig.hpp"
+
+namespace haptic::testing {
+namespace {
+
+using ::testing::HasSubstr;
+
+void renderWithForce(RuntimeRig& rig) {
+    rig.offerContact();
+    rig.ticks(20);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
+    for (int i = 0; i < 300; ++i) {
+        if (i % 10 == 0) {
+            rig.offerContact();
+        }
+        rig.tick();
+    }
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
+    ASSERT_GT(std::abs(rig.exoForce()), 1.0);
+}
+
+// Keeps the sim input fresh for `n` ticks.
+void renderTicks(RuntimeRig& rig, int n) {
+    for (int i = 0; i < n; ++i) {
+        if (i % 10 == 0) {
+            rig.offerContact();
+        }
+        rig.tick();
+    }
+}
+
+TEST(Plausibility, ADeviceThatRebootedLatchesAFaultUntilClearAndEnable) {
+    RuntimeRig rig;
+    renderWithForce(rig);
+    rig.emulatorFault(kThimble, "reboot");
+    renderTicks(rig, 30);  // the next heartbeat (10 ms period) shows the uptime gone back
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    ASSERT_EQ(rig.core.stateMachine().faultCount(), 1U);
+    const auto& fault = rig.core.stateMachine().fault(0);
+    EXPECT_EQ(fault.code, runtime::kFaultDeviceRebooted);
+    EXPECT_EQ(fault.device_id.view(), "thimble");
+    EXPECT_THAT(std::string(fault.message.view()), HasSubstr("device rebooted (uptime "));
+    EXPECT_EQ(rig.exoForce(), 0.0) << "FAULT holds every device safe";
+
+    // Latched though the device now runs normally; clear lands in IDLE, enable renders again.
+    renderTicks(rig, 100);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    EXPECT_EQ(rig.core.stateMachine().faultCount(), 1U) << "raised once";
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kClearFault));
+    renderTicks(rig, 5);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
+    renderTicks(rig, 300);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
+    EXPECT_GT(std::abs(rig.exoForce()), 1.0);
+}
+
+// A drive that ignores the disable keeps pushing the finger: hapticd cannot stop it over the
+// bus, but it must say so, latch FAULT and keep commanding the safe state.
+TEST(Plausibility, AnExoskeletonStillEnabledAfterADisableRaisesItsOwnFault) {
+    RuntimeRig rig;
+    renderWithForce(rig);
+    rig.emulatorFault(kExo, "stuck-enable on");
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kDisable));
+    renderTicks(rig, 40);  // can.heartbeat_timeout_ms is 50: not yet
+    EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U);
+    renderTicks(rig, 30);
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    ASSERT_EQ(rig.core.stateMachine().faultCount(), 1U);
+    const auto& fault = rig.core.stateMachine().fault(0);
+    EXPECT_EQ(fault.code, runtime::kFaultImplausibleFeedback);
+    EXPECT_EQ(fault.device_id.view(), "exo");
+    EXPECT_THAT(std::string(fault.message.view()),
+                HasSubstr("device reports enabled 5"));  // 50-some ms after disable
+    EXPECT_THAT(std::string(fault.message.view()), HasSubstr("ms after disable; held safe"));
+    EXPECT_EQ(rig.core.deviceReport(kExo).run_state, msgs::DeviceRunState::kFault);
+    EXPECT_EQ(rig.exoForce(), 0.0);
+
+    // Repaired (the fault command off): clear and enable bring the rendering back.
+    rig.emulatorFault(kExo, "stuck-enable off");
+    renderTicks(rig, 5);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kClearFault));
+    renderTicks(rig, 5);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
+    renderTicks(rig, 300);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
+}
+
+// The same check the other way round: a device that never shows the enable it was sent.
+TEST(Plausibility, OnlyAFreshContradictionCountsNotAStaleState) {
+    RuntimeRig rig;
+    renderWithForce(rig);
+    // Bus-off silences the device: its last state still says enabled while hapticd commands
+    // the safe state, but that is the bus-off fault, not an implausible device.
+    rig.emulatorFault(kExo, "busoff");
+    renderTicks(rig, 200);
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    for (std::size_t i = 0; i < rig.core.stateMachine().faultCount(); ++i) {
+        EXPECT_NE(rig.core.stateMachine().fault(i).code, runtime::kFaultImplausibleFeedback)
+            << rig.core.stateMachine().fault(i).message.view();
+    }
+}
+
+}  // namespace
+}  // namespace haptic::testing
