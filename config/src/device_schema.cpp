@@ -142,6 +142,8 @@ ActuatorConfig readActuator(MapReader map) {
     out.max_speed_m_per_s = map.required("max_speed_m_per_s", Real::positive(5.0));
     out.lag_time_constant_s = map.required("lag_time_constant_s", Real::closed(0.0, 1.0));
     out.damping_n_s_per_m = map.required("damping_n_s_per_m", Real::closed(0.0, 10'000.0));
+    out.force_tolerance_n =
+        map.optional("force_tolerance_n", out.force_tolerance_n, Real::positive(100.0));
     map.finish();
     return out;
 }

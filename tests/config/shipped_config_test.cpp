@@ -134,6 +134,8 @@ TEST(ShippedConfig, Exoskeleton) {
     EXPECT_DOUBLE_EQ(exo.rendering.tracking_stiffness_nm_per_rad, 2.0);
     EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_nm_per_rad, 0.6);
     EXPECT_DOUBLE_EQ(exo.rendering.actuator_damping_n_s_per_m, 0.5);
+    EXPECT_DOUBLE_EQ(exo.actuator.damping_n_s_per_m, 10.0);
+    EXPECT_DOUBLE_EQ(exo.actuator.force_tolerance_n, 1.0);
     EXPECT_DOUBLE_EQ(exo.rendering.passivity_port_mass_kg, 0.1);
     EXPECT_THROW((void)cfg.thimble(), std::bad_variant_access);
 }

@@ -8,6 +8,8 @@
 
 #include <cmath>
 #include <string>
+#include <variant>
+#include <vector>
 
 #include "haptic/runtime/device_channel.hpp"
 #include "runtime_rig.hpp"
@@ -99,7 +101,39 @@ TEST(Plausibility, AnExoskeletonStillEnabledAfterADisableRaisesItsOwnFault) {
     EXPECT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
 }
 
-// The same check the other way round: a device that never shows the enable it was sent.
+// A drive that delivers half its setpoint (and measures it): the force it reports against the
+// commanded force through the actuator's 5 ms lag, beyond actuator.force_tolerance_n + 20 %.
+TEST(Plausibility, AForceThatDoesNotFollowTheCommandRaisesItsOwnFault) {
+    RuntimeRig rig;
+    renderWithForce(rig);
+    renderTicks(rig, 500);
+    EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U) << "a healthy drive follows";
+    rig.emulatorFault(kExo, "force-percent 50");
+    renderTicks(rig, 200);
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    ASSERT_EQ(rig.core.stateMachine().faultCount(), 1U);
+    const auto& fault = rig.core.stateMachine().fault(0);
+    EXPECT_EQ(fault.code, runtime::kFaultImplausibleFeedback);
+    EXPECT_EQ(fault.device_id.view(), "exo");
+    EXPECT_THAT(std::string(fault.message.view()), HasSubstr("device measures "));
+    EXPECT_THAT(std::string(fault.message.view()), HasSubstr(" N commanded for 5"));
+    EXPECT_EQ(rig.exoForce(), 0.0);
+}
+
+// actuator.force_tolerance_n is what decides: 50 N of tolerance accepts the half-strength
+// drive above.
+TEST(Plausibility, TheForceToleranceKeyDecidesWhatIsImplausible) {
+    RuntimeRig rig([](std::vector<config::DeviceConfig>& devices) {
+        std::get<config::ExoskeletonConfig>(devices[kExo].params).actuator.force_tolerance_n = 50.0;
+    });
+    renderWithForce(rig);
+    rig.emulatorFault(kExo, "force-percent 50");
+    renderTicks(rig, 200);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
+    EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U);
+}
+
+// A device that falls silent is judged by the link monitor, not on its last state.
 TEST(Plausibility, OnlyAFreshContradictionCountsNotAStaleState) {
     RuntimeRig rig;
     renderWithForce(rig);

@@ -48,7 +48,9 @@ ExoskeletonChannel::ExoskeletonChannel(const config::DeviceConfig& device, can::
       q_dot_(kinesthetic::ConfigVector::Zero(model_.dofs())),
       tracking_stiffness_(device.exoskeleton().rendering.tracking_stiffness_nm_per_rad),
       max_stiffness_n_per_m_(device.safety.max_stiffness_n_per_m),
-      max_velocity_m_per_s_(device.safety.max_velocity_m_per_s) {
+      max_velocity_m_per_s_(device.safety.max_velocity_m_per_s),
+      lag_time_constant_s_(device.exoskeleton().actuator.lag_time_constant_s),
+      force_tolerance_n_(device.exoskeleton().actuator.force_tolerance_n) {
     applied_method_.assign(config::toString(device.exoskeleton().rendering.method));
     report_.kind = msgs::DeviceKind::kExoskeleton;
 }
@@ -65,28 +67,46 @@ std::uint32_t ExoskeletonChannel::plausibilityFaults(std::int64_t now_ns) noexce
     const auto& state = driver_.state();
     const bool reports_enabled = (state.actuator.status & protocol::kExoEnabled) != 0;
     const bool reports_fault = (state.actuator.status & protocol::kExoFaulted) != 0;
-    // The command of the last write(), which the device has had one state period to show;
-    // judged only on a fresh state (a silent device is the link monitor's to report).
+    // The command of the last write(), as the device's first-order lag shapes it (a disabled
+    // drive carries no current: zero at once).
+    const double step = settings_.period_s / (lag_time_constant_s_ + settings_.period_s);
+    expected_force_n_ =
+        command_.enable ? expected_force_n_ + step * (command_.force_n - expected_force_n_) : 0.0;
+    // Judged only on a fresh state (a silent device is the link monitor's to report).
     const bool fresh = (linkFaults() & (devices::kStateStale | devices::kNoHeartbeatYet |
                                         devices::kHeartbeatLost)) == 0;
-    const bool mismatch =
-        fresh && state.actuator_updates > 0 && !reports_fault && reports_enabled != command_.enable;
-    if (!mismatch) {
-        enable_mismatch_since_ns_ = -1;
-        return 0;
+    const bool judged = fresh && state.actuator_updates > 0 && !reports_fault;
+    // The time each contradiction has lasted; a fault once it outlasts the heartbeat timeout.
+    auto lasting = [&](bool contradicts, std::int64_t& since_ns) -> double {
+        if (!judged || !contradicts) {
+            since_ns = -1;
+            return 0.0;
+        }
+        if (since_ns < 0) {
+            since_ns = now_ns;
+        }
+        return now_ns - since_ns > heartbeatTimeoutNs()
+                   ? static_cast<double>(now_ns - since_ns) * 1e-6
+                   : 0.0;
+    };
+    if (const double ms = lasting(reports_enabled != command_.enable, enable_mismatch_since_ns_);
+        ms > 0.0) {
+        std::snprintf(implausible_message_, sizeof(implausible_message_),
+                      command_.enable ? "device reports disabled %.0f ms after enable"
+                                      : "device reports enabled %.0f ms after disable",
+                      ms);
+        return kImplausibleFeedback;
     }
-    if (enable_mismatch_since_ns_ < 0) {
-        enable_mismatch_since_ns_ = now_ns;
+    const double tolerance_n = force_tolerance_n_ + 0.2 * std::abs(expected_force_n_);
+    const bool force_off = command_.enable && reports_enabled &&
+                           std::abs(state.actuator.force_n - expected_force_n_) > tolerance_n;
+    if (const double ms = lasting(force_off, force_mismatch_since_ns_); ms > 0.0) {
+        std::snprintf(implausible_message_, sizeof(implausible_message_),
+                      "device measures %.2f N against %.2f N commanded for %.0f ms",
+                      state.actuator.force_n, expected_force_n_, ms);
+        return kImplausibleFeedback;
     }
-    const std::int64_t for_ns = now_ns - enable_mismatch_since_ns_;
-    if (for_ns <= heartbeatTimeoutNs()) {
-        return 0;
-    }
-    std::snprintf(implausible_message_, sizeof(implausible_message_),
-                  command_.enable ? "device reports disabled %.0f ms after enable"
-                                  : "device reports enabled %.0f ms after disable",
-                  static_cast<double>(for_ns) * 1e-6);
-    return kImplausibleFeedback;
+    return 0;
 }
 
 void ExoskeletonChannel::followMethod(const msgs::DeviceId& method) noexcept {

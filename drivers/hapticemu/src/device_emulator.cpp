@@ -153,7 +153,8 @@ class ExoskeletonEmulator final : private CodecOwner<protocol::ExoskeletonCodec>
 
   private:
     void stepModel(double dt_s) noexcept override {
-        model_.step(dt_s, command_.force_n, command_.enable && activeFault() == 0);
+        model_.step(dt_s, command_.force_n * faults_.forceFraction(),
+                    command_.enable && activeFault() == 0);
     }
     void onReboot() noexcept override { command_ = protocol::ExoskeletonCommand{}; }
     void sendState(std::int64_t now_ns) noexcept override {

@@ -123,6 +123,8 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
         fault_changed_ = true;
     } else if (verb == "reboot" && argument.empty()) {
         reboot_ = true;
+    } else if (verb == "force-percent" && has_number && number <= 200) {
+        force_percent_ = number;
     } else if (verb == "stuck-enable" && (argument == "on" || argument == "off")) {
         stuck_enable_ = argument == "on";
     } else if (verb == "clear" && argument.empty()) {
@@ -132,6 +134,7 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
         corrupt_next_ = 0;
         heartbeat_stopped_ = false;
         stuck_enable_ = false;
+        force_percent_ = 100;
         if (bus_off_) {
             bus_off_ = false;
             pending_restart_report_ = true;
@@ -143,7 +146,7 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
     } else {
         error = "unknown fault command '" + std::string(line) +
                 "' (drop N, drop-every N, delay MS, corrupt N, heartbeat stop|start, busoff, "
-                "recover, fault CODE, reboot, stuck-enable on|off, clear)";
+                "recover, fault CODE, reboot, stuck-enable on|off, force-percent P, clear)";
         return false;
     }
     return true;

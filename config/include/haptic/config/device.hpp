@@ -103,6 +103,9 @@ struct ActuatorConfig {
     // Viscous damping of the unpowered rod (motor and screw), what keeps a sampled spring
     // passive (the margin check on safety.max_stiffness_n_per_m); the emulator applies it.
     double damping_n_s_per_m{0.0};
+    // How far the force the device measures may stray from the commanded force, seen through
+    // the actuator's lag, before hapticd calls the feedback implausible (plus 20 % of it).
+    double force_tolerance_n{1.0};
 };
 
 // YAML: finger: {phalanx_lengths_m: [l1, l2, l3], joint_limits_deg: [[min, max] x 3]}.

@@ -61,9 +61,10 @@ class ExoskeletonChannel final
 
   protected:
     [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
-    // The enabled bit of the device's state against the enable last commanded: a device that
-    // stays enabled after a disable, or never enables, for longer than
-    // can.heartbeat_timeout_ms (and is not reporting a fault of its own).
+    // For longer than can.heartbeat_timeout_ms on a fresh state, the device reporting no fault
+    // of its own: its enabled bit against the enable last commanded (a device that stays
+    // enabled after a disable, or never enables), and, while enabled, the force it measures
+    // against the commanded force through the actuator's lag.
     std::uint32_t plausibilityFaults(std::int64_t now_ns) noexcept override;
     [[nodiscard]] const char* implausibleMessage() const noexcept override {
         return implausible_message_;
@@ -115,6 +116,12 @@ class ExoskeletonChannel final
     double actuator_stiffness_{0.0};
     double rod_speed_{0.0};
     std::int64_t enable_mismatch_since_ns_{-1};
+    // The commanded force through the actuator's first-order lag: what the device should
+    // measure. Compared with what it does (actuator.force_tolerance_n + 20 %).
+    double lag_time_constant_s_;
+    double force_tolerance_n_;
+    double expected_force_n_{0.0};
+    std::int64_t force_mismatch_since_ns_{-1};
     char implausible_message_[msgs::kShortTextCapacity]{};
 };
 

@@ -13,6 +13,8 @@
 //   reboot          the device restarts: uptime from 0, disabled, no command seen yet
 //   stuck-enable on|off  the exoskeleton's firmware ignores a disable once enabled (a stuck
 //                   drive enable: it keeps following the force setpoint)
+//   force-percent P the exoskeleton's actuator produces (and measures) P % of its setpoint,
+//                   0-200 (a weak or miscalibrated drive); 100 is healthy
 //   clear           all of the above off
 // Fixed-size delay queue: no allocation while running.
 
@@ -45,6 +47,7 @@ class FaultInjector {
     // Set by `reboot`; the emulator restarts its device and resets it.
     bool takeReboot() noexcept;
     [[nodiscard]] bool stuckEnable() const noexcept { return stuck_enable_; }
+    [[nodiscard]] double forceFraction() const noexcept { return force_percent_ * 0.01; }
     [[nodiscard]] std::uint64_t droppedFrames() const noexcept { return dropped_; }
     [[nodiscard]] std::uint64_t corruptedFrames() const noexcept { return corrupted_; }
 
@@ -69,6 +72,7 @@ class FaultInjector {
     bool fault_changed_{false};
     bool reboot_{false};
     bool stuck_enable_{false};
+    std::uint32_t force_percent_{100};
     std::array<Delayed, kDelayCapacity> delayed_{};
     std::size_t delayed_head_{0};
     std::size_t delayed_size_{0};
