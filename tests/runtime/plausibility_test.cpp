@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -43,23 +44,23 @@ void renderTicks(RuntimeRig& rig, int n) {
     }
 }
 
-TEST(Plausibility, ADeviceThatRebootedLatchesAFaultUntilClearAndEnable) {
-    RuntimeRig rig;
-    renderWithForce(rig);
-    rig.emulatorFault(kThimble, "reboot");
-    renderTicks(rig, 30);  // the next heartbeat (10 ms period) shows the uptime gone back
-    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
-    ASSERT_EQ(rig.core.stateMachine().faultCount(), 1U);
-    const auto& fault = rig.core.stateMachine().fault(0);
-    EXPECT_EQ(fault.code, runtime::kFaultDeviceRebooted);
-    EXPECT_EQ(fault.device_id.view(), "thimble");
-    EXPECT_THAT(std::string(fault.message.view()), HasSubstr("device rebooted (uptime "));
-    EXPECT_EQ(rig.exoForce(), 0.0) << "FAULT holds every device safe";
-
-    // Latched though the device now runs normally; clear lands in IDLE, enable renders again.
-    renderTicks(rig, 100);
+// The message of the one fault the daemon latched, after checking that it is in FAULT for it
+// and who raised it.
+std::string onlyFault(RuntimeRig& rig, std::uint32_t code, std::string_view device) {
     EXPECT_EQ(rig.core.state(), msgs::DaemonState::kFault);
-    EXPECT_EQ(rig.core.stateMachine().faultCount(), 1U) << "raised once";
+    EXPECT_EQ(rig.core.stateMachine().faultCount(), 1U);
+    if (rig.core.stateMachine().faultCount() == 0) {
+        return "";
+    }
+    const auto& fault = rig.core.stateMachine().fault(0);
+    EXPECT_EQ(fault.code, code);
+    EXPECT_EQ(fault.device_id.view(), device);
+    return std::string(fault.message.view());
+}
+
+// The operator's way back: clear lands in IDLE (never straight in RENDERING), and only a new
+// enable renders force again.
+void clearAndRenderAgain(RuntimeRig& rig) {
     ASSERT_TRUE(rig.command(msgs::CommandKind::kClearFault));
     renderTicks(rig, 5);
     EXPECT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
@@ -67,6 +68,22 @@ TEST(Plausibility, ADeviceThatRebootedLatchesAFaultUntilClearAndEnable) {
     renderTicks(rig, 300);
     EXPECT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
     EXPECT_GT(std::abs(rig.exoForce()), 1.0);
+}
+
+TEST(Plausibility, ADeviceThatRebootedLatchesAFaultUntilClearAndEnable) {
+    RuntimeRig rig;
+    renderWithForce(rig);
+    rig.emulatorFault(kThimble, "reboot");
+    renderTicks(rig, 30);  // the next heartbeat (10 ms period) shows the uptime gone back
+    EXPECT_THAT(onlyFault(rig, runtime::kFaultDeviceRebooted, "thimble"),
+                HasSubstr("device rebooted (uptime "));
+    EXPECT_EQ(rig.exoForce(), 0.0) << "FAULT holds every device safe";
+
+    // Latched though the device now runs normally; clear lands in IDLE, enable renders again.
+    renderTicks(rig, 100);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kFault);
+    EXPECT_EQ(rig.core.stateMachine().faultCount(), 1U) << "raised once";
+    clearAndRenderAgain(rig);
 }
 
 // A drive that ignores the disable keeps pushing the finger: hapticd cannot stop it over the
@@ -79,26 +96,16 @@ TEST(Plausibility, AnExoskeletonStillEnabledAfterADisableRaisesItsOwnFault) {
     renderTicks(rig, 40);  // can.heartbeat_timeout_ms is 50: not yet
     EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U);
     renderTicks(rig, 30);
-    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
-    ASSERT_EQ(rig.core.stateMachine().faultCount(), 1U);
-    const auto& fault = rig.core.stateMachine().fault(0);
-    EXPECT_EQ(fault.code, runtime::kFaultImplausibleFeedback);
-    EXPECT_EQ(fault.device_id.view(), "exo");
-    EXPECT_THAT(std::string(fault.message.view()),
-                HasSubstr("device reports enabled 5"));  // 50-some ms after disable
-    EXPECT_THAT(std::string(fault.message.view()), HasSubstr("ms after disable; held safe"));
+    const std::string message = onlyFault(rig, runtime::kFaultImplausibleFeedback, "exo");
+    EXPECT_THAT(message, HasSubstr("device reports enabled 5"));  // 50-some ms after disable
+    EXPECT_THAT(message, HasSubstr("ms after disable; held safe"));
     EXPECT_EQ(rig.core.deviceReport(kExo).run_state, msgs::DeviceRunState::kFault);
     EXPECT_EQ(rig.exoForce(), 0.0);
 
     // Repaired (the fault command off): clear and enable bring the rendering back.
     rig.emulatorFault(kExo, "stuck-enable off");
     renderTicks(rig, 5);
-    ASSERT_TRUE(rig.command(msgs::CommandKind::kClearFault));
-    renderTicks(rig, 5);
-    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
-    ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
-    renderTicks(rig, 300);
-    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
+    clearAndRenderAgain(rig);
 }
 
 // A drive that delivers half its setpoint (and measures it): the force it reports against the
@@ -110,13 +117,9 @@ TEST(Plausibility, AForceThatDoesNotFollowTheCommandRaisesItsOwnFault) {
     EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U) << "a healthy drive follows";
     rig.emulatorFault(kExo, "force-percent 50");
     renderTicks(rig, 200);
-    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kFault);
-    ASSERT_EQ(rig.core.stateMachine().faultCount(), 1U);
-    const auto& fault = rig.core.stateMachine().fault(0);
-    EXPECT_EQ(fault.code, runtime::kFaultImplausibleFeedback);
-    EXPECT_EQ(fault.device_id.view(), "exo");
-    EXPECT_THAT(std::string(fault.message.view()), HasSubstr("device measures "));
-    EXPECT_THAT(std::string(fault.message.view()), HasSubstr(" N commanded for 5"));
+    const std::string message = onlyFault(rig, runtime::kFaultImplausibleFeedback, "exo");
+    EXPECT_THAT(message, HasSubstr("device measures "));
+    EXPECT_THAT(message, HasSubstr(" N commanded for 5"));
     EXPECT_EQ(rig.exoForce(), 0.0);
 }
 
