@@ -23,6 +23,10 @@ LoopConfig readLoop(MapReader map) {
     out.status_rate_hz = map.optional("status_rate_hz", 20, Integer<int>::closed(1, 100));
     out.telemetry_decimation =
         map.optional("telemetry_decimation", 1, Integer<int>::closed(1, 1000));
+    out.overrun_limit =
+        map.optional("overrun_limit", out.overrun_limit, Integer<int>::closed(0, 1000));
+    out.overrun_window_ms =
+        map.optional("overrun_window_ms", out.overrun_window_ms, Integer<int>::closed(1, 60'000));
     map.finish();
     return out;
 }

@@ -54,6 +54,8 @@ daemon::CoreSettings coreSettings(const config::DaemonConfig& cfg) {
     daemon::CoreSettings settings;
     settings.rate_hz = cfg.loop.rate_hz;
     settings.telemetry_decimation = static_cast<std::uint32_t>(cfg.loop.telemetry_decimation);
+    settings.overrun_limit = static_cast<std::uint32_t>(cfg.loop.overrun_limit);
+    settings.overrun_window_ns = static_cast<std::int64_t>(cfg.loop.overrun_window_ms) * 1'000'000;
     settings.sim_timeout_ns = static_cast<std::int64_t>(cfg.loop.sim_timeout_ms) * 1'000'000;
     settings.sim_rearm_after_ns =
         static_cast<std::int64_t>(cfg.loop.sim_rearm_after_ms) * 1'000'000;

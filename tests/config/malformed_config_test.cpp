@@ -128,7 +128,7 @@ TEST(ConfigUnknownKeys, NestedTypoHasDottedPath) {
                  lineOf(kDataDir / "unknown_key_nested.yaml", "rate_hx"), 3, "loop.rate_hx",
                  "unknown key 'loop.rate_hx' (allowed: rate_hz, realtime, priority, "
                  "cpu_affinity, sim_timeout_ms, sim_rearm_after_ms, status_rate_hz, "
-                 "telemetry_decimation)"});
+                 "telemetry_decimation, overrun_limit, overrun_window_ms)"});
 }
 
 TEST(ConfigUnknownKeys, ThimbleKeyInExoskeletonFile) {

@@ -74,6 +74,8 @@ TEST(ShippedConfig, Daemon) {
     EXPECT_EQ(cfg.loop.sim_rearm_after_ms, 1000);
     EXPECT_EQ(cfg.loop.status_rate_hz, 20);
     EXPECT_EQ(cfg.loop.telemetry_decimation, 1);
+    EXPECT_EQ(cfg.loop.overrun_limit, 100);
+    EXPECT_EQ(cfg.loop.overrun_window_ms, 1000);
     ASSERT_EQ(cfg.devices.size(), 2U);
     EXPECT_EQ(cfg.devices[0].name, "exo");
     EXPECT_EQ(cfg.devices[0].type(), DeviceType::kExoskeleton);

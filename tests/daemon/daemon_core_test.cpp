@@ -167,6 +167,67 @@ TEST(DaemonCoreStall, AStallIsItsOwnFaultOnlyWhileADeviceIsOnline) {
     EXPECT_EQ(core.lastStallEndNs(), 72 * kMs);
 }
 
+// The overrun policy (loop.overrun_limit within loop.overrun_window_ms): as many overruns
+// spread wider than the window are only counted; the limit within it is hapticd's own fault,
+// raised once until cleared.
+TEST(DaemonCoreOverruns, TheLimitWithinTheWindowIsItsOwnFaultSpreadWiderItIsOnlyCounted) {
+    CoreSettings settings = oneMethodSettings();
+    settings.overrun_limit = 10;
+    settings.overrun_window_ns = 100 * kMs;
+    DaemonCore core(settings, kOneExoskeleton);
+    core.markStarted(0);
+    DeviceReport online;
+    online.status_bits = static_cast<std::uint32_t>(msgs::DeviceStatusBit::kOnline);
+    core.setDeviceReport(0, online);
+    TickTiming overrun;
+    overrun.compute_us = 1200.0;  // past the 1000 us period
+    std::int64_t t = 0;
+    auto tick = [&](const TickTiming& timing) {
+        t += kMs;
+        core.update(t, timing);
+    };
+    // One overrun every 20 ticks: 10 of them span 180 ms, wider than the window.
+    for (int i = 0; i < 400; ++i) {
+        tick(i % 20 == 0 ? overrun : TickTiming{});
+    }
+    EXPECT_EQ(core.stateMachine().faultCount(), 0U);
+    // One every 10 ticks: the 10th lands 90 ms after the first.
+    for (int i = 0; i < 91; ++i) {
+        tick(i % 10 == 0 ? overrun : TickTiming{});
+    }
+    ASSERT_EQ(core.stateMachine().faultCount(), 1U);
+    EXPECT_EQ(core.stateMachine().fault(0).code, kFaultLoopOverrunning);
+    EXPECT_EQ(core.stateMachine().fault(0).device_id.view(), "hapticd");
+    EXPECT_EQ(std::string(core.stateMachine().fault(0).message.view()),
+              "loop overrunning: 10 ticks past the 1000 us period within 100 ms");
+    EXPECT_EQ(core.state(), msgs::DaemonState::kFault);
+    for (int i = 0; i < 100; ++i) {
+        tick(overrun);
+    }
+    EXPECT_EQ(core.stateMachine().faultCount(), 1U) << "raised once until cleared";
+}
+
+TEST(DaemonCoreOverruns, OffAtZeroAndWithNoDeviceOnline) {
+    TickTiming overrun;
+    overrun.write_us = 5000.0;
+    for (const bool online : {false, true}) {
+        CoreSettings settings = oneMethodSettings();
+        settings.overrun_limit = online ? 0 : 5;
+        settings.overrun_window_ns = 1000 * kMs;
+        DaemonCore core(settings, kOneExoskeleton);
+        core.markStarted(0);
+        if (online) {
+            DeviceReport report;
+            report.status_bits = static_cast<std::uint32_t>(msgs::DeviceStatusBit::kOnline);
+            core.setDeviceReport(0, report);
+        }
+        for (int i = 1; i <= 100; ++i) {
+            core.update(i * kMs, overrun);
+        }
+        EXPECT_EQ(core.stateMachine().faultCount(), 0U) << (online ? "limit 0" : "offline");
+    }
+}
+
 // The re-arm policy (loop.sim_rearm_after_ms): a short outage fades out and back in by itself;
 // after a longer one the device renders again only after a new enable, however fresh its
 // input is; input that was never fresh since the enable is not an outage.

@@ -137,6 +137,7 @@ void DaemonCore::update(std::int64_t now_ns, const TickTiming& timing) noexcept 
                       static_cast<double>(settings_.stall_limit_ns) * 1e-6);
         machine_.raiseFault(kFaultLoopStalled, "hapticd", message);
     }
+    countOverrun(now_ns, timing, any_online);
     const double timeout_ms = static_cast<double>(settings_.sim_timeout_ns) * 1e-6;
     const double fade_in_s = std::max(1e-9, static_cast<double>(settings_.fade_in_ns) * 1e-9);
 
@@ -177,6 +178,33 @@ void DaemonCore::update(std::int64_t now_ns, const TickTiming& timing) noexcept 
     if (statistics_.windowCount() >= window_ticks_) {
         statistics_.closeWindow(last_window_);
     }
+}
+
+void DaemonCore::countOverrun(std::int64_t now_ns, const TickTiming& timing,
+                              bool any_online) noexcept {
+    const std::size_t limit = std::min<std::size_t>(settings_.overrun_limit, kMaxOverrunLimit);
+    const double work_us = timing.read_us + timing.compute_us + timing.write_us;
+    if (limit == 0 || !(work_us > 1e6 / settings_.rate_hz)) {
+        return;
+    }
+    // The ring holds the times of the last `limit` overruns, the oldest where the next goes.
+    overrun_times_ns_[overrun_next_] = now_ns;
+    overrun_next_ = (overrun_next_ + 1) % limit;
+    overrun_count_ = std::min(overrun_count_ + 1, limit);
+    // Raised once until an operator clears the fault list.
+    if (overrun_fault_latched_ && machine_.faultCount() == 0) {
+        overrun_fault_latched_ = false;
+    }
+    if (overrun_count_ < limit || overrun_fault_latched_ || !any_online ||
+        now_ns - overrun_times_ns_[overrun_next_] > settings_.overrun_window_ns) {
+        return;
+    }
+    char message[msgs::kShortTextCapacity];  // no allocation on the RT thread
+    std::snprintf(message, sizeof(message),
+                  "loop overrunning: %zu ticks past the %.0f us period within %.0f ms", limit,
+                  1e6 / settings_.rate_hz, static_cast<double>(settings_.overrun_window_ns) * 1e-6);
+    machine_.raiseFault(kFaultLoopOverrunning, "hapticd", message);
+    overrun_fault_latched_ = true;
 }
 
 void DaemonCore::fillDeviceState(std::size_t device, std::int64_t now_ns,

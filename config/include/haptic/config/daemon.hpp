@@ -38,6 +38,9 @@ struct LoopConfig {
     int sim_rearm_after_ms{1000};
     int status_rate_hz{20};       // haptic/status publication rate, 1..100
     int telemetry_decimation{1};  // haptic/telemetry every N ticks
+    // This many overruns within overrun_window_ms are hapticd's fault 111; 0: off.
+    int overrun_limit{100};
+    int overrun_window_ms{1000};
 };
 
 struct DaemonConfig {

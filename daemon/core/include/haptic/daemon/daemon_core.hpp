@@ -31,6 +31,9 @@ struct DeviceDescriptor {
 // hapticd's own fault codes in haptic/status, next to the device link codes 100-103
 // (runtime::DaemonFaultCode).
 inline constexpr std::uint32_t kFaultLoopStalled = 110;
+inline constexpr std::uint32_t kFaultLoopOverrunning = 111;
+// The most overruns a policy may count (loop.overrun_limit's upper bound).
+inline constexpr std::size_t kMaxOverrunLimit = 1000;
 
 struct CoreSettings {
     double rate_hz{1000.0};
@@ -54,6 +57,12 @@ struct CoreSettings {
     std::int64_t sim_rearm_after_ns{0};
     // haptic/telemetry carries every Nth tick (loop.telemetry_decimation); 1 = every tick.
     std::uint32_t telemetry_decimation{1};
+    // Overrun policy: `overrun_limit` ticks whose work (read + compute + write) ran past the
+    // period within any `overrun_window_ns` raise kFaultLoopOverrunning while a device is
+    // online: the loop still ticks, but its commands go out late too often to be trusted.
+    // A single overrun only counts. 0 turns the policy off; at most kMaxOverrunLimit.
+    std::uint32_t overrun_limit{0};
+    std::int64_t overrun_window_ns{0};
 };
 
 class DaemonCore {
@@ -187,6 +196,12 @@ class DaemonCore {
     std::int64_t started_ns_{0};
     std::int64_t last_tick_ns_{0};
     std::int64_t last_stall_end_ns_{0};
+    // When the last overrun_limit overruns happened (a ring, oldest at overrun_next_).
+    std::array<std::int64_t, kMaxOverrunLimit> overrun_times_ns_{};
+    std::size_t overrun_next_{0};
+    std::size_t overrun_count_{0};
+    bool overrun_fault_latched_{false};
+    void countOverrun(std::int64_t now_ns, const TickTiming& timing, bool any_online) noexcept;
     LoopStatisticsCollector statistics_;
     std::uint64_t window_ticks_;
     msgs::LoopStatistics last_window_{};
