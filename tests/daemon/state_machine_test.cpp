@@ -217,11 +217,17 @@ TEST(CommandChannel, CommandsAndRepliesCrossThreadsInOrderWithoutAllocating) {
             EXPECT_TRUE(reply.accepted);
         }
     }
-    rt.join();
-    while (channel.takeReply(reply)) {
-        EXPECT_THAT(reply.request_id, Eq(next_reply++));
+    // Keep reading replies until the last: the RT side waits for room to post each (up to 16
+    // commands in flight plus the one it holds can exceed the reply queue), so joining first
+    // could deadlock (it did under TSan).
+    while (next_reply <= kCommands) {
+        while (channel.takeReply(reply)) {
+            EXPECT_THAT(reply.request_id, Eq(next_reply++));
+        }
+        std::this_thread::yield();
     }
-    EXPECT_THAT(next_reply, Eq(kCommands + 1));
+    rt.join();
+    EXPECT_FALSE(channel.takeReply(reply));
     EXPECT_THAT(core.state(), Eq(DaemonState::kIdle));
 }
 
