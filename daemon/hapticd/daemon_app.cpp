@@ -36,7 +36,8 @@ namespace {
 
 using common::monotonicNowNs;
 
-// One sample per device per tick, drained every ~10 ms by the non-RT thread. Telemetry is
+// One sample per device per published tick (loop.telemetry_decimation), drained every ~10 ms
+// by the non-RT thread. Telemetry is
 // best effort (the RT thread never waits for it): 2048 slots hold about one second of two
 // devices, so only a non-RT thread stalled that long loses samples, and they are counted.
 using TelemetryQueue = daemon::SpscQueue<msgs::TelemetrySample, 2048>;

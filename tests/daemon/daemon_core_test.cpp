@@ -186,14 +186,23 @@ TEST(DaemonCoreOverruns, TheLimitWithinTheWindowIsItsOwnFaultSpreadWiderItIsOnly
         t += kMs;
         core.update(t, timing);
     };
-    // One overrun every 20 ticks: 10 of them span 180 ms, wider than the window.
+    // One overrun every 12 ms: any 10 of them span 108 ms, wider than the window.
     for (int i = 0; i < 400; ++i) {
-        tick(i % 20 == 0 ? overrun : TickTiming{});
+        tick(i % 12 == 0 ? overrun : TickTiming{});
     }
     EXPECT_EQ(core.stateMachine().faultCount(), 0U);
-    // One every 10 ticks: the 10th lands 90 ms after the first.
-    for (int i = 0; i < 91; ++i) {
-        tick(i % 10 == 0 ? overrun : TickTiming{});
+    tick(TickTiming{});
+    // Quiet for longer than the window, then one every 11 ms: the 10th lands 99 ms after
+    // the first, within the window, and raises; the 9th did not.
+    for (int i = 0; i < 150; ++i) {
+        tick(TickTiming{});
+    }
+    for (int n = 1; n <= 10; ++n) {
+        EXPECT_EQ(core.stateMachine().faultCount(), 0U) << "before overrun " << n;
+        tick(overrun);
+        for (int i = 0; n < 10 && i < 10; ++i) {
+            tick(TickTiming{});
+        }
     }
     ASSERT_EQ(core.stateMachine().faultCount(), 1U);
     EXPECT_EQ(core.stateMachine().fault(0).code, kFaultLoopOverrunning);
@@ -205,6 +214,38 @@ TEST(DaemonCoreOverruns, TheLimitWithinTheWindowIsItsOwnFaultSpreadWiderItIsOnly
         tick(overrun);
     }
     EXPECT_EQ(core.stateMachine().faultCount(), 1U) << "raised once until cleared";
+}
+
+// The window's edge: 10 overruns exactly 100 ms apart end to end still count (within means
+// <=), 101 ms do not; and a limit of 1 makes every overrun a fault.
+TEST(DaemonCoreOverruns, TheWindowIncludesItsEdgeAndALimitOfOneRaisesAtOnce) {
+    TickTiming overrun;
+    overrun.read_us = 1500.0;
+    DeviceReport online;
+    online.status_bits = static_cast<std::uint32_t>(msgs::DeviceStatusBit::kOnline);
+    for (const std::int64_t spacing_us : {11'111, 11'223}) {  // 9 gaps: 99.999 ms, 101.0 ms
+        CoreSettings settings = oneMethodSettings();
+        settings.overrun_limit = 10;
+        settings.overrun_window_ns = 100 * kMs;
+        DaemonCore core(settings, kOneExoskeleton);
+        core.markStarted(0);
+        core.setDeviceReport(0, online);
+        for (int n = 0; n < 10; ++n) {
+            core.update(kMs + n * spacing_us * 1000, overrun);
+        }
+        EXPECT_EQ(core.stateMachine().faultCount(), spacing_us < 11'112 ? 1U : 0U)
+            << spacing_us << " us apart";
+    }
+    CoreSettings settings = oneMethodSettings();
+    settings.overrun_limit = 1;
+    settings.overrun_window_ns = 100 * kMs;
+    DaemonCore core(settings, kOneExoskeleton);
+    core.markStarted(0);
+    core.setDeviceReport(0, online);
+    core.update(kMs, TickTiming{});
+    EXPECT_EQ(core.stateMachine().faultCount(), 0U);
+    core.update(2 * kMs, overrun);
+    EXPECT_EQ(core.stateMachine().faultCount(), 1U);
 }
 
 TEST(DaemonCoreOverruns, OffAtZeroAndWithNoDeviceOnline) {

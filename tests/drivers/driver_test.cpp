@@ -11,6 +11,7 @@
 #include "device_files.hpp"
 #include "haptic/can/loopback_bus.hpp"
 #include "haptic/devices/exoskeleton_driver.hpp"
+#include "haptic/devices/link_monitor.hpp"
 #include "haptic/devices/thimble_driver.hpp"
 #include "haptic/emu/device_emulator.hpp"
 #include "haptic/tactile/thimble_kinematics.hpp"
@@ -413,6 +414,39 @@ TEST(Drivers, LoopPathDoesNotAllocate) {
     EXPECT_GT(exo.state().actuator_updates, 4000U);
     EXPECT_GT(exo.codec().lostFrames(), 0U);
     EXPECT_GT(thimble.codec().rejects().of(protocol::RejectReason::kBadCrc), 900U);
+}
+
+// Uptime judged against the host's clock: a u32 wrap after 49 days is not a restart, a
+// restart is one whatever the uptime was (also in the last days before a wrap).
+TEST(LinkMonitor, AnUptimeThatGoesBackIsARestartAWrapIsNot) {
+    const auto device = exoskeletonDevice();
+    constexpr std::int64_t kMsNs = 1'000'000;
+    auto heartbeat = [](std::uint32_t uptime_ms) {
+        protocol::Heartbeat h;
+        h.uptime_ms = uptime_ms;
+        return h;
+    };
+    LinkMonitor wrapping(device.can);
+    wrapping.onHeartbeat(heartbeat(0xFFFFFFF0U), 0);
+    wrapping.onHeartbeat(heartbeat(0x00000004U), 20 * kMsNs);  // 20 ms later, wrapped
+    EXPECT_EQ(wrapping.rebootCount(), 0U);
+    EXPECT_EQ(wrapping.faults(20 * kMsNs, can::BusState::kErrorActive) & kDeviceRebooted, 0U);
+
+    LinkMonitor restarting(device.can);
+    restarting.onHeartbeat(heartbeat(0xFFFF0000U), 0);  // days before a wrap
+    restarting.onHeartbeat(heartbeat(3), 20 * kMsNs);
+    EXPECT_EQ(restarting.rebootCount(), 1U);
+    EXPECT_EQ(restarting.uptimeBeforeRebootMs(), 0xFFFF0000U);
+    EXPECT_EQ(restarting.uptimeAfterRebootMs(), 3U);
+    // Reported once: the daemon latches it.
+    EXPECT_NE(restarting.faults(20 * kMsNs, can::BusState::kErrorActive) & kDeviceRebooted, 0U);
+    EXPECT_EQ(restarting.faults(21 * kMsNs, can::BusState::kErrorActive) & kDeviceRebooted, 0U);
+
+    LinkMonitor running(device.can);
+    for (std::uint32_t t = 0; t < 100; ++t) {
+        running.onHeartbeat(heartbeat(5000 + 10 * t), static_cast<std::int64_t>(10 * t) * kMsNs);
+    }
+    EXPECT_EQ(running.rebootCount(), 0U);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 #include "haptic/runtime/exoskeleton_channel.hpp"
@@ -79,15 +80,18 @@ TEST(ExoskeletonSafetyKeys, TheCouplingAlongTheActuatorIsClampedToMaxStiffness) 
 }
 
 // A limit a few mm/s: the emulated finger's own sine moves the rod faster than that in its
-// middle and slower near its turning points, so the force fades and returns.
-TEST(ExoskeletonSafetyKeys, TheForceFadesAsTheRodOutrunsMaxVelocity) {
+// middle and slower near its turning points. A force that drives the rod along its motion
+// fades (to zero at twice the limit) and returns when it slows; one that resists the motion
+// is left alone.
+TEST(ExoskeletonSafetyKeys, AForceDrivingTheRodFasterThanMaxVelocityFades) {
     const double limit = 0.004;
     auto rig = exoRig(15000.0, limit);
     rig->offerContact();
     rig->ticks(20);
     ASSERT_TRUE(rig->command(msgs::CommandKind::kEnable));
-    int fast_ticks = 0;
-    int slow_pushing_ticks = 0;
+    int driving_fast = 0;
+    int resisting_fast = 0;
+    int slow_pushing = 0;
     for (int i = 0; i < 3000; ++i) {
         if (i % 10 == 0) {
             placeWall(*rig, 0.03);
@@ -97,18 +101,24 @@ TEST(ExoskeletonSafetyKeys, TheForceFadesAsTheRodOutrunsMaxVelocity) {
         if (i < 200 || !channel.renderOutput().in_contact) {
             continue;
         }
+        const double rendered_n = channel.renderOutput().actuator_force[0];
+        const double velocity = channel.rodVelocity();
         const bool limited = (channel.portFlags() & kinesthetic::kPortVelocityLimited) != 0;
-        EXPECT_EQ(limited, channel.rodSpeed() > limit) << "tick " << i;
-        if (channel.rodSpeed() > 2.0 * limit) {
-            ++fast_ticks;
-            EXPECT_EQ(rig->exoForce(), 0.0)
-                << "tick " << i << ", rod at " << channel.rodSpeed() << " m/s";
-        } else if (channel.rodSpeed() < 0.5 * limit && std::abs(rig->exoForce()) > 0.1) {
-            ++slow_pushing_ticks;
+        EXPECT_EQ(limited, std::abs(velocity) > limit && rendered_n * velocity > 0.0)
+            << "tick " << i;
+        if (std::abs(velocity) > 2.0 * limit && rendered_n * velocity > 0.0) {
+            ++driving_fast;
+            EXPECT_EQ(rig->exoForce(), 0.0) << "tick " << i << ", rod at " << velocity << " m/s";
+        } else if (std::abs(velocity) > 2.0 * limit && std::abs(rendered_n) > 0.5) {
+            ++resisting_fast;
+        } else if (std::abs(velocity) < 0.5 * limit && std::abs(rig->exoForce()) > 0.1) {
+            ++slow_pushing;
         }
     }
-    EXPECT_GT(fast_ticks, 50);
-    EXPECT_GT(slow_pushing_ticks, 50) << "the force returns when the rod slows down";
+    EXPECT_GT(driving_fast, 20);
+    EXPECT_GT(slow_pushing, 50) << "the force returns when the rod slows down";
+    std::printf("fast ticks: %d driving (faded), %d resisting (kept)\n", driving_fast,
+                resisting_fast);
 }
 
 }  // namespace

@@ -184,18 +184,20 @@ void DaemonCore::countOverrun(std::int64_t now_ns, const TickTiming& timing,
                               bool any_online) noexcept {
     const std::size_t limit = std::min<std::size_t>(settings_.overrun_limit, kMaxOverrunLimit);
     const double work_us = timing.read_us + timing.compute_us + timing.write_us;
-    if (limit == 0 || !(work_us > 1e6 / settings_.rate_hz)) {
+    // Only a device that hears us is endangered by late commands (as for a stall).
+    if (limit == 0 || !any_online || !(work_us > 1e6 / settings_.rate_hz)) {
         return;
+    }
+    // Raised once until an operator clears the fault list; counted afresh after the clear.
+    if (overrun_fault_latched_ && machine_.faultCount() == 0) {
+        overrun_fault_latched_ = false;
+        overrun_count_ = 0;
     }
     // The ring holds the times of the last `limit` overruns, the oldest where the next goes.
     overrun_times_ns_[overrun_next_] = now_ns;
     overrun_next_ = (overrun_next_ + 1) % limit;
     overrun_count_ = std::min(overrun_count_ + 1, limit);
-    // Raised once until an operator clears the fault list.
-    if (overrun_fault_latched_ && machine_.faultCount() == 0) {
-        overrun_fault_latched_ = false;
-    }
-    if (overrun_count_ < limit || overrun_fault_latched_ || !any_online ||
+    if (overrun_count_ < limit || overrun_fault_latched_ ||
         now_ns - overrun_times_ns_[overrun_next_] > settings_.overrun_window_ns) {
         return;
     }

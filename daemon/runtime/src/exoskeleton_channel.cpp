@@ -173,9 +173,13 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
         if (renderer_.parameters().tracking_stiffness < tracking_stiffness_) {
             limits |= kinesthetic::kPortStiffnessLimited;
         }
-        rod_speed_ = std::abs(felt_actuation_.col(0).dot(q_dot_));
-        if (rod_speed_ > max_velocity_m_per_s_) {
-            desired_n *= std::max(0.0, 2.0 - rod_speed_ / max_velocity_m_per_s_);
+        // Only a force that drives the rod along its motion fades: the runaway the limit
+        // guards against. A force resisting a fast finger (a wall hit hard) stays, since
+        // fading it would soften the wall and, released slowly, return more than it took.
+        rod_velocity_ = felt_actuation_.col(0).dot(q_dot_);
+        const double rod_speed = std::abs(rod_velocity_);
+        if (rod_speed > max_velocity_m_per_s_ && desired_n * rod_velocity_ > 0.0) {
+            desired_n *= std::max(0.0, 2.0 - rod_speed / max_velocity_m_per_s_);
             limits |= kinesthetic::kPortVelocityLimited;
         }
         channel_flags = limits;

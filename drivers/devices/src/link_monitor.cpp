@@ -1,6 +1,12 @@
 #include "haptic/devices/link_monitor.hpp"
 
 namespace haptic::devices {
+namespace {
+
+// Clock drift and frame delays between the device's uptime and the host's clock.
+constexpr double kUptimeSlackMs = 1000.0;
+
+}  // namespace
 
 const char* linkFaultName(LinkFault fault) noexcept {
     switch (fault) {
@@ -27,10 +33,12 @@ LinkMonitor::LinkMonitor(const config::CanConfig& can) noexcept
       state_timeout_ns_(static_cast<std::int64_t>(can.state_timeout_ms) * 1'000'000) {}
 
 void LinkMonitor::onHeartbeat(const protocol::Heartbeat& heartbeat, std::int64_t now_ns) noexcept {
-    // Uptime only grows while the device runs (u32 ms wraps after 49 days: a wrap is not a
-    // restart, which starts near zero).
-    const bool wrapped = last_uptime_ms_ > 0xF0000000U && heartbeat.uptime_ms < 0x10000000U;
-    if (heartbeat_seen_ && heartbeat.uptime_ms < last_uptime_ms_ && !wrapped) {
+    // Uptime grows with the host's clock while the device runs. Its advance, modulo 2^32 (a
+    // u32 of ms wraps after 49 days), is judged against the host time since the last
+    // heartbeat: a restart makes it go back, i.e. look like nearly 2^32 ms.
+    const std::uint32_t advance_ms = heartbeat.uptime_ms - last_uptime_ms_;
+    const double elapsed_ms = static_cast<double>(now_ns - last_heartbeat_ns_) * 1e-6;
+    if (heartbeat_seen_ && static_cast<double>(advance_ms) > 1.1 * elapsed_ms + kUptimeSlackMs) {
         ++reboots_;
         uptime_before_ms_ = last_uptime_ms_;
         uptime_after_ms_ = heartbeat.uptime_ms;

@@ -28,7 +28,7 @@ struct DeviceDescriptor {
     std::uint16_t actuator_count{0};
 };
 
-// hapticd's own fault codes in haptic/status, next to the device link codes 100-103
+// hapticd's own fault codes in haptic/status, next to the device link codes 100-105
 // (runtime::DaemonFaultCode).
 inline constexpr std::uint32_t kFaultLoopStalled = 110;
 inline constexpr std::uint32_t kFaultLoopOverrunning = 111;

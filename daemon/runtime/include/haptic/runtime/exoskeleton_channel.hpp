@@ -10,9 +10,10 @@
 // geometry) is a spring of k_a / |B|^2 along the actuator, which the linkage makes stiffer as
 // the finger flexes; k_a is lowered, tick by tick, so that this never exceeds
 // safety.max_stiffness_n_per_m (the value the configuration's passivity margin was checked
-// for). The force fades linearly from full at safety.max_velocity_m_per_s of rod speed to zero
-// at twice that. The port guard then uses min(safety.max_force_n, actuator.max_force_n),
-// safety.max_force_rate_n_per_s and safety.fade_out_ms.
+// for). A force that drives the rod along its motion fades linearly from full at
+// safety.max_velocity_m_per_s of rod speed to zero at twice that. The port guard then uses
+// min(safety.max_force_n, actuator.max_force_n), safety.max_force_rate_n_per_s and
+// safety.fade_out_ms.
 //
 // A method switch (allowed while RENDERING) is bumpless: for kMethodTransitionTicks after it,
 // the new strategy's force may move from the force last sent by at most the rate limit per
@@ -55,9 +56,9 @@ class ExoskeletonChannel final
     // What the port guard did to the last command (kinesthetic::PortFlag bits).
     [[nodiscard]] std::uint8_t portFlags() const noexcept { return port_flags_; }
     // The last render's coupling stiffness along the actuator, k_a / |B|^2 after the clamp
-    // (N/m), and the rod speed |B^T q_dot| the velocity limit judged (m/s).
+    // (N/m), and the rod velocity B^T q_dot the velocity limit judged (m/s).
     [[nodiscard]] double actuatorStiffness() const noexcept { return actuator_stiffness_; }
-    [[nodiscard]] double rodSpeed() const noexcept { return rod_speed_; }
+    [[nodiscard]] double rodVelocity() const noexcept { return rod_velocity_; }
 
   protected:
     [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
@@ -114,7 +115,7 @@ class ExoskeletonChannel final
     double max_stiffness_n_per_m_;
     double max_velocity_m_per_s_;
     double actuator_stiffness_{0.0};
-    double rod_speed_{0.0};
+    double rod_velocity_{0.0};
     std::int64_t enable_mismatch_since_ns_{-1};
     // The commanded force through the actuator's first-order lag: what the device should
     // measure. Compared with what it does (actuator.force_tolerance_n + 20 %).
