@@ -90,10 +90,13 @@ struct TestConfig {
                 replaceLine(dir / device, "command_timeout_ms: 10", "command_timeout_ms: 50");
             }
         }
-        // A sanitized handsim steps at ~4 Hz with stalls: its gaps are not outages here.
+        // A sanitized handsim steps at ~4 Hz with stalls: its gaps are not outages here. A
+        // sanitized hapticd overruns its 1 ms period on more than 100 ticks a second on this
+        // VM (fault 111 in a CI rehearsal): the overrun policy is off there.
         if (HAPTIC_SANITIZED != 0) {
             replaceLine(dir / "daemon.yaml", "sim_rearm_after_ms: 1000",
                         "sim_rearm_after_ms: 10000");
+            replaceLine(dir / "daemon.yaml", "overrun_limit: 100 ", "overrun_limit: 0 ");
         }
     }
     ~TestConfig() { fs::remove_all(dir); }
