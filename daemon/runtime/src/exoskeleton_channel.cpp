@@ -73,9 +73,7 @@ std::uint32_t ExoskeletonChannel::plausibilityFaults(std::int64_t now_ns) noexce
     expected_force_n_ =
         command_.enable ? expected_force_n_ + step * (command_.force_n - expected_force_n_) : 0.0;
     // Judged only on a fresh state (a silent device is the link monitor's to report).
-    const bool fresh = (linkFaults() & (devices::kStateStale | devices::kNoHeartbeatYet |
-                                        devices::kHeartbeatLost)) == 0;
-    const bool judged = fresh && state.actuator_updates > 0 && !reports_fault;
+    const bool judged = linkStateFresh() && state.actuator_updates > 0 && !reports_fault;
     // The time each contradiction has lasted; a fault once it outlasts the heartbeat timeout.
     auto lasting = [&](bool contradicts, std::int64_t& since_ns) -> double {
         if (!judged || !contradicts) {
@@ -148,9 +146,8 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
                                  std::int64_t now_ns) noexcept {
     followMethod(core.stateMachine().method());
     const auto& state = driver_.state();
-    const bool state_fresh = (linkFaults() & (devices::kStateStale | devices::kNoHeartbeatYet |
-                                              devices::kHeartbeatLost)) == 0 &&
-                             state.encoder_updates > 0 && state.actuator_updates > 0;
+    const bool state_fresh =
+        linkStateFresh() && state.encoder_updates > 0 && state.actuator_updates > 0;
 
     double desired_n = 0.0;
     std::uint8_t channel_flags = kinesthetic::kPortOk;

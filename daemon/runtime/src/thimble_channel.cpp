@@ -73,9 +73,7 @@ tactile::ServoAngles ThimbleChannel::blend(double gain) const noexcept {
 void ThimbleChannel::compute(daemon::DaemonCore& core, std::size_t index,
                              std::int64_t now_ns) noexcept {
     const auto& state = driver_.state();
-    const bool state_fresh = (linkFaults() & (devices::kStateStale | devices::kNoHeartbeatYet |
-                                              devices::kHeartbeatLost)) == 0 &&
-                             state.state_updates > 0;
+    const bool state_fresh = linkStateFresh() && state.state_updates > 0;
     if (state_fresh) {
         measure();
     }

@@ -84,6 +84,12 @@ class DeviceChannel {
     [[nodiscard]] const daemon::DeviceReport& report() const noexcept { return report_; }
     // LinkFault bits of the last supervise().
     [[nodiscard]] std::uint32_t linkFaults() const noexcept { return link_bits_; }
+    // Whether this tick's link bits let the device's last state be trusted: heard, and neither
+    // its state nor its heartbeat timed out.
+    [[nodiscard]] bool linkStateFresh() const noexcept {
+        return (link_bits_ &
+                (devices::kStateStale | devices::kNoHeartbeatYet | devices::kHeartbeatLost)) == 0;
+    }
     // LinkFault bits that raised a fault and hold the device safe until `clear`.
     [[nodiscard]] std::uint32_t latchedFaults() const noexcept { return latched_; }
     // Whether the device must send no force (thimble: retract), whatever the daemon state.
