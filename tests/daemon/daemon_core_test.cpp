@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "allocation_counter.hpp"
@@ -167,18 +168,29 @@ TEST(DaemonCoreStall, AStallIsItsOwnFaultOnlyWhileADeviceIsOnline) {
     EXPECT_EQ(core.lastStallEndNs(), 72 * kMs);
 }
 
+// A one-exoskeleton core, started, with the overrun policy `limit` within `window_ns` and its
+// device online unless told otherwise.
+std::unique_ptr<DaemonCore> overrunCore(std::uint32_t limit, std::int64_t window_ns,
+                                        bool online = true) {
+    CoreSettings settings = oneMethodSettings();
+    settings.overrun_limit = limit;
+    settings.overrun_window_ns = window_ns;
+    auto core = std::make_unique<DaemonCore>(settings, kOneExoskeleton);
+    core->markStarted(0);
+    if (online) {
+        DeviceReport report;
+        report.status_bits = static_cast<std::uint32_t>(msgs::DeviceStatusBit::kOnline);
+        core->setDeviceReport(0, report);
+    }
+    return core;
+}
+
 // The overrun policy (loop.overrun_limit within loop.overrun_window_ms): as many overruns
 // spread wider than the window are only counted; the limit within it is hapticd's own fault,
 // raised once until cleared.
 TEST(DaemonCoreOverruns, TheLimitWithinTheWindowIsItsOwnFaultSpreadWiderItIsOnlyCounted) {
-    CoreSettings settings = oneMethodSettings();
-    settings.overrun_limit = 10;
-    settings.overrun_window_ns = 100 * kMs;
-    DaemonCore core(settings, kOneExoskeleton);
-    core.markStarted(0);
-    DeviceReport online;
-    online.status_bits = static_cast<std::uint32_t>(msgs::DeviceStatusBit::kOnline);
-    core.setDeviceReport(0, online);
+    auto owned = overrunCore(10, 100 * kMs);
+    DaemonCore& core = *owned;
     TickTiming overrun;
     overrun.compute_us = 1200.0;  // past the 1000 us period
     std::int64_t t = 0;
@@ -221,51 +233,30 @@ TEST(DaemonCoreOverruns, TheLimitWithinTheWindowIsItsOwnFaultSpreadWiderItIsOnly
 TEST(DaemonCoreOverruns, TheWindowIncludesItsEdgeAndALimitOfOneRaisesAtOnce) {
     TickTiming overrun;
     overrun.read_us = 1500.0;
-    DeviceReport online;
-    online.status_bits = static_cast<std::uint32_t>(msgs::DeviceStatusBit::kOnline);
     for (const std::int64_t spacing_us : {11'111, 11'223}) {  // 9 gaps: 99.999 ms, 101.0 ms
-        CoreSettings settings = oneMethodSettings();
-        settings.overrun_limit = 10;
-        settings.overrun_window_ns = 100 * kMs;
-        DaemonCore core(settings, kOneExoskeleton);
-        core.markStarted(0);
-        core.setDeviceReport(0, online);
+        auto core = overrunCore(10, 100 * kMs);
         for (int n = 0; n < 10; ++n) {
-            core.update(kMs + n * spacing_us * 1000, overrun);
+            core->update(kMs + n * spacing_us * 1000, overrun);
         }
-        EXPECT_EQ(core.stateMachine().faultCount(), spacing_us < 11'112 ? 1U : 0U)
+        EXPECT_EQ(core->stateMachine().faultCount(), spacing_us < 11'112 ? 1U : 0U)
             << spacing_us << " us apart";
     }
-    CoreSettings settings = oneMethodSettings();
-    settings.overrun_limit = 1;
-    settings.overrun_window_ns = 100 * kMs;
-    DaemonCore core(settings, kOneExoskeleton);
-    core.markStarted(0);
-    core.setDeviceReport(0, online);
-    core.update(kMs, TickTiming{});
-    EXPECT_EQ(core.stateMachine().faultCount(), 0U);
-    core.update(2 * kMs, overrun);
-    EXPECT_EQ(core.stateMachine().faultCount(), 1U);
+    auto core = overrunCore(1, 100 * kMs);
+    core->update(kMs, TickTiming{});
+    EXPECT_EQ(core->stateMachine().faultCount(), 0U);
+    core->update(2 * kMs, overrun);
+    EXPECT_EQ(core->stateMachine().faultCount(), 1U);
 }
 
 TEST(DaemonCoreOverruns, OffAtZeroAndWithNoDeviceOnline) {
     TickTiming overrun;
     overrun.write_us = 5000.0;
     for (const bool online : {false, true}) {
-        CoreSettings settings = oneMethodSettings();
-        settings.overrun_limit = online ? 0 : 5;
-        settings.overrun_window_ns = 1000 * kMs;
-        DaemonCore core(settings, kOneExoskeleton);
-        core.markStarted(0);
-        if (online) {
-            DeviceReport report;
-            report.status_bits = static_cast<std::uint32_t>(msgs::DeviceStatusBit::kOnline);
-            core.setDeviceReport(0, report);
-        }
+        auto core = overrunCore(online ? 0 : 5, 1000 * kMs, online);
         for (int i = 1; i <= 100; ++i) {
-            core.update(i * kMs, overrun);
+            core->update(i * kMs, overrun);
         }
-        EXPECT_EQ(core.stateMachine().faultCount(), 0U) << (online ? "limit 0" : "offline");
+        EXPECT_EQ(core->stateMachine().faultCount(), 0U) << (online ? "limit 0" : "offline");
     }
 }
 
