@@ -169,7 +169,9 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroAndOnlyAnEnab
         }
     }
     ASSERT_FALSE(thimble.empty());
-    ASSERT_GT(fromRetract(thimble.back(), retract), 0.05) << "the thimble never pressed";
+    ASSERT_GT(fromRetract(thimble.back(), retract), 0.05)
+        << "the thimble never pressed; faults: "
+        << faultsOf(waitForStatus("a status", [](const auto&) { return true; }));
 
     const std::int64_t kill_ns = monotonicNs();
     ::kill(sim_->pid(), SIGKILL);
