@@ -1,4 +1,6 @@
 #include <algorithm>
+#include <cstdio>
+#include <string>
 
 #include "haptic/config/daemon.hpp"
 #include "schema.hpp"
@@ -31,6 +33,46 @@ LoopConfig readLoop(MapReader map) {
     return out;
 }
 
+// The relay's id must not be one a device on the same bus uses, and it must sit on a bus
+// hapticd opens, so it names one of the devices.
+EstopRelayConfig readEstopRelay(MapReader map, const std::vector<DeviceConfig>& devices) {
+    EstopRelayConfig out;
+    out.enabled = map.required("enabled", spec::Boolean{});
+    auto [bus_device, bus_field] = map.requiredWithField("bus_device", spec::Text{});
+    const auto bus = std::find_if(devices.begin(), devices.end(),
+                                  [&](const DeviceConfig& d) { return d.name == bus_device; });
+    if (bus == devices.end()) {
+        std::string names;
+        for (const auto& device : devices) {
+            names += (names.empty() ? "'" : ", '") + device.name + "'";
+        }
+        bus_field.fail("the name of a device in devices (" + names + ")", "'" + bus_device + "'");
+    }
+    out.bus_device = bus_device;
+    auto [status_id, id_field] =
+        map.requiredWithField("status_id", spec::Integer<std::uint32_t>::hexClosed(0, 0x7FF));
+    for (const auto& device : devices) {
+        if (device.can.interface != bus->can.interface ||
+            device.can.udp_port != bus->can.udp_port) {
+            continue;
+        }
+        for (const std::uint32_t id : {device.can.command_id, device.can.state_id,
+                                       device.can.heartbeat_id, device.can.fault_id}) {
+            if (id == status_id) {
+                char text[96];
+                std::snprintf(text, sizeof(text), "0x%03x, a CAN id of device '%s'", id,
+                              device.name.c_str());
+                id_field.fail("a CAN id no device on the relay's bus uses", text);
+            }
+        }
+    }
+    out.status_id = status_id;
+    // The relay sends every 10 ms: at least two periods, so one lost frame never trips it.
+    out.timeout_ms = map.required("timeout_ms", spec::Integer<int>::closed(20, 1000));
+    map.finish();
+    return out;
+}
+
 }  // namespace
 
 DaemonConfig loadDaemonConfig(const std::filesystem::path& path) {
@@ -40,6 +82,9 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& path) {
     out.log_level = detail::readLogLevel(root);
     out.loop = readLoop(root.requiredMap("loop"));
     out.devices = detail::readDeviceList(detail::requiredDeviceList(root), out.loop.rate_hz);
+    if (auto relay = root.optionalMap("estop_relay")) {
+        out.estop_relay = readEstopRelay(std::move(*relay), out.devices);
+    }
     detail::readTransports(root, out);
     root.finish();
     return out;

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 #include <systemd/sd-daemon.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdlib>
 #include <memory>
@@ -373,12 +374,26 @@ int runDaemon(const DaemonOptions& options) {
         }
     };
     // CAN: one bus per distinct interface / UDP port block, one driver and renderer per device.
-    const runtime::OpenedBuses buses = runtime::openBuses(cfg.devices);
+    const runtime::OpenedBuses buses = runtime::openBuses(cfg.devices, cfg.estop_relay);
     runtime::ChannelSettings channel_settings;
     channel_settings.period_s = 1.0 / cfg.loop.rate_hz;
     runtime::DeviceRuntime devices(cfg.devices, buses.per_device, channel_settings);
     for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
         spdlog::info("device '{}' on {}", cfg.devices[i].name, buses.descriptions[i]);
+    }
+    if (const auto& relay = cfg.estop_relay; relay.enabled) {
+        const auto bus_device = static_cast<std::size_t>(
+            std::find_if(cfg.devices.begin(), cfg.devices.end(),
+                         [&](const auto& device) { return device.name == relay.bus_device; }) -
+            cfg.devices.begin());
+        devices.attachEstopRelay(bus_device, relay.status_id,
+                                 static_cast<std::int64_t>(relay.timeout_ms) * 1'000'000);
+        spdlog::info("hardware E-stop: relay status 0x{:03x} on the bus of '{}', {} ms timeout",
+                     relay.status_id, relay.bus_device, relay.timeout_ms);
+    } else {
+        spdlog::warn(
+            "no hardware E-stop input (daemon.yaml estop_relay.enabled: false): only `hapticctl "
+            "estop` and a hard-wired power cut stop the devices");
     }
     std::vector<std::unique_ptr<DeviceStateSnapshot>> device_states;
     for (std::size_t i = 0; i < endpoints.size(); ++i) {

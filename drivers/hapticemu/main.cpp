@@ -7,6 +7,8 @@
 //   hapticemu -d config/devices/thimble.yaml --bus socketcan --interface vcan0
 //   hapticemu --user config/user.yaml     every device the user wears, one hand, and the
 //                                         tracker publishing that hand on tracking/hand
+//   ... --estop-relay 0x0E0               also the E-stop relay's status on that id
+//                                         ("estop press" on stdin presses its button)
 //
 // It prints "ready" on stdout once the bus is open, and each fault command's result
 // ("ok" or "error: ...") on stdout, so a test driving it through pipes can synchronise. With
@@ -36,6 +38,7 @@
 #include "haptic/config/error.hpp"
 #include "haptic/config/virtual_user.hpp"
 #include "haptic/emu/device_emulator.hpp"
+#include "haptic/emu/estop_relay_emulator.hpp"
 #include "haptic/emu/virtual_user.hpp"
 #include "haptic/ipc/dds_participant.hpp"
 #include "haptic/msgs/conversions.hpp"
@@ -75,7 +78,8 @@ bool applyFaultCommand(std::vector<EmulatedDevice>& devices, const std::string& 
 class CommandReader {
   public:
     // Returns false at end of input.
-    bool readAvailable(std::vector<EmulatedDevice>& devices) {
+    bool readAvailable(std::vector<EmulatedDevice>& devices,
+                       haptic::emu::EstopRelayEmulator* relay) {
         char buffer[512];
         const ssize_t count = ::read(STDIN_FILENO, buffer, sizeof(buffer));
         if (count <= 0) {
@@ -90,7 +94,11 @@ class CommandReader {
                 continue;
             }
             std::string error;
-            if (applyFaultCommand(devices, line, error)) {
+            const bool for_relay = line.rfind("estop ", 0) == 0;
+            if (for_relay && relay == nullptr) {
+                error = "no E-stop relay emulated (start with --estop-relay ID)";
+            } else if (for_relay ? relay->command(line.substr(6), error)
+                                 : applyFaultCommand(devices, line, error)) {
                 std::printf("ok %s\n", line.c_str());
             } else {
                 std::printf("error: %s\n", error.c_str());
@@ -157,6 +165,11 @@ int main(int argc, char** argv) {
     app.add_option("--duration", duration_s, "stop after this many seconds (0: until signalled)");
     app.add_option("--dds-domain", dds_domain, "with --user: override dds.domain_id")
         ->check(CLI::Range(0, 232));
+    std::string estop_relay_id;
+    app.add_option("--estop-relay", estop_relay_id,
+                   "also emulate the E-stop relay, sending its status on this CAN id (hex, as "
+                   "daemon.yaml's estop_relay.status_id); commands on stdin: estop press|release|"
+                   "silence|resume|corrupt N");
     auto* log_level_option = app.add_option(
         "--log-level", log_level, "trace, debug, info, warn, error (default: the user file's)");
     CLI11_PARSE(app, argc, argv);
@@ -212,6 +225,23 @@ int main(int argc, char** argv) {
                 device.config.name, device.config.isExoskeleton() ? "exoskeleton" : "thimble",
                 can.command_id, can.state_id, can.heartbeat_id, can.fault_id);
             command_ids.push_back(can.command_id);
+        }
+        std::unique_ptr<haptic::emu::EstopRelayEmulator> relay;
+        if (!estop_relay_id.empty()) {
+            std::size_t parsed = 0;
+            unsigned long id = 0;
+            try {
+                id = std::stoul(estop_relay_id, &parsed, 0);
+            } catch (const std::exception&) {
+                parsed = 0;
+            }
+            if (parsed != estop_relay_id.size() || id > 0x7FF) {
+                throw std::runtime_error("--estop-relay " + estop_relay_id +
+                                         ": expected an 11-bit CAN id such as 0x0E0");
+            }
+            relay =
+                std::make_unique<haptic::emu::EstopRelayEmulator>(static_cast<std::uint32_t>(id));
+            spdlog::info("E-stop relay: status 0x{:03x} every 10 ms, released", id);
         }
         std::unique_ptr<haptic::emu::VirtualUser> user;
         if (user_config) {
@@ -317,6 +347,9 @@ int main(int argc, char** argv) {
                     }
                 }
             }
+            if (relay) {
+                relay->tick(*bus, now_ns);
+            }
             if (user) {
                 if (const auto pose = user->track(now_ns, t_s)) {
                     if (!tracker_writer.write(haptic::msgs::toIdl(*pose))) {
@@ -341,7 +374,7 @@ int main(int argc, char** argv) {
                 throw std::runtime_error(std::string("poll: ") + std::strerror(errno));
             }
             if ((fds[1].revents & (POLLIN | POLLHUP)) != 0) {
-                stdin_open = commands.readAvailable(devices);
+                stdin_open = commands.readAvailable(devices, relay.get());
             }
         }
         for (const EmulatedDevice& device : devices) {

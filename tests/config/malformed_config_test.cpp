@@ -118,8 +118,8 @@ TEST(ConfigFileErrors, DuplicateKeyIsRejected) {
 TEST(ConfigUnknownKeys, TopLevelTypoListsAllowedKeys) {
     expectError(daemonError("unknown_key_top_level.yaml"),
                 {data("unknown_key_top_level.yaml"), 1, 1, "log_levle",
-                 "unknown key 'log_levle' (allowed: log_level, loop, devices, sim_link, dds, "
-                 "iceoryx)"});
+                 "unknown key 'log_levle' (allowed: log_level, loop, devices, estop_relay, "
+                 "sim_link, dds, iceoryx)"});
 }
 
 TEST(ConfigUnknownKeys, NestedTypoHasDottedPath) {
@@ -268,6 +268,30 @@ TEST(ConfigPassivityMargin, AStiffnessNotPassiveAtTheLoopRateNamesTheDeviceKey) 
                  "safety.max_stiffness_n_per_m", "not passive at loop.rate_hz 100"});
     // The same device file alone (hapticemu, the sim) has no loop rate to check against.
     EXPECT_NO_THROW((void)config::loadDeviceConfig(device));
+}
+
+// The E-stop relay must sit on a bus hapticd opens (a device's), on an id no device there
+// uses, and be given at least two of its 10 ms periods.
+TEST(ConfigEstopRelay, TheBusMustBeADevicesAndTheIdItsOwn) {
+    const auto unknown = kDataDir / "estop_unknown_bus.yaml";
+    expectError(daemonError("estop_unknown_bus.yaml"),
+                {unknown.string(), lineOf(unknown, "bus_device"), 15, "estop_relay.bus_device",
+                 "expected the name of a device in devices ('exo', 'thimble'), got 'exoskeleton'"});
+    const auto taken = kDataDir / "estop_id_of_a_device.yaml";
+    expectError(daemonError("estop_id_of_a_device.yaml"),
+                {taken.string(), lineOf(taken, "status_id"), 14, "estop_relay.status_id",
+                 "got 0x182, a CAN id of device 'thimble'"});
+    const auto fast = kDataDir / "estop_timeout_too_short.yaml";
+    expectError(daemonError("estop_timeout_too_short.yaml"),
+                {fast.string(), lineOf(fast, "  timeout_ms"), 15, "estop_relay.timeout_ms",
+                 "expected an integer in [20, 1000], got 10"});
+    const DaemonConfig relay = loadDaemonConfig(kDataDir / "estop_ok.yaml");
+    EXPECT_TRUE(relay.estop_relay.enabled);
+    EXPECT_EQ(relay.estop_relay.bus_device, "thimble");
+    EXPECT_EQ(relay.estop_relay.status_id, 0x0E1U);
+    EXPECT_EQ(relay.estop_relay.timeout_ms, 40);
+    EXPECT_FALSE(loadDaemonConfig(kDataDir / "daemon_ok.yaml").estop_relay.enabled)
+        << "no block: no relay";
 }
 
 // Negative damping along the actuator would feed energy into the finger.

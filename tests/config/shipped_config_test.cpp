@@ -76,6 +76,11 @@ TEST(ShippedConfig, Daemon) {
     EXPECT_EQ(cfg.loop.telemetry_decimation, 1);
     EXPECT_EQ(cfg.loop.overrun_limit, 100);
     EXPECT_EQ(cfg.loop.overrun_window_ms, 1000);
+    // Off as shipped: the relay's id is the lab's (docs/hapticd.md, "Hardware E-stop").
+    EXPECT_FALSE(cfg.estop_relay.enabled);
+    EXPECT_EQ(cfg.estop_relay.bus_device, "exo");
+    EXPECT_EQ(cfg.estop_relay.status_id, 0x0E0U);
+    EXPECT_EQ(cfg.estop_relay.timeout_ms, 30);
     ASSERT_EQ(cfg.devices.size(), 2U);
     EXPECT_EQ(cfg.devices[0].name, "exo");
     EXPECT_EQ(cfg.devices[0].type(), DeviceType::kExoskeleton);

@@ -263,6 +263,63 @@ TEST(DaemonCoreOverruns, OffAtZeroAndWithNoDeviceOnline) {
 // The re-arm policy (loop.sim_rearm_after_ms): a short outage fades out and back in by itself;
 // after a longer one the device renders again only after a new enable, however fresh its
 // input is; input that was never fresh since the enable is not an outage.
+// The hardware E-stop input: pressed or silent, E-STOP at once (so the gain of this very tick
+// is 0) from any state, recorded once per engagement, and `clear` refused until released.
+TEST(DaemonCoreHardwareEstop, PressedOrSilentStopsAtOnceAndOnlyAReleasedRelayLetsClearThrough) {
+    DaemonCore core(oneMethodSettings(), kOneExoskeleton);
+    msgs::HapticCommandReply reply;
+    auto command = [&](msgs::CommandKind kind) {
+        msgs::HapticCommand message;
+        message.kind = kind;
+        return core.applyCommand(message, 0, reply);
+    };
+    core.setHardwareEstop(HardwareEstop::kPressed, "0x0e0 on exo's bus");
+    EXPECT_EQ(core.state(), msgs::DaemonState::kInit) << "INIT is left only by the loop start";
+    core.markStarted(0);
+
+    core.setHardwareEstop(HardwareEstop::kAwaitingFirstStatus, "0x0e0 on exo's bus");
+    EXPECT_EQ(core.state(), msgs::DaemonState::kIdle);
+    EXPECT_FALSE(command(msgs::CommandKind::kEnable).accepted);
+    EXPECT_THAT(std::string(reply.message.view()), ::testing::HasSubstr("first status"));
+
+    core.setHardwareEstop(HardwareEstop::kReleased, "0x0e0 on exo's bus");
+    ASSERT_TRUE(command(msgs::CommandKind::kEnable).accepted);
+    for (std::int64_t t = 1; t <= 200; ++t) {
+        (void)core.offerConstraintSet(0, validConstraintSet("exo"), t * kMs);
+        core.update(t * kMs, TickTiming{});
+    }
+    ASSERT_GT(core.outputGain(0), 0.0);
+
+    core.setHardwareEstop(HardwareEstop::kPressed, "0x0e0 on exo's bus");
+    EXPECT_EQ(core.state(), msgs::DaemonState::kEstop);
+    EXPECT_EQ(core.outputGain(0), 0.0) << "the tick that reads the press sends no force";
+    core.setHardwareEstop(HardwareEstop::kPressed, "0x0e0 on exo's bus");
+    ASSERT_EQ(core.stateMachine().faultCount(), 1U) << "a lasting press is recorded once";
+    EXPECT_EQ(core.stateMachine().fault(0).code, kFaultEstopPressed);
+    EXPECT_THAT(std::string(core.stateMachine().fault(0).message.view()),
+                ::testing::HasSubstr("0x0e0 on exo's bus"));
+    EXPECT_FALSE(command(msgs::CommandKind::kClearFault).accepted);
+    EXPECT_THAT(std::string(reply.message.view()), ::testing::HasSubstr("release it"));
+    EXPECT_FALSE(command(msgs::CommandKind::kEnable).accepted);
+
+    core.setHardwareEstop(HardwareEstop::kSilent, "0x0e0 on exo's bus");
+    ASSERT_EQ(core.stateMachine().faultCount(), 2U);
+    EXPECT_EQ(core.stateMachine().fault(1).code, kFaultEstopRelaySilent);
+    EXPECT_FALSE(command(msgs::CommandKind::kClearFault).accepted);
+
+    core.setHardwareEstop(HardwareEstop::kReleased, "0x0e0 on exo's bus");
+    EXPECT_EQ(core.state(), msgs::DaemonState::kEstop) << "releasing re-arms nothing";
+    ASSERT_TRUE(command(msgs::CommandKind::kClearFault).accepted);
+    EXPECT_EQ(core.state(), msgs::DaemonState::kIdle);
+    EXPECT_EQ(core.stateMachine().faultCount(), 0U);
+
+    // From FAULT too: E-STOP wins.
+    core.raiseFault(100, "exo", "heartbeat lost");
+    ASSERT_EQ(core.state(), msgs::DaemonState::kFault);
+    core.setHardwareEstop(HardwareEstop::kSilent, "0x0e0 on exo's bus");
+    EXPECT_EQ(core.state(), msgs::DaemonState::kEstop);
+}
+
 TEST(DaemonCoreRearm, ALongSimOutageWhileRenderingNeedsANewEnable) {
     CoreSettings settings = oneMethodSettings();
     settings.sim_rearm_after_ns = 250 * kMs;

@@ -139,7 +139,7 @@ class DeviceSafetyTest : public ::testing::Test {
             ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
             std::this_thread::sleep_for(20ms);
         }
-        exo_emu_ = startEmulator("devices/exoskeleton.yaml");
+        exo_emu_ = startEmulator("devices/exoskeleton.yaml", exo_emulator_args_);
         thimble_emu_ = startEmulator("devices/thimble.yaml");
         startDaemon();
         participant_ = std::make_unique<ipc::DdsParticipant>(
@@ -185,10 +185,12 @@ class DeviceSafetyTest : public ::testing::Test {
     }
 
     // The emulator takes the port block from the device file, as hapticd does.
-    std::unique_ptr<EmulatorProcess> startEmulator(const std::string& device) {
-        return std::make_unique<EmulatorProcess>(withFifoPriority(
-            {HAPTICEMU_PATH, "-d", (config_.dir / device).string(), "--bus", "udp"},
-            kEmulatorPriority));
+    std::unique_ptr<EmulatorProcess> startEmulator(const std::string& device,
+                                                   const std::vector<std::string>& extra = {}) {
+        std::vector<std::string> argv{HAPTICEMU_PATH, "-d", (config_.dir / device).string(),
+                                      "--bus", "udp"};
+        argv.insert(argv.end(), extra.begin(), extra.end());
+        return std::make_unique<EmulatorProcess>(withFifoPriority(argv, kEmulatorPriority));
     }
 
     void startSim() {
@@ -273,6 +275,8 @@ class DeviceSafetyTest : public ::testing::Test {
     }
 
     TestConfig config_;
+    // More arguments for the exoskeleton's hapticemu (a fixture's constructor sets them).
+    std::vector<std::string> exo_emulator_args_;
     std::unique_ptr<ChildProcess> roudi_;
     std::unique_ptr<EmulatorProcess> exo_emu_;
     std::unique_ptr<EmulatorProcess> thimble_emu_;

@@ -5,10 +5,13 @@
 //   restart  a new hapticd on the same RouDi comes up IDLE and renders after `enable`.
 //   SIGTERM  hapticd's fail-stop writes the safe commands within two ticks and exits 0.
 //   SIGSTOP  the devices time out on their own; hapticd wakes up, blames its own stall.
+//   E-stop   the relay on the exoskeleton's bus reports pressed, or falls silent: E-STOP
+//            within a tick of hapticd reading it, and only release + clear + enable re-arm.
 
 #include <poll.h>
 
 #include <cstdio>
+#include <optional>
 
 #include "device_safety_rig.hpp"
 #include "haptic/can/udp_bus.hpp"
@@ -287,6 +290,93 @@ TEST_F(FailStopTest, SigtermWritesTheSafeCommandsWithinTwoTicksAndExitsCleanly) 
     });
     ASSERT_NE(last_command, thimble.rend());
     EXPECT_LT(fromRetract(last_command->message.command.servo_target_rad), 1e-3);
+}
+
+// The shipped daemon.yaml with its estop_relay enabled, and the exoskeleton's hapticemu
+// emulating the relay on its bus. Under the sanitizers, whose processes stall for tens of ms,
+// the relay's timeout is longer (a stall there would read as a silent relay).
+class EstopRelayTest : public FailStopTest {
+  protected:
+    EstopRelayTest() {
+        replaceLine(config_.dir / "daemon.yaml", "  enabled: false", "  enabled: true");
+        if (HAPTIC_SANITIZED != 0) {
+            replaceLine(config_.dir / "daemon.yaml", "timeout_ms: 30 ", "timeout_ms: 200 ");
+        }
+        exo_emulator_args_ = {"--estop-relay", "0x0E0"};
+    }
+
+    // The first limp actuator state of the exoskeleton after `since_ns` within `duration`.
+    std::optional<std::int64_t> limpAfter(std::int64_t since_ns,
+                                          std::chrono::milliseconds duration) {
+        const auto heard = exo_bus_.listen(duration);
+        const auto first = std::find_if(heard.begin(), heard.end(), [&](const auto& h) {
+            return h.at_ns > since_ns && limp(h.message);
+        });
+        if (first == heard.end()) {
+            return std::nullopt;
+        }
+        // Limp from then on.
+        for (auto it = first; it != heard.end(); ++it) {
+            EXPECT_FALSE(enabledWithForce(it->message, 0.0))
+                << (it->at_ns - since_ns) * 1e-6 << " ms after";
+        }
+        return first->at_ns - since_ns;
+    }
+};
+
+TEST_F(EstopRelayTest, APressedOrSilentRelayStopsTheDevicesAndOnlyAnOperatorReArms) {
+    renderUntilTheExoskeletonPushes();
+    const std::int64_t press_ns = monotonicNs();
+    ASSERT_TRUE(exo_emu_->sendCommand("estop press"));
+    // The relay's next status (10 ms period), hapticd's next tick, the device's next tick.
+    const auto limp_ns = limpAfter(press_ns, 300ms);
+    ASSERT_TRUE(limp_ns.has_value()) << "the exoskeleton never went limp after the press";
+    std::printf("E-stop pressed: exoskeleton limp after %.2f ms\n",
+                static_cast<double>(*limp_ns) * 1e-6);
+    EXPECT_LE(*limp_ns, 10 * kTickNs + 2 * kTickNs + kSlackNs);
+    auto status = waitForStatus("E-STOP", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kEstop && !s.faults.empty();
+    });
+    ASSERT_EQ(status.faults.size(), 1U) << faultsOf(status);
+    EXPECT_EQ(status.faults[0].code, daemon::kFaultEstopPressed);
+    EXPECT_EQ(status.faults[0].device_id.view(), "estop");
+    EXPECT_THAT(std::string(status.faults[0].message.view()),
+                ::testing::HasSubstr("0x0e0 on exo's bus"));
+
+    const auto refused = hapticctl({"clear"});
+    EXPECT_NE(refused.exit_code, 0) << "clear while the button is pressed";
+    EXPECT_THAT(refused.out + refused.err, ::testing::HasSubstr("release it"));
+    ASSERT_TRUE(exo_emu_->sendCommand("estop release"));
+    std::this_thread::sleep_for(100ms);
+    EXPECT_EQ(waitForStatus("a status", [](const auto&) { return true; }).state,
+              msgs::DaemonState::kEstop)
+        << "a release re-arms nothing";
+    const auto released = exo_bus_.listen(100ms);
+    EXPECT_FALSE(std::any_of(released.begin(), released.end(),
+                             [](const auto& h) { return enabledWithForce(h.message, 0.0); }));
+    ASSERT_TRUE(command("clear"));
+    ASSERT_TRUE(command("enable"));
+    waitForStatus("RENDERING after clear and enable", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kRendering;
+    });
+
+    // A relay that falls silent (a cut wire) is a pressed one.
+    const std::int64_t silence_ns = monotonicNs();
+    ASSERT_TRUE(exo_emu_->sendCommand("estop silence"));
+    status = waitForStatus("E-STOP from the silent relay", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kEstop && !s.faults.empty();
+    });
+    std::printf("E-stop relay silent: E-STOP reported %.1f ms after the silence command\n",
+                static_cast<double>(monotonicNs() - silence_ns) * 1e-6);
+    ASSERT_EQ(status.faults.size(), 1U) << faultsOf(status);
+    EXPECT_EQ(status.faults[0].code, daemon::kFaultEstopRelaySilent);
+    const auto after = exo_bus_.listen(50ms);
+    EXPECT_FALSE(std::any_of(after.begin(), after.end(),
+                             [](const auto& h) { return enabledWithForce(h.message, 0.0); }));
+    EXPECT_NE(hapticctl({"clear"}).exit_code, 0) << "clear while the relay is silent";
+    ASSERT_TRUE(exo_emu_->sendCommand("estop resume"));
+    std::this_thread::sleep_for(50ms);
+    ASSERT_TRUE(command("clear"));
 }
 
 }  // namespace

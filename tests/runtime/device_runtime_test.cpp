@@ -147,6 +147,56 @@ TEST(DeviceRuntime, SwitchingAmongAllSixMethodsWhileRenderingNeverStepsTheForce)
 // Each coupling key of the device file changes what the channel renders. The rigs stay IDLE
 // (no force is sent), so the emulated finger moves the same in both and the renderer's outputs
 // compare tick by tick; the wall sits 0.01 rad inside the finger, re-placed every 10 ticks.
+// The relay's status comes on the exoskeleton's bus: a press read in a tick zeroes that tick's
+// commands, and only release and an operator's clear and enable bring force back.
+TEST(DeviceRuntime, AnEstopRelayPressZeroesTheForceInTheTickThatReadsIt) {
+    RuntimeRig rig;
+    rig.attachEstopRelay();
+    renderWithContact(rig);
+    ASSERT_GT(std::abs(rig.exoForce()), 1.0);
+    std::string error;
+    ASSERT_TRUE(rig.estop_relay->command("press", error));
+    // The relay sends every 10 ms: tick until hapticd has read the press, then look at the
+    // command that tick wrote.
+    int ticks = 0;
+    while (rig.core.state() == msgs::DaemonState::kRendering && ticks < 20) {
+        rig.tick();
+        ++ticks;
+    }
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kEstop) << "after " << ticks << " ticks";
+    EXPECT_LE(ticks, 10);
+    EXPECT_EQ(rig.exoForce(), 0.0) << "the same tick";
+    ASSERT_EQ(rig.core.stateMachine().faultCount(), 1U);
+    EXPECT_EQ(rig.core.stateMachine().fault(0).code, daemon::kFaultEstopPressed);
+    EXPECT_EQ(rig.runtime.estopRelay()->decoder().rejects().total(), 0U);
+
+    rig.ticks(300);  // the thimble retracts at its servo rate limit
+    EXPECT_LT(distance(rig.thimbleTargets(), retract(rig)), 1e-12);
+    EXPECT_FALSE(rig.command(msgs::CommandKind::kClearFault)) << "still pressed";
+    ASSERT_TRUE(rig.estop_relay->command("release", error));
+    rig.ticks(15);
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kEstop) << "a release re-arms nothing";
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kClearFault));
+    renderWithContact(rig);
+    // Rendering again (the force itself depends on where the emulated finger is by now).
+    EXPECT_EQ(rig.core.outputGain(kExo), 1.0);
+    EXPECT_EQ(rig.core.deviceReport(kExo).run_state, msgs::DeviceRunState::kActive);
+
+    // A relay that falls silent is a pressed one, 30 ms after its last status.
+    ASSERT_TRUE(rig.estop_relay->command("silence", error));
+    ticks = 0;
+    while (rig.core.state() == msgs::DaemonState::kRendering && ticks < 100) {
+        rig.offerContact();
+        rig.tick();
+        ++ticks;
+    }
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kEstop);
+    EXPECT_GE(ticks, 21);
+    EXPECT_LE(ticks, 32);
+    EXPECT_EQ(rig.exoForce(), 0.0);
+    EXPECT_EQ(rig.core.stateMachine().fault(0).code, daemon::kFaultEstopRelaySilent);
+}
+
 TEST(DeviceRuntime, EveryCouplingKeyOfTheDeviceFileChangesTheRendering) {
     auto rig_with = [](double k_a, double k_u, double b_v, double mass_kg,
                        config::RenderingMethod method) {

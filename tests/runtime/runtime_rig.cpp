@@ -85,6 +85,14 @@ void RuntimeRig::advanceDevices() {
     for (auto& emulator : emulators) {
         emulator->tick(now);
     }
+    if (estop_relay) {
+        estop_relay->tick(target, now);
+    }
+}
+
+void RuntimeRig::attachEstopRelay() {
+    estop_relay = std::make_unique<emu::EstopRelayEmulator>(kEstopRelayId);
+    runtime.attachEstopRelay(kExo, kEstopRelayId, 30 * kMs);
 }
 
 void RuntimeRig::tick() {

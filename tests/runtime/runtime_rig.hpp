@@ -14,6 +14,7 @@
 #include "haptic/config/device.hpp"
 #include "haptic/daemon/daemon_core.hpp"
 #include "haptic/emu/device_emulator.hpp"
+#include "haptic/emu/estop_relay_emulator.hpp"
 #include "haptic/runtime/device_runtime.hpp"
 
 namespace haptic::testing {
@@ -21,6 +22,7 @@ namespace haptic::testing {
 inline constexpr std::int64_t kMs = 1'000'000;
 inline constexpr std::size_t kExo = 0;
 inline constexpr std::size_t kThimble = 1;
+inline constexpr std::uint32_t kEstopRelayId = 0x0E0;
 
 class RuntimeRig {
   public:
@@ -42,6 +44,9 @@ class RuntimeRig {
     // Sim input as handsim would send it (valid; contact on both devices).
     void offerContact();
     bool command(msgs::CommandKind kind, const char* argument = "");
+    // An E-stop relay on the devices' bus (status kEstopRelayId, 30 ms timeout), emulated and
+    // supervised from the next tick on.
+    void attachEstopRelay();
     void emulatorFault(std::size_t device, const char* line);
 
     [[nodiscard]] double exoForce() const;
@@ -51,6 +56,7 @@ class RuntimeRig {
     can::LoopbackBus host;
     can::LoopbackBus target;
     std::vector<std::unique_ptr<emu::DeviceEmulator>> emulators;
+    std::unique_ptr<emu::EstopRelayEmulator> estop_relay;
     daemon::DaemonCore core;
     runtime::DeviceRuntime runtime;
     msgs::ConstraintSet constraint_set{};

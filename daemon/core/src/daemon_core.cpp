@@ -9,6 +9,23 @@ namespace haptic::daemon {
 namespace {
 // The last quarter of the sim timeout is the fade-out window.
 constexpr double kFadeFraction = 0.25;
+
+// A command the hardware E-stop input forbids now, with the reason; nullptr when allowed.
+const char* blockedByHardwareEstop(msgs::CommandKind kind, HardwareEstop input) noexcept {
+    if (kind == msgs::CommandKind::kClearFault) {
+        if (input == HardwareEstop::kPressed) {
+            return "the hardware E-stop is pressed; release it, then clear";
+        }
+        if (input == HardwareEstop::kSilent) {
+            return "the E-stop relay is silent (wiring, power or bus); it must report released "
+                   "before clear";
+        }
+    }
+    if (kind == msgs::CommandKind::kEnable && input == HardwareEstop::kAwaitingFirstStatus) {
+        return "waiting for the E-stop relay's first status";
+    }
+    return nullptr;
+}
 }  // namespace
 
 DaemonCore::DaemonCore(CoreSettings settings, std::vector<DeviceDescriptor> devices)
@@ -29,9 +46,34 @@ void DaemonCore::markStarted(std::int64_t now_ns) noexcept {
     machine_.started();
 }
 
+void DaemonCore::setHardwareEstop(HardwareEstop input, std::string_view relay) noexcept {
+    const bool engaged = input == HardwareEstop::kPressed || input == HardwareEstop::kSilent;
+    // A new engagement, or pressed turning silent (or back), is recorded; one that lasts is not.
+    if (engaged && input != hardware_estop_ && machine_.state() != msgs::DaemonState::kInit) {
+        (void)machine_.apply(msgs::CommandKind::kEstop, {});
+        char message[msgs::kShortTextCapacity];  // no allocation on the RT thread
+        const int length = static_cast<int>(relay.size());
+        if (input == HardwareEstop::kPressed) {
+            std::snprintf(message, sizeof(message), "E-stop pressed (relay %.*s)", length,
+                          relay.data());
+            machine_.raiseFault(kFaultEstopPressed, "estop", message);
+        } else {
+            std::snprintf(message, sizeof(message),
+                          "E-stop relay silent (%.*s): treated as pressed", length, relay.data());
+            machine_.raiseFault(kFaultEstopRelaySilent, "estop", message);
+        }
+    }
+    if (machine_.state() != msgs::DaemonState::kInit) {
+        hardware_estop_ = input;
+    }
+}
+
 CommandOutcome DaemonCore::applyCommand(const msgs::HapticCommand& command, std::int64_t now_ns,
                                         msgs::HapticCommandReply& reply) noexcept {
-    const CommandOutcome outcome = machine_.apply(command.kind, command.argument.view());
+    const char* blocked = blockedByHardwareEstop(command.kind, hardware_estop_);
+    const CommandOutcome outcome = blocked != nullptr
+                                       ? CommandOutcome{false, blocked}
+                                       : machine_.apply(command.kind, command.argument.view());
     // An accepted enable (also while RENDERING) is the operator's re-arm.
     if (outcome.accepted && command.kind == msgs::CommandKind::kEnable) {
         for (auto& slot : devices_) {

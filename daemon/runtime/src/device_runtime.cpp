@@ -1,6 +1,7 @@
 #include "haptic/runtime/device_runtime.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 #include <stdexcept>
 
@@ -42,10 +43,28 @@ DeviceRuntime::DeviceRuntime(const std::vector<config::DeviceConfig>& devices,
     }
 }
 
+void DeviceRuntime::attachEstopRelay(std::size_t bus_device, std::uint32_t status_id,
+                                     std::int64_t timeout_ns) {
+    if (bus_device >= channels_.size()) {
+        throw std::invalid_argument("DeviceRuntime: the E-stop relay names no device");
+    }
+    estop_relay_.emplace(status_id, timeout_ns);
+    estop_bus_ = &channels_[bus_device]->bus();
+    char label[64];
+    std::snprintf(label, sizeof(label), "0x%03x on %s's bus", status_id,
+                  channels_[bus_device]->name().c_str());
+    estop_label_ = label;
+}
+
 void DeviceRuntime::read(std::int64_t now_ns) noexcept {
     for (auto& group : groups_) {
+        devices::EstopRelayMonitor* relay =
+            group.bus == estop_bus_ && estop_relay_ ? &*estop_relay_ : nullptr;
         (void)devices::pollFrames(*group.bus, now_ns,
-                                  [&group](const can::CanFrame& frame, std::int64_t now) {
+                                  [&group, relay](const can::CanFrame& frame, std::int64_t now) {
+                                      if (relay != nullptr && relay->handleFrame(frame, now)) {
+                                          return true;
+                                      }
                                       for (std::size_t k = 0; k < group.count; ++k) {
                                           if (group.members[k]->handleFrame(frame, now)) {
                                               return true;
@@ -57,6 +76,23 @@ void DeviceRuntime::read(std::int64_t now_ns) noexcept {
 }
 
 void DeviceRuntime::compute(daemon::DaemonCore& core, std::int64_t now_ns) noexcept {
+    if (estop_relay_) {
+        daemon::HardwareEstop input = daemon::HardwareEstop::kReleased;
+        switch (estop_relay_->evaluate(now_ns)) {
+            case devices::EstopInput::kAwaitingFirstStatus:
+                input = daemon::HardwareEstop::kAwaitingFirstStatus;
+                break;
+            case devices::EstopInput::kPressed:
+                input = daemon::HardwareEstop::kPressed;
+                break;
+            case devices::EstopInput::kSilent:
+                input = daemon::HardwareEstop::kSilent;
+                break;
+            case devices::EstopInput::kReleased:
+                break;
+        }
+        core.setHardwareEstop(input, estop_label_);
+    }
     for (std::size_t i = 0; i < channels_.size(); ++i) {
         channels_[i]->supervise(core, now_ns);
     }
@@ -78,7 +114,8 @@ void DeviceRuntime::writeSafe() noexcept {
     }
 }
 
-OpenedBuses openBuses(const std::vector<config::DeviceConfig>& devices) {
+OpenedBuses openBuses(const std::vector<config::DeviceConfig>& devices,
+                      const config::EstopRelayConfig& estop_relay) {
     OpenedBuses out;
     out.per_device.resize(devices.size(), nullptr);
     out.descriptions.resize(devices.size());
@@ -124,6 +161,9 @@ OpenedBuses openBuses(const std::vector<config::DeviceConfig>& devices) {
                             config.receive_ids.end(),
                             {other.can.state_id, other.can.heartbeat_id, other.can.fault_id});
                         config.fd = config.fd || other.can.fd;
+                        if (estop_relay.enabled && other.name == estop_relay.bus_device) {
+                            config.receive_ids.push_back(estop_relay.status_id);
+                        }
                     }
                 }
                 out.owned.push_back(std::make_unique<can::SocketCanBus>(config));

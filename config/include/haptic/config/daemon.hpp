@@ -6,6 +6,7 @@
 #include <array>
 #include <filesystem>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "haptic/config/common.hpp"
@@ -43,11 +44,23 @@ struct LoopConfig {
     int overrun_window_ms{1000};
 };
 
+// YAML: estop_relay: {...}. A safety relay's E-stop button on one of the devices' CAN buses
+// (frame layout: haptic/protocol/estop_relay_protocol.hpp). Enabled, hapticd goes to E-STOP
+// within a tick of a status saying "pressed" or of timeout_ms without a valid status, and
+// `clear` is refused until the relay reports released again.
+struct EstopRelayConfig {
+    bool enabled{false};
+    std::string bus_device;  // the device (by name) whose CAN bus carries the relay's status
+    std::uint32_t status_id{0x0E0};
+    int timeout_ms{30};
+};
+
 struct DaemonConfig {
     std::filesystem::path source;
     LogLevel log_level{LogLevel::kInfo};
     LoopConfig loop;
     std::vector<DeviceConfig> devices;  // 1..4, names unique, CAN ids disjoint per interface
+    EstopRelayConfig estop_relay;
     SimLinkConfig sim_link;
     DdsConfig dds;
     std::optional<IceoryxConfig> iceoryx;

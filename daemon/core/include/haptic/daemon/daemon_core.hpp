@@ -32,8 +32,21 @@ struct DeviceDescriptor {
 // (runtime::DaemonFaultCode).
 inline constexpr std::uint32_t kFaultLoopStalled = 110;
 inline constexpr std::uint32_t kFaultLoopOverrunning = 111;
+// The hardware E-stop input (DaemonCore::setHardwareEstop): its button pressed, or its relay
+// silent for its timeout. Both hold E-STOP, recorded in the fault list.
+inline constexpr std::uint32_t kFaultEstopPressed = 112;
+inline constexpr std::uint32_t kFaultEstopRelaySilent = 113;
 // The most overruns a policy may count (loop.overrun_limit's upper bound).
 inline constexpr std::size_t kMaxOverrunLimit = 1000;
+
+// What the hardware E-stop input says this tick (daemon.yaml estop_relay).
+enum class HardwareEstop : std::uint8_t {
+    kNone,                 // no relay configured
+    kReleased,             // the relay reports released
+    kAwaitingFirstStatus,  // configured, not heard yet, within its timeout since start
+    kPressed,              // the relay reports pressed
+    kSilent,               // no valid status from the relay for its timeout
+};
 
 struct CoreSettings {
     double rate_hz{1000.0};
@@ -143,6 +156,14 @@ class DaemonCore {
     // When the loop last came back from a stall (kFaultLoopStalled), 0 if never.
     [[nodiscard]] std::int64_t lastStallEndNs() const noexcept { return last_stall_end_ns_; }
 
+    // The hardware E-stop input, once per tick before the devices compute (DeviceRuntime), so
+    // that a press takes the force off in the tick that reads it. Pressed or silent: E-STOP
+    // (from any state but INIT), recorded once per engagement as kFaultEstopPressed or
+    // kFaultEstopRelaySilent with `relay` (e.g. "0x0e0 on exo's bus") in the message, and
+    // `clear` is refused while it lasts. Awaiting its first status: `enable` is refused.
+    void setHardwareEstop(HardwareEstop input, std::string_view relay) noexcept;
+    [[nodiscard]] HardwareEstop hardwareEstop() const noexcept { return hardware_estop_; }
+
     // A safety fault (device, bus, loop); latches FAULT. See DaemonStateMachine::raiseFault.
     void raiseFault(std::uint32_t code, std::string_view device_id,
                     std::string_view message) noexcept {
@@ -201,6 +222,7 @@ class DaemonCore {
     std::size_t overrun_next_{0};
     std::size_t overrun_count_{0};
     bool overrun_fault_latched_{false};
+    HardwareEstop hardware_estop_{HardwareEstop::kNone};
     void countOverrun(std::int64_t now_ns, const TickTiming& timing, bool any_online) noexcept;
     LoopStatisticsCollector statistics_;
     std::uint64_t window_ticks_;
