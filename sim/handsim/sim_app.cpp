@@ -118,7 +118,7 @@ int runSim(const SimOptions& options) {
 
     softhand::SceneSimulation physics(cfg.scene, deviceRequests(cfg),
                                       softhand::realtimeSceneSettings(cfg.scene.solver));
-    auto tracking = makeTrackingSource(cfg.scene, physics, participant);
+    auto tracking = makeTrackingSource(cfg.scene, physics, participant, cfg.tracking_filter);
     physics.reset(tracking->initialPose());
     const double dt_s = 1.0 / cfg.scene.rate_hz;
     spdlog::info("scene '{}': soft hand {} ({} nodes, {} tetrahedra), tracking from {}",

@@ -7,6 +7,7 @@
 
 #include "HandPosePubSubTypes.h"
 #include "haptic/msgs/conversions.hpp"
+#include "haptic/softhand/tracking_filter.hpp"
 
 namespace haptic::handsim {
 namespace {
@@ -86,11 +87,19 @@ class ReplaySource final : public TrackingSource {
 class TopicSource final : public TrackingSource {
   public:
     TopicSource(const config::SceneConfig& scene, const softhand::SceneSimulation& sim,
-                ipc::DdsParticipant& participant)
+                ipc::DdsParticipant& participant,
+                const std::optional<config::TrackingFilterConfig>& filter)
         : reader_(participant.createReader<idl::HandPosePubSubType>(scene.tracking.topic,
                                                                     ipc::TopicKind::kStream)),
           initial_(sim.trackedHand().buildPose()),
-          topic_(scene.tracking.topic) {
+          topic_(scene.tracking.topic),
+          gap_s_(1e-3 * scene.tracking.timeout_ms) {
+        if (filter) {
+            filter_.emplace(softhand::TrackingFilterSettings{
+                {filter->min_cutoff_hz, filter->angle_beta_s_per_rad, filter->derivative_cutoff_hz},
+                {filter->min_cutoff_hz, filter->position_beta_s_per_m,
+                 filter->derivative_cutoff_hz}});
+        }
         // Until the tracker speaks, the hand waits well above the scene's objects.
         initial_.wrist.position_m.z() += 0.3;
     }
@@ -110,32 +119,39 @@ class TopicSource final : public TrackingSource {
                 rejection = "HandPose on '" + topic_ + "': " + *reason;
                 continue;
             }
-            latest = input;
+            // Every sample through the filter, in order, at the tracker's own stamps; after a
+            // silence longer than the tracking timeout it starts afresh at the new pose.
+            latest = filter_
+                         ? filter_->filter(
+                               input, 1e-9 * static_cast<double>(message.header.stamp_ns), gap_s_)
+                         : input;
         }
         return latest;
     }
     [[nodiscard]] std::string describe() const override {
-        return "HandPose topic '" + topic_ + "'";
+        return "HandPose topic '" + topic_ + "'" + (filter_ ? " through the One Euro filter" : "");
     }
 
   private:
     ipc::DdsReader<idl::HandPose> reader_;
     softhand::HandPoseInput initial_;
     std::string topic_;
+    double gap_s_;
+    std::optional<softhand::HandPoseFilter> filter_;
 };
 
 }  // namespace
 
-std::unique_ptr<TrackingSource> makeTrackingSource(const config::SceneConfig& scene,
-                                                   const softhand::SceneSimulation& sim,
-                                                   ipc::DdsParticipant& participant) {
+std::unique_ptr<TrackingSource> makeTrackingSource(
+    const config::SceneConfig& scene, const softhand::SceneSimulation& sim,
+    ipc::DdsParticipant& participant, const std::optional<config::TrackingFilterConfig>& filter) {
     switch (scene.tracking.source) {
         case config::TrackingSource::kScripted:
             return std::make_unique<ScriptedSource>(scene, sim);
         case config::TrackingSource::kReplay:
             return std::make_unique<ReplaySource>(scene.tracking);
         case config::TrackingSource::kTopic:
-            return std::make_unique<TopicSource>(scene, sim, participant);
+            return std::make_unique<TopicSource>(scene, sim, participant, filter);
     }
     throw std::invalid_argument("unknown tracking source");
 }

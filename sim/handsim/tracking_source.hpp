@@ -8,6 +8,7 @@
 #include <string>
 
 #include "haptic/config/scene.hpp"
+#include "haptic/config/sim.hpp"
 #include "haptic/ipc/dds_participant.hpp"
 #include "haptic/softhand/scene_simulation.hpp"
 
@@ -25,8 +26,11 @@ class TrackingSource {
 };
 
 // Throws std::runtime_error (replay file errors carry file:line) or std::invalid_argument.
+// `filter` (sim.yaml tracking_filter) smooths the poses of a topic, i.e. of a real tracker;
+// scripts and replays are used as they are.
 [[nodiscard]] std::unique_ptr<TrackingSource> makeTrackingSource(
     const config::SceneConfig& scene, const softhand::SceneSimulation& sim,
-    ipc::DdsParticipant& participant);
+    ipc::DdsParticipant& participant,
+    const std::optional<config::TrackingFilterConfig>& filter = std::nullopt);
 
 }  // namespace haptic::handsim

@@ -105,6 +105,11 @@ TEST(ShippedConfig, Sim) {
     for (const DeviceConfig& device : cfg.devices) {
         EXPECT_TRUE(cfg.scene.devices.contains(device.name)) << device.name;
     }
+    ASSERT_TRUE(cfg.tracking_filter.has_value());
+    EXPECT_EQ(cfg.tracking_filter->min_cutoff_hz, 2.0);
+    EXPECT_EQ(cfg.tracking_filter->angle_beta_s_per_rad, 10.0);
+    EXPECT_EQ(cfg.tracking_filter->position_beta_s_per_m, 50.0);
+    EXPECT_EQ(cfg.tracking_filter->derivative_cutoff_hz, 1.0);
 }
 
 TEST(ShippedConfig, Exoskeleton) {

@@ -13,6 +13,16 @@
 
 namespace haptic::config {
 
+// YAML: tracking_filter: {...} (optional; absent: poses are used as the tracker sends them).
+// The One Euro filter handsim applies to poses from a HandPose topic, i.e. a real tracker
+// (haptic/softhand/tracking_filter.hpp).
+struct TrackingFilterConfig {
+    double min_cutoff_hz{1.0};          // cutoff at rest
+    double angle_beta_s_per_rad{0.0};   // cutoff rise per rad/s of a flexion angle or the wrist
+    double position_beta_s_per_m{0.0};  // cutoff rise per m/s of the wrist
+    double derivative_cutoff_hz{1.0};   // low-pass of the speed that sets the cutoff
+};
+
 struct SimConfig {
     std::filesystem::path source;
     LogLevel log_level{LogLevel::kInfo};
@@ -21,6 +31,7 @@ struct SimConfig {
     DdsConfig dds;
     std::optional<IceoryxConfig> iceoryx;
     std::vector<DeviceConfig> devices;  // the devices the sim computes targets for
+    std::optional<TrackingFilterConfig> tracking_filter;
 };
 
 // Loads sim.yaml, its scene and its device files. Throws ConfigError.
