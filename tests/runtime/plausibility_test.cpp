@@ -12,7 +12,9 @@
 #include <variant>
 #include <vector>
 
+#include "haptic/protocol/exoskeleton_protocol.hpp"
 #include "haptic/runtime/device_channel.hpp"
+#include "haptic/runtime/exoskeleton_channel.hpp"
 #include "runtime_rig.hpp"
 
 namespace haptic::testing {
@@ -149,6 +151,39 @@ TEST(Plausibility, OnlyAFreshContradictionCountsNotAStaleState) {
         EXPECT_NE(rig.core.stateMachine().fault(i).code, runtime::kFaultImplausibleFeedback)
             << rig.core.stateMachine().fault(i).message.view();
     }
+}
+
+// A second host on the exoskeleton's command id, two counters ahead of hapticd: the device's
+// sequence check accepts the other host's frames and rejects hapticd's, so it obeys the other
+// host while still hearing commands (no command timeout). Its echo, not one of hapticd's
+// latest counters, says so.
+TEST(Plausibility, AnExoskeletonObeyingAnotherHostRaisesItsOwnFault) {
+    RuntimeRig rig;
+    renderWithForce(rig);
+    can::LoopbackBus other_host;
+    ASSERT_TRUE(other_host.connect(rig.target));
+    protocol::ExoskeletonCodec codec(rig.devices[kExo]);
+    const auto& channel = static_cast<runtime::ExoskeletonChannel&>(rig.runtime.channel(kExo));
+    int ticks = 0;
+    while (rig.core.state() == msgs::DaemonState::kRendering && ticks < 200) {
+        if (ticks % 10 == 0) {
+            rig.offerContact();
+        }
+        rig.tick();
+        ++ticks;
+        protocol::ExoskeletonCommand push;
+        push.enable = true;
+        push.force_n = 5.0;
+        can::CanFrame frame;
+        ASSERT_TRUE(codec.encodeCommand(push, frame));
+        protocol::sealFrame(frame, 0,
+                            static_cast<std::uint8_t>(channel.driver().lastCommandCounter() + 2));
+        ASSERT_EQ(other_host.write(frame), can::IoResult::kOk);
+    }
+    EXPECT_GE(ticks, 50) << "after can.heartbeat_timeout_ms, not before";
+    EXPECT_LE(ticks, 60);
+    const std::string message = onlyFault(rig, runtime::kFaultImplausibleFeedback, "exo");
+    EXPECT_THAT(message, HasSubstr("it obeys another host or none for 5"));
 }
 
 }  // namespace

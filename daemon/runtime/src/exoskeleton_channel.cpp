@@ -25,6 +25,9 @@ kinesthetic::PortGuardConfig portGuardConfig(const config::DeviceConfig& device,
     return guard;
 }
 
+// How many of hapticd's latest commands a fresh state's echo may lag (alive counters, mod 16).
+constexpr std::uint8_t kMaxEchoLagTicks = 4;
+
 }  // namespace
 
 kinesthetic::RenderParameters exoskeletonRenderParameters(const config::ExoskeletonConfig& exo) {
@@ -93,6 +96,19 @@ std::uint32_t ExoskeletonChannel::plausibilityFaults(std::int64_t now_ns) noexce
                       command_.enable ? "device reports disabled %.0f ms after enable"
                                       : "device reports enabled %.0f ms after disable",
                       ms);
+        return kImplausibleFeedback;
+    }
+    // The device echoes the alive counter of the last command it accepted. Within the round
+    // trip (a tick out, a device tick, a tick back) it is one of the last few hapticd sent;
+    // otherwise the device obeys commands that are not hapticd's (another host on its id) or
+    // none at all.
+    const auto echo_lag = static_cast<std::uint8_t>(
+        (driver_.lastCommandCounter() - state.actuator.command_echo) & 0x0F);
+    if (const double ms = lasting(echo_lag > kMaxEchoLagTicks, echo_mismatch_since_ns_); ms > 0.0) {
+        std::snprintf(implausible_message_, sizeof(implausible_message_),
+                      "device echoes command %u, hapticd sent %u: it obeys another host or none "
+                      "for %.0f ms",
+                      state.actuator.command_echo, driver_.lastCommandCounter(), ms);
         return kImplausibleFeedback;
     }
     const double tolerance_n = force_tolerance_n_ + 0.2 * std::abs(expected_force_n_);

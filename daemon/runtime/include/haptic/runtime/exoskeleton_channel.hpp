@@ -123,6 +123,7 @@ class ExoskeletonChannel final
     double force_tolerance_n_;
     double expected_force_n_{0.0};
     std::int64_t force_mismatch_since_ns_{-1};
+    std::int64_t echo_mismatch_since_ns_{-1};
     char implausible_message_[msgs::kShortTextCapacity]{};
 };
 
