@@ -265,6 +265,8 @@ ServoConfig readServos(MapReader map) {
     out.max_rad = degToRad(max_deg);
     out.max_rate_rad_per_s = degToRad(map.required("max_rate_deg_per_s", Real::positive(2000.0)));
     out.lag_time_constant_s = map.required("lag_time_constant_s", Real::closed(0.0, 1.0));
+    out.angle_tolerance_rad =
+        degToRad(map.optional("angle_tolerance_deg", 5.0, Real::positive(90.0)));
     map.finish();
     return out;
 }

@@ -403,7 +403,8 @@ TEST_F(EstopRelayTest, APressedOrSilentRelayStopsTheDevicesAndOnlyAnOperatorReAr
     bool enabled = false;
     for (int i = 0; i < 100 && !enabled; ++i) {
         const auto window = exo_bus_.listen(30ms);
-        enabled = !window.empty() && enabledWithForce(window.back().message, 0.0);
+        enabled = std::any_of(window.begin(), window.end(),
+                              [](const auto& h) { return enabledWithForce(h.message, 0.0); });
     }
     ASSERT_TRUE(enabled) << "the exoskeleton did not come back after clear and enable";
     const std::int64_t silence_ns = monotonicNs();

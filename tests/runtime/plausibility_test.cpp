@@ -153,6 +153,40 @@ TEST(Plausibility, OnlyAFreshContradictionCountsNotAStaleState) {
     }
 }
 
+// A thimble servo that stops following its target (hapticemu's `servo-stuck 2`): its measured
+// angle leaves the one the servo's lag and rate limit predict by more than
+// servos.angle_tolerance_deg (5) for longer than can.heartbeat_timeout_ms; a healthy thimble
+// rendering and retracting never does.
+TEST(Plausibility, AThimbleServoThatDoesNotFollowItsTargetRaisesItsOwnFault) {
+    RuntimeRig rig;
+    renderWithForce(rig);
+    renderTicks(rig, 500);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kDisable));  // retract: a large move
+    renderTicks(rig, 400);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
+    renderTicks(rig, 400);
+    EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U) << "a healthy thimble follows";
+    rig.emulatorFault(kThimble, "servo-stuck 2");
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kDisable));  // every servo must move now
+    renderTicks(rig, 400);
+    const std::string message = onlyFault(rig, runtime::kFaultImplausibleFeedback, "thimble");
+    EXPECT_THAT(message, HasSubstr("servo 2 at "));
+    EXPECT_THAT(message, HasSubstr(" deg expected for 5"));
+}
+
+// servos.angle_tolerance_deg decides: with 90 degrees the stuck servo above passes.
+TEST(Plausibility, TheServoAngleToleranceKeyDecidesWhatIsImplausible) {
+    RuntimeRig rig([](std::vector<config::DeviceConfig>& devices) {
+        std::get<config::ThimbleConfig>(devices[kThimble].params).servos.angle_tolerance_rad =
+            1.5707963;
+    });
+    renderWithForce(rig);
+    rig.emulatorFault(kThimble, "servo-stuck 2");
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kDisable));
+    renderTicks(rig, 400);
+    EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U);
+}
+
 // A second host on the exoskeleton's command id, two counters ahead of hapticd: the device's
 // sequence check accepts the other host's frames and rejects hapticd's, so it obeys the other
 // host while still hearing commands (no command timeout). Its echo, not one of hapticd's

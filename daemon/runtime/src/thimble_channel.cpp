@@ -1,6 +1,9 @@
 #include "haptic/runtime/thimble_channel.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 
 namespace haptic::runtime {
 namespace {
@@ -28,6 +31,58 @@ ThimbleChannel::ThimbleChannel(const config::DeviceConfig& device, can::CanBus& 
     report_.kind = msgs::DeviceKind::kThimble;
     measured_dofs_ = kinematics_.retractPose();
     command_.servo_target_rad = retract_servo_rad_;
+    const auto& servos = device.thimble().servos;
+    servo_lag_s_ = servos.lag_time_constant_s;
+    servo_max_rate_rad_per_s_ = servos.max_rate_rad_per_s;
+    angle_tolerance_rad_ = servos.angle_tolerance_rad;
+}
+
+std::uint32_t ThimbleChannel::plausibilityFaults(std::int64_t now_ns) noexcept {
+    const auto& state = driver_.state();
+    const auto& measured = state.servos.servo_angle_rad;
+    // Judged only on a fresh state of a device reporting no fault of its own (a silent or
+    // faulted device is the link monitor's to report; one retracting on its own command
+    // timeout goes where it wants).
+    const bool judged = linkStateFresh() && state.state_updates > 0 && deviceFaultCode() == 0;
+    if (!judged || !expected_synced_) {
+        expected_servo_rad_ = measured;
+        expected_synced_ = judged;
+        expected_at_ns_ = now_ns;
+        angle_mismatch_since_ns_ = -1;
+        return 0;
+    }
+    // Over the time that really passed: after a stall of hapticd the servos have moved on.
+    const double dt_s = std::clamp(static_cast<double>(now_ns - expected_at_ns_) * 1e-9, 0.0, 0.1);
+    expected_at_ns_ = now_ns;
+    const double step = dt_s / (servo_lag_s_ + dt_s);
+    const double max_step_rad = servo_max_rate_rad_per_s_ * dt_s;
+    std::size_t worst = 0;
+    double worst_error = 0.0;
+    for (std::size_t k = 0; k < expected_servo_rad_.size(); ++k) {
+        const double move = step * (command_.servo_target_rad[k] - expected_servo_rad_[k]);
+        expected_servo_rad_[k] += std::clamp(move, -max_step_rad, max_step_rad);
+        const double error = std::abs(measured[k] - expected_servo_rad_[k]);
+        if (error > worst_error) {
+            worst_error = error;
+            worst = k;
+        }
+    }
+    if (!(worst_error > angle_tolerance_rad_)) {
+        angle_mismatch_since_ns_ = -1;
+        return 0;
+    }
+    if (angle_mismatch_since_ns_ < 0) {
+        angle_mismatch_since_ns_ = now_ns;
+    }
+    if (now_ns - angle_mismatch_since_ns_ <= heartbeatTimeoutNs()) {
+        return 0;
+    }
+    constexpr double kDeg = 180.0 / 3.14159265358979323846;
+    std::snprintf(implausible_message_, sizeof(implausible_message_),
+                  "servo %zu at %.1f deg against %.1f deg expected for %.0f ms", worst + 1,
+                  measured[worst] * kDeg, expected_servo_rad_[worst] * kDeg,
+                  static_cast<double>(now_ns - angle_mismatch_since_ns_) * 1e-6);
+    return kImplausibleFeedback;
 }
 
 std::uint8_t ThimbleChannel::deviceFaultCode() const noexcept {

@@ -1,6 +1,7 @@
 #include "haptic/emu/device_emulator.hpp"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "haptic/emu/device_models.hpp"
@@ -227,7 +228,12 @@ class ThimbleEmulator final : private CodecOwner<protocol::ThimbleCodec>, public
     void stepModel(double dt_s) noexcept override {
         // An injected fault freezes the servos where they are; the command timeout retracts.
         if (faults_.deviceFault() == 0) {
-            model_.step(dt_s, commandTimedOut() ? retract_rad_ : target_.servo_target_rad);
+            std::array<double, 3> target =
+                commandTimedOut() ? retract_rad_ : target_.servo_target_rad;
+            if (const std::uint8_t stuck = faults_.stuckServo(); stuck >= 1 && stuck <= 3) {
+                target[stuck - 1U] = std::numeric_limits<double>::quiet_NaN();  // holds
+            }
+            model_.step(dt_s, target);
         }
     }
     // The firmware starts at home: the retract pose.

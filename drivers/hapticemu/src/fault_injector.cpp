@@ -127,6 +127,8 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
         force_percent_ = number;
     } else if (verb == "stuck-enable" && (argument == "on" || argument == "off")) {
         stuck_enable_ = argument == "on";
+    } else if (verb == "servo-stuck" && has_number && number <= 3) {
+        stuck_servo_ = static_cast<std::uint8_t>(number);
     } else if (verb == "clear" && argument.empty()) {
         drop_next_ = 0;
         drop_every_ = 0;
@@ -134,6 +136,7 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
         corrupt_next_ = 0;
         heartbeat_stopped_ = false;
         stuck_enable_ = false;
+        stuck_servo_ = 0;
         force_percent_ = 100;
         if (bus_off_) {
             bus_off_ = false;
@@ -146,7 +149,8 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
     } else {
         error = "unknown fault command '" + std::string(line) +
                 "' (drop N, drop-every N, delay MS, corrupt N, heartbeat stop|start, busoff, "
-                "recover, fault CODE, reboot, stuck-enable on|off, force-percent P, clear)";
+                "recover, fault CODE, reboot, stuck-enable on|off, force-percent P, servo-stuck N, "
+                "clear)";
         return false;
     }
     return true;

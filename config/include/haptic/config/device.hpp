@@ -173,6 +173,9 @@ struct ServoConfig {
     double max_rad{0.0};
     double max_rate_rad_per_s{0.0};
     double lag_time_constant_s{0.0};  // first-order position response
+    // A measured angle may differ from the one this response predicts for the commanded
+    // targets by this much for up to can.heartbeat_timeout_ms before hapticd latches 105.
+    double angle_tolerance_rad{0.0872664626};  // 5 degrees
 };
 
 // YAML: finger_calibration: {...}. Per user: where the pad is and how far it may be pressed.

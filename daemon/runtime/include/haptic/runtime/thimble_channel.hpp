@@ -42,6 +42,10 @@ class ThimbleChannel final
   protected:
     [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
     void commandSafe() noexcept override { command_.servo_target_rad = retract_servo_rad_; }
+    std::uint32_t plausibilityFaults(std::int64_t now_ns) noexcept override;
+    [[nodiscard]] const char* implausibleMessage() const noexcept override {
+        return implausible_message_;
+    }
 
   private:
     void measure() noexcept;
@@ -56,6 +60,16 @@ class ThimbleChannel final
     std::uint64_t state_updates_{0};
     tactile::PlatformDofs measured_dofs_{};
     tactile::PlatformPose measured_pose_{};
+    // Where the servos should be: the commanded targets through their lag and rate limit,
+    // resynchronised to the measured angles whenever the state cannot be judged.
+    tactile::ServoAngles expected_servo_rad_{};
+    bool expected_synced_{false};
+    std::int64_t expected_at_ns_{0};
+    double servo_lag_s_{0.0};
+    double servo_max_rate_rad_per_s_{0.0};
+    double angle_tolerance_rad_{0.0};
+    std::int64_t angle_mismatch_since_ns_{-1};
+    char implausible_message_[msgs::kShortTextCapacity]{};
 };
 
 }  // namespace haptic::runtime

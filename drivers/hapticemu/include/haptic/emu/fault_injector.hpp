@@ -15,6 +15,7 @@
 //                   drive enable: it keeps following the force setpoint)
 //   force-percent P the exoskeleton's actuator produces (and measures) P % of its setpoint,
 //                   0-200 (a weak or miscalibrated drive); 100 is healthy
+//   servo-stuck N   the thimble's servo N (1-3) holds its angle whatever its target; 0: none
 //   clear           all of the above off
 // Fixed-size delay queue: no allocation while running.
 
@@ -48,6 +49,8 @@ class FaultInjector {
     bool takeReboot() noexcept;
     [[nodiscard]] bool stuckEnable() const noexcept { return stuck_enable_; }
     [[nodiscard]] double forceFraction() const noexcept { return force_percent_ * 0.01; }
+    // The thimble servo (1-3) that holds its angle, 0 when none.
+    [[nodiscard]] std::uint8_t stuckServo() const noexcept { return stuck_servo_; }
     [[nodiscard]] std::uint64_t droppedFrames() const noexcept { return dropped_; }
     [[nodiscard]] std::uint64_t corruptedFrames() const noexcept { return corrupted_; }
 
@@ -72,6 +75,7 @@ class FaultInjector {
     bool fault_changed_{false};
     bool reboot_{false};
     bool stuck_enable_{false};
+    std::uint8_t stuck_servo_{0};
     std::uint32_t force_percent_{100};
     std::array<Delayed, kDelayCapacity> delayed_{};
     std::size_t delayed_head_{0};
