@@ -401,7 +401,8 @@ TEST_F(EstopRelayTest, APressedOrSilentRelayStopsTheDevicesAndOnlyAnOperatorReAr
     // its last status, sent before the silence) and two ticks.
     // Rendering again: the device reports itself enabled (this also drains the listener).
     bool enabled = false;
-    for (int i = 0; i < 100 && !enabled; ++i) {
+    // Up to 20 s, as renderUntilTheExoskeletonPushes: a sanitized handsim steps at ~4 Hz.
+    for (int i = 0; i < 660 && !enabled; ++i) {
         const auto window = exo_bus_.listen(30ms);
         enabled = std::any_of(window.begin(), window.end(),
                               [](const auto& h) { return enabledWithForce(h.message, 0.0); });

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include "allocation_counter.hpp"
 #include "runtime_rig.hpp"
 
@@ -12,6 +14,7 @@ namespace {
 
 TEST(RuntimeAllocation, TenThousandTicksOfBothDevicesAllocateNothing) {
     RuntimeRig rig;
+    rig.attachEstopRelay();  // its frames, supervision and a press are on the path too
     rig.offerContact();
     rig.ticks(20);
     ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
@@ -19,6 +22,7 @@ TEST(RuntimeAllocation, TenThousandTicksOfBothDevicesAllocateNothing) {
 
     std::uint64_t allocations = 0;
     double peak_force = 0.0;
+    bool saw_estop = false;
     {
         ScopedAllocationCounter counter;
         for (int i = 0; i < 10'000; ++i) {
@@ -30,13 +34,27 @@ TEST(RuntimeAllocation, TenThousandTicksOfBothDevicesAllocateNothing) {
                 (void)rig.command(msgs::CommandKind::kSetMethod, "anisotropic");
                 (void)rig.command(msgs::CommandKind::kEnable);
             }
+            std::string unused;
+            if (i == 8'000) {
+                (void)rig.estop_relay->command("press", unused);
+            }
+            if (i == 8'100) {
+                (void)rig.estop_relay->command("release", unused);
+            }
+            if (i == 8'200) {
+                (void)rig.command(msgs::CommandKind::kClearFault);
+                (void)rig.command(msgs::CommandKind::kEnable);
+            }
             rig.tick();
+            saw_estop = saw_estop || rig.core.state() == msgs::DaemonState::kEstop;
             peak_force = std::max(peak_force, std::abs(rig.exoForce()));
         }
         allocations = counter.allocations();
     }
     EXPECT_EQ(allocations, 0U);
     EXPECT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
+    EXPECT_TRUE(saw_estop) << "the relay's press must have stopped the loop";
+    EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U) << "and been cleared";
     EXPECT_GT(peak_force, 1.0) << "the loop must have rendered force, not idled";
     EXPECT_GT(rig.core.deviceReport(kExo).can.rx_frames, 10'000U);
 }
