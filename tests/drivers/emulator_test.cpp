@@ -29,11 +29,33 @@ TEST(ExoskeletonModel, ActuatorForceIsAFirstOrderLagClampedToTheLimit) {
     for (int i = 0; i < 2000; ++i) {
         model.step(1e-3, 1000.0, true);
     }
-    EXPECT_NEAR(model.forceN(), actuator.max_force_n, 1e-6);
+    // The drive saturates at max_force_n; what reaches the rod, which the force keeps moving,
+    // is that on the torque-speed line.
+    EXPECT_NEAR(model.forceN(),
+                deliverableForceN(actuator.max_force_n, model.rodSpeedMPerS(), actuator), 1e-6);
+    EXPECT_LE(model.forceN(), actuator.max_force_n);
     for (int i = 0; i < 200; ++i) {
         model.step(1e-3, 1000.0, false);
     }
     EXPECT_NEAR(model.forceN(), 0.0, 1e-6);  // disabled: limp
+}
+
+// actuator.max_speed_m_per_s is the motor's torque-speed line: pushing the rod along its
+// motion the drive delivers less the faster the rod goes, nothing at that speed; braking the
+// rod it delivers the full force.
+TEST(ExoskeletonModel, TheDriveDeliversLessForceTheFasterItPushesTheRodAlong) {
+    const auto device = exoskeletonDevice();
+    auto actuator = device.exoskeleton().actuator;
+    const double v_max = actuator.max_speed_m_per_s;
+    const double f_max = actuator.max_force_n;
+    EXPECT_DOUBLE_EQ(deliverableForceN(30.0, 0.0, actuator), 30.0);
+    EXPECT_DOUBLE_EQ(deliverableForceN(30.0, 0.5 * v_max, actuator), 0.5 * f_max);
+    EXPECT_DOUBLE_EQ(deliverableForceN(-30.0, -0.5 * v_max, actuator), -0.5 * f_max);
+    EXPECT_DOUBLE_EQ(deliverableForceN(5.0, 0.5 * v_max, actuator), 5.0) << "below the line";
+    EXPECT_DOUBLE_EQ(deliverableForceN(30.0, 2.0 * v_max, actuator), 0.0);
+    EXPECT_DOUBLE_EQ(deliverableForceN(30.0, -2.0 * v_max, actuator), 30.0) << "braking";
+    actuator.max_speed_m_per_s *= 2.0;
+    EXPECT_DOUBLE_EQ(deliverableForceN(30.0, 0.5 * v_max, actuator), 0.75 * f_max);
 }
 
 TEST(ExoskeletonModel, TheFingerFollowsTheIntentAndYieldsToTheActuator) {

@@ -53,7 +53,9 @@ ExoskeletonChannel::ExoskeletonChannel(const config::DeviceConfig& device, can::
       max_stiffness_n_per_m_(device.safety.max_stiffness_n_per_m),
       max_velocity_m_per_s_(device.safety.max_velocity_m_per_s),
       lag_time_constant_s_(device.exoskeleton().actuator.lag_time_constant_s),
-      force_tolerance_n_(device.exoskeleton().actuator.force_tolerance_n) {
+      force_tolerance_n_(device.exoskeleton().actuator.force_tolerance_n),
+      actuator_max_force_n_(device.exoskeleton().actuator.max_force_n),
+      actuator_max_speed_m_per_s_(device.exoskeleton().actuator.max_speed_m_per_s) {
     applied_method_.assign(config::toString(device.exoskeleton().rendering.method));
     report_.kind = msgs::DeviceKind::kExoskeleton;
 }
@@ -111,13 +113,22 @@ std::uint32_t ExoskeletonChannel::plausibilityFaults(std::int64_t now_ns) noexce
                       state.actuator.command_echo, driver_.lastCommandCounter(), ms);
         return kImplausibleFeedback;
     }
-    const double tolerance_n = force_tolerance_n_ + 0.2 * std::abs(expected_force_n_);
+    // What the motor can deliver at the rod's speed: driving the rod along its motion, at most
+    // actuator.max_force_n (1 - |v| / actuator.max_speed_m_per_s) (its torque-speed line).
+    double deliverable_n = expected_force_n_;
+    if (expected_force_n_ * rod_velocity_ > 0.0) {
+        const double cap =
+            actuator_max_force_n_ *
+            std::max(0.0, 1.0 - std::abs(rod_velocity_) / actuator_max_speed_m_per_s_);
+        deliverable_n = std::clamp(expected_force_n_, -cap, cap);
+    }
+    const double tolerance_n = force_tolerance_n_ + 0.2 * std::abs(deliverable_n);
     const bool force_off = command_.enable && reports_enabled &&
-                           std::abs(state.actuator.force_n - expected_force_n_) > tolerance_n;
+                           std::abs(state.actuator.force_n - deliverable_n) > tolerance_n;
     if (const double ms = lasting(force_off, force_mismatch_since_ns_); ms > 0.0) {
         std::snprintf(implausible_message_, sizeof(implausible_message_),
                       "device measures %.2f N against %.2f N commanded for %.0f ms",
-                      state.actuator.force_n, expected_force_n_, ms);
+                      state.actuator.force_n, deliverable_n, ms);
         return kImplausibleFeedback;
     }
     return 0;

@@ -7,6 +7,16 @@
 
 namespace haptic::emu {
 
+double deliverableForceN(double drive_force_n, double rod_speed_m_per_s,
+                         const config::ActuatorConfig& actuator) noexcept {
+    if (!(drive_force_n * rod_speed_m_per_s > 0.0) || !(actuator.max_speed_m_per_s > 0.0)) {
+        return drive_force_n;
+    }
+    const double cap = actuator.max_force_n * std::max(0.0, 1.0 - std::abs(rod_speed_m_per_s) /
+                                                                      actuator.max_speed_m_per_s);
+    return std::clamp(drive_force_n, -cap, cap);
+}
+
 ExoskeletonModel::ExoskeletonModel(const config::DeviceConfig& device)
     : ExoskeletonModel(device, HandImpedance{}, Intent{}) {}
 
@@ -90,9 +100,10 @@ void ExoskeletonModel::step(double dt_s, double force_command_n, bool enable) no
     }
     if (enable) {
         // Implicit Euler of tau dF/dt = target - F: stable for any dt.
-        force_n_ += (target_n - force_n_) * dt_s / (actuator_.lag_time_constant_s + dt_s);
+        drive_force_n_ +=
+            (target_n - drive_force_n_) * dt_s / (actuator_.lag_time_constant_s + dt_s);
     } else {
-        force_n_ = 0.0;  // a disabled drive carries no current: limp at once, not after a lag
+        drive_force_n_ = 0.0;  // a disabled drive carries no current: limp at once, no lag
     }
     time_s_ += dt_s;
 
@@ -106,6 +117,8 @@ void ExoskeletonModel::step(double dt_s, double force_command_n, bool enable) no
     for (std::size_t j = 0; j < 3; ++j) {
         rod_speed_m_per_s += jacobian[j] * qd_rad_per_s_[j];
     }
+    rod_speed_m_per_s_ = rod_speed_m_per_s;
+    force_n_ = deliverableForceN(drive_force_n_, rod_speed_m_per_s, actuator_);
     for (std::size_t j = 0; j < 3; ++j) {
         const config::Interval& limits = finger_.joint_limits_rad[j];
         const double mid = 0.5 * (limits.min + limits.max);

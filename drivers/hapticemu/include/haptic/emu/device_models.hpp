@@ -11,13 +11,20 @@
 
 namespace haptic::emu {
 
-// Exoskeleton: the actuator force follows the command through a first-order lag and is
-// limited to actuator.max_force_n; it is zero while disabled. The finger (MCP, PIP, DIP)
-// follows the user's intent through a hand impedance (per-joint inertia, stiffness, damping)
-// and feels the actuator through the linkage: tau = J^T F with J = d(stroke)/dq, so a
-// positive force (extending the actuator) flexes the finger. Joints stop at their limits.
-// The intent is the virtual user's (setIntent) once it wears the device; until then, and for
-// an emulator without a user, a built-in open-close sine.
+// The force a drive making `drive_force_n` delivers to a rod moving at `rod_speed_m_per_s`:
+// the motor's torque-speed line. Driving the rod along its motion it delivers at most
+// actuator.max_force_n (1 - |v| / actuator.max_speed_m_per_s), nothing at max_speed; braking
+// it, the full force. hapticd's plausibility check expects the same.
+[[nodiscard]] double deliverableForceN(double drive_force_n, double rod_speed_m_per_s,
+                                       const config::ActuatorConfig& actuator) noexcept;
+
+// Exoskeleton: the actuator force follows the command through a first-order lag, limited to
+// actuator.max_force_n and to the torque-speed line above; it is zero while disabled. The
+// finger (MCP, PIP, DIP) follows the user's intent through a hand impedance (per-joint
+// inertia, stiffness, damping) and feels the actuator through the linkage: tau = J^T F with
+// J = d(stroke)/dq, so a positive force (extending the actuator) flexes the finger. Joints
+// stop at their limits. The intent is the virtual user's (setIntent) once it wears the
+// device; until then, and for an emulator without a user, a built-in open-close sine.
 class ExoskeletonModel {
   public:
     using HandImpedance = config::HandImpedanceConfig;
@@ -38,6 +45,8 @@ class ExoskeletonModel {
     void placeFinger(const std::array<double, 3>& q_rad) noexcept;
 
     [[nodiscard]] double forceN() const noexcept { return force_n_; }
+    // The rod's speed the last step()'s force was delivered at (m/s, positive lengthening).
+    [[nodiscard]] double rodSpeedMPerS() const noexcept { return rod_speed_m_per_s_; }
     [[nodiscard]] double strokeM() const noexcept;
     [[nodiscard]] const std::array<double, 3>& jointRad() const noexcept { return q_rad_; }
     [[nodiscard]] bool enabled() const noexcept { return enabled_; }
@@ -56,7 +65,9 @@ class ExoskeletonModel {
     Intent intent_;
     bool user_intent_{false};
     std::array<double, 3> user_intent_rad_{};
-    double force_n_{0.0};
+    double drive_force_n_{0.0};  // the force the drive's current makes, after its lag
+    double rod_speed_m_per_s_{0.0};
+    double force_n_{0.0};  // what reaches the rod: drive_force_n_ on the torque-speed line
     bool enabled_{false};
     double time_s_{0.0};
     std::array<double, 3> q_rad_{};
