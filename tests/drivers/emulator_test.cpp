@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "device_files.hpp"
+#include "haptic/devices/actuator_limits.hpp"
 #include "haptic/emu/device_models.hpp"
 #include "haptic/emu/fault_injector.hpp"
 
@@ -32,7 +33,8 @@ TEST(ExoskeletonModel, ActuatorForceIsAFirstOrderLagClampedToTheLimit) {
     // The drive saturates at max_force_n; what reaches the rod, which the force keeps moving,
     // is that on the torque-speed line.
     EXPECT_NEAR(model.forceN(),
-                deliverableForceN(actuator.max_force_n, model.rodSpeedMPerS(), actuator), 1e-6);
+                devices::deliverableForceN(actuator.max_force_n, model.rodSpeedMPerS(), actuator),
+                1e-6);
     EXPECT_LE(model.forceN(), actuator.max_force_n);
     for (int i = 0; i < 200; ++i) {
         model.step(1e-3, 1000.0, false);
@@ -48,14 +50,15 @@ TEST(ExoskeletonModel, TheDriveDeliversLessForceTheFasterItPushesTheRodAlong) {
     auto actuator = device.exoskeleton().actuator;
     const double v_max = actuator.max_speed_m_per_s;
     const double f_max = actuator.max_force_n;
-    EXPECT_DOUBLE_EQ(deliverableForceN(30.0, 0.0, actuator), 30.0);
-    EXPECT_DOUBLE_EQ(deliverableForceN(30.0, 0.5 * v_max, actuator), 0.5 * f_max);
-    EXPECT_DOUBLE_EQ(deliverableForceN(-30.0, -0.5 * v_max, actuator), -0.5 * f_max);
-    EXPECT_DOUBLE_EQ(deliverableForceN(5.0, 0.5 * v_max, actuator), 5.0) << "below the line";
-    EXPECT_DOUBLE_EQ(deliverableForceN(30.0, 2.0 * v_max, actuator), 0.0);
-    EXPECT_DOUBLE_EQ(deliverableForceN(30.0, -2.0 * v_max, actuator), 30.0) << "braking";
+    EXPECT_DOUBLE_EQ(devices::deliverableForceN(30.0, 0.0, actuator), 30.0);
+    EXPECT_DOUBLE_EQ(devices::deliverableForceN(30.0, 0.5 * v_max, actuator), 0.5 * f_max);
+    EXPECT_DOUBLE_EQ(devices::deliverableForceN(-30.0, -0.5 * v_max, actuator), -0.5 * f_max);
+    EXPECT_DOUBLE_EQ(devices::deliverableForceN(5.0, 0.5 * v_max, actuator), 5.0)
+        << "below the line";
+    EXPECT_DOUBLE_EQ(devices::deliverableForceN(30.0, 2.0 * v_max, actuator), 0.0);
+    EXPECT_DOUBLE_EQ(devices::deliverableForceN(30.0, -2.0 * v_max, actuator), 30.0) << "braking";
     actuator.max_speed_m_per_s *= 2.0;
-    EXPECT_DOUBLE_EQ(deliverableForceN(30.0, 0.5 * v_max, actuator), 0.75 * f_max);
+    EXPECT_DOUBLE_EQ(devices::deliverableForceN(30.0, 0.5 * v_max, actuator), 0.75 * f_max);
 }
 
 TEST(ExoskeletonModel, TheFingerFollowsTheIntentAndYieldsToTheActuator) {

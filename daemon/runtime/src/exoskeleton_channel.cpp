@@ -6,6 +6,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "haptic/devices/actuator_limits.hpp"
+
 namespace haptic::runtime {
 namespace {
 
@@ -54,8 +56,7 @@ ExoskeletonChannel::ExoskeletonChannel(const config::DeviceConfig& device, can::
       max_velocity_m_per_s_(device.safety.max_velocity_m_per_s),
       lag_time_constant_s_(device.exoskeleton().actuator.lag_time_constant_s),
       force_tolerance_n_(device.exoskeleton().actuator.force_tolerance_n),
-      actuator_max_force_n_(device.exoskeleton().actuator.max_force_n),
-      actuator_max_speed_m_per_s_(device.exoskeleton().actuator.max_speed_m_per_s) {
+      actuator_(device.exoskeleton().actuator) {
     applied_method_.assign(config::toString(device.exoskeleton().rendering.method));
     report_.kind = msgs::DeviceKind::kExoskeleton;
 }
@@ -113,15 +114,9 @@ std::uint32_t ExoskeletonChannel::plausibilityFaults(std::int64_t now_ns) noexce
                       state.actuator.command_echo, driver_.lastCommandCounter(), ms);
         return kImplausibleFeedback;
     }
-    // What the motor can deliver at the rod's speed: driving the rod along its motion, at most
-    // actuator.max_force_n (1 - |v| / actuator.max_speed_m_per_s) (its torque-speed line).
-    double deliverable_n = expected_force_n_;
-    if (expected_force_n_ * rod_velocity_ > 0.0) {
-        const double cap =
-            actuator_max_force_n_ *
-            std::max(0.0, 1.0 - std::abs(rod_velocity_) / actuator_max_speed_m_per_s_);
-        deliverable_n = std::clamp(expected_force_n_, -cap, cap);
-    }
+    // What the motor can deliver at the rod's speed (its torque-speed line), as the device does.
+    const double deliverable_n =
+        devices::deliverableForceN(expected_force_n_, rod_velocity_, actuator_);
     const double tolerance_n = force_tolerance_n_ + 0.2 * std::abs(deliverable_n);
     const bool force_off = command_.enable && reports_enabled &&
                            std::abs(state.actuator.force_n - deliverable_n) > tolerance_n;

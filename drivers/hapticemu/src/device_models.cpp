@@ -5,17 +5,9 @@
 #include <numbers>
 #include <stdexcept>
 
-namespace haptic::emu {
+#include "haptic/devices/actuator_limits.hpp"
 
-double deliverableForceN(double drive_force_n, double rod_speed_m_per_s,
-                         const config::ActuatorConfig& actuator) noexcept {
-    if (!(drive_force_n * rod_speed_m_per_s > 0.0) || !(actuator.max_speed_m_per_s > 0.0)) {
-        return drive_force_n;
-    }
-    const double cap = actuator.max_force_n * std::max(0.0, 1.0 - std::abs(rod_speed_m_per_s) /
-                                                                      actuator.max_speed_m_per_s);
-    return std::clamp(drive_force_n, -cap, cap);
-}
+namespace haptic::emu {
 
 ExoskeletonModel::ExoskeletonModel(const config::DeviceConfig& device)
     : ExoskeletonModel(device, HandImpedance{}, Intent{}) {}
@@ -118,7 +110,7 @@ void ExoskeletonModel::step(double dt_s, double force_command_n, bool enable) no
         rod_speed_m_per_s += jacobian[j] * qd_rad_per_s_[j];
     }
     rod_speed_m_per_s_ = rod_speed_m_per_s;
-    force_n_ = deliverableForceN(drive_force_n_, rod_speed_m_per_s, actuator_);
+    force_n_ = devices::deliverableForceN(drive_force_n_, rod_speed_m_per_s, actuator_);
     for (std::size_t j = 0; j < 3; ++j) {
         const config::Interval& limits = finger_.joint_limits_rad[j];
         const double mid = 0.5 * (limits.min + limits.max);

@@ -121,8 +121,7 @@ class ExoskeletonChannel final
     // measure. Compared with what it does (actuator.force_tolerance_n + 20 %).
     double lag_time_constant_s_;
     double force_tolerance_n_;
-    double actuator_max_force_n_;
-    double actuator_max_speed_m_per_s_;
+    config::ActuatorConfig actuator_;
     double expected_force_n_{0.0};
     std::int64_t force_mismatch_since_ns_{-1};
     std::int64_t echo_mismatch_since_ns_{-1};

@@ -11,18 +11,11 @@
 
 namespace haptic::emu {
 
-// The force a drive making `drive_force_n` delivers to a rod moving at `rod_speed_m_per_s`:
-// the motor's torque-speed line. Driving the rod along its motion it delivers at most
-// actuator.max_force_n (1 - |v| / actuator.max_speed_m_per_s), nothing at max_speed; braking
-// it, the full force. hapticd's plausibility check expects the same.
-[[nodiscard]] double deliverableForceN(double drive_force_n, double rod_speed_m_per_s,
-                                       const config::ActuatorConfig& actuator) noexcept;
-
 // Exoskeleton: the actuator force follows the command through a first-order lag, limited to
-// actuator.max_force_n and to the torque-speed line above; it is zero while disabled. The
-// finger (MCP, PIP, DIP) follows the user's intent through a hand impedance (per-joint
-// inertia, stiffness, damping) and feels the actuator through the linkage: tau = J^T F with
-// J = d(stroke)/dq, so a positive force (extending the actuator) flexes the finger. Joints
+// actuator.max_force_n and to the torque-speed line (devices::deliverableForceN); it is zero while
+// disabled. The finger (MCP, PIP, DIP) follows the user's intent through a hand impedance
+// (per-joint inertia, stiffness, damping) and feels the actuator through the linkage: tau = J^T F
+// with J = d(stroke)/dq, so a positive force (extending the actuator) flexes the finger. Joints
 // stop at their limits. The intent is the virtual user's (setIntent) once it wears the
 // device; until then, and for an emulator without a user, a built-in open-close sine.
 class ExoskeletonModel {
