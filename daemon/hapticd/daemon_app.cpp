@@ -313,11 +313,7 @@ int runDaemon(const DaemonOptions& options) {
     const auto& cfg = options.config;
     // Over DDS the daemon needs no RouDi: the sim link is its only iceoryx user.
     const bool dds_sim = cfg.sim_link.transport == config::SimTransport::kDds;
-    std::optional<ipc::RoudiWatch> roudi_watch;
-    if (!dds_sim) {
-        ipc::initIceoryxRuntime("hapticd");
-        roudi_watch.emplace();
-    }
+    const std::optional<ipc::RoudiWatch> roudi_watch = ipc::joinRoudi(!dds_sim, "hapticd");
     std::vector<DeviceEndpoints> endpoints(cfg.devices.size());
     for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
         const auto& device = cfg.devices[i];

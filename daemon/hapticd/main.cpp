@@ -6,9 +6,7 @@
 #include "daemon_app.hpp"
 #include "haptic/config/command_line.hpp"
 #include "haptic/config/daemon.hpp"
-#include "haptic/process/logging.hpp"
 #include "haptic/process/main_skeleton.hpp"
-#include "haptic/process/shutdown.hpp"
 
 int main(int argc, char** argv) {
     CLI::App app{"hapticd - hard real-time haptic rendering daemon (1 kHz)"};
@@ -23,17 +21,14 @@ int main(int argc, char** argv) {
     CLI11_PARSE(app, argc, argv);
 
     return haptic::process::runMain("hapticd", [&] {
-        haptic::hapticd::DaemonOptions options;
-        options.config = haptic::config::loadDaemonConfig(overrides.config_path);
-        options.duration_s = overrides.duration_s;
-        const std::string log_level = applyCommonOverrides(overrides, options.config);
-        if (!realtime.empty()) {
-            options.config.loop.realtime = realtime == "enforce"
+        using haptic::config::DaemonConfig;
+        return haptic::hapticd::runDaemon(haptic::config::startWithConfig<DaemonConfig>(
+            "hapticd", overrides, haptic::config::loadDaemonConfig, [&](DaemonConfig& config) {
+                if (!realtime.empty()) {
+                    config.loop.realtime = realtime == "enforce"
                                                ? haptic::config::RealtimeMode::kEnforce
                                                : haptic::config::RealtimeMode::kIgnore;
-        }
-        haptic::process::setupLogging("hapticd", log_level);
-        haptic::process::installShutdownHandlers();
-        return haptic::hapticd::runDaemon(options);
+                }
+            }));
     });
 }

@@ -7,9 +7,7 @@
 
 #include "haptic/config/command_line.hpp"
 #include "haptic/config/sim.hpp"
-#include "haptic/process/logging.hpp"
 #include "haptic/process/main_skeleton.hpp"
-#include "haptic/process/shutdown.hpp"
 #include "sim_app.hpp"
 
 int main(int argc, char** argv) {
@@ -31,16 +29,13 @@ int main(int argc, char** argv) {
     CLI11_PARSE(app, argc, argv);
 
     return haptic::process::runMain("handsim", [&] {
-        haptic::handsim::SimOptions options;
-        options.config = haptic::config::loadSimConfig(overrides.config_path);
-        options.duration_s = overrides.duration_s;
-        if (!tracking_topic.empty()) {
-            options.config.scene.tracking.source = haptic::config::TrackingSource::kTopic;
-            options.config.scene.tracking.topic = tracking_topic;
-        }
-        const std::string log_level = applyCommonOverrides(overrides, options.config);
-        haptic::process::setupLogging("handsim", log_level);
-        haptic::process::installShutdownHandlers();
-        return haptic::handsim::runSim(options);
+        using haptic::config::SimConfig;
+        return haptic::handsim::runSim(haptic::config::startWithConfig<SimConfig>(
+            "handsim", overrides, haptic::config::loadSimConfig, [&](SimConfig& config) {
+                if (!tracking_topic.empty()) {
+                    config.scene.tracking.source = haptic::config::TrackingSource::kTopic;
+                    config.scene.tracking.topic = tracking_topic;
+                }
+            }));
     });
 }

@@ -123,27 +123,16 @@ InputRejection DaemonCore::offerConstraintSet(std::size_t device,
                                               const msgs::ConstraintSet& message,
                                               std::int64_t now_ns) noexcept {
     DeviceSlot& slot = devices_[device];
-    const InputRejection reason =
-        account(slot, validate(message, slot.descriptor.name, slot.descriptor.joint_count),
-                message.header, now_ns);
-    if (reason == InputRejection::kNone) {
-        slot.constraint_set = message;
-        slot.has_constraint_set = true;
-    }
-    return reason;
+    return admit(slot, validate(message, slot.descriptor.name, slot.descriptor.joint_count),
+                 message, slot.constraint_set, slot.has_constraint_set, now_ns);
 }
 
 InputRejection DaemonCore::offerContactSurface(std::size_t device,
                                                const msgs::ContactSurface& message,
                                                std::int64_t now_ns) noexcept {
     DeviceSlot& slot = devices_[device];
-    const InputRejection reason =
-        account(slot, validate(message, slot.descriptor.name), message.header, now_ns);
-    if (reason == InputRejection::kNone) {
-        slot.contact_surface = message;
-        slot.has_contact_surface = true;
-    }
-    return reason;
+    return admit(slot, validate(message, slot.descriptor.name), message, slot.contact_surface,
+                 slot.has_contact_surface, now_ns);
 }
 
 double DaemonCore::ageMs(const DeviceSlot& slot, std::int64_t now_ns) const noexcept {

@@ -4,20 +4,6 @@
 
 namespace haptic::can {
 
-const char* toString(BusState state) noexcept {
-    switch (state) {
-        case BusState::kErrorActive:
-            return "error-active";
-        case BusState::kErrorWarning:
-            return "error-warning";
-        case BusState::kErrorPassive:
-            return "error-passive";
-        case BusState::kBusOff:
-            return "bus-off";
-    }
-    return "unknown";
-}
-
 void BusStateTracker::onErrorFrame(const CanFrame& frame, std::int64_t now_ns) noexcept {
     if (!frame.isError()) {
         return;

@@ -4,15 +4,6 @@ namespace haptic::devices {
 
 using protocol::ExoskeletonMessage;
 
-ExoskeletonDriver::ExoskeletonDriver(const config::DeviceConfig& device, can::CanBus& bus)
-    : bus_(bus), codec_(device), link_(device.can) {}
-
-int ExoskeletonDriver::poll(std::int64_t now_ns) noexcept {
-    return pollFrames(bus_, now_ns, [this](const can::CanFrame& frame, std::int64_t now) {
-        return handleFrame(frame, now);
-    });
-}
-
 bool ExoskeletonDriver::handleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept {
     const ExoskeletonMessage message = codec_.decode(frame);
     switch (message.type) {
@@ -46,24 +37,6 @@ bool ExoskeletonDriver::handleFrame(const can::CanFrame& frame, std::int64_t now
                                                                         : state_.encoders_time_ns);
     }
     return true;
-}
-
-can::IoResult ExoskeletonDriver::sendCommand(const protocol::ExoskeletonCommand& command) noexcept {
-    const std::uint8_t counter = codec_.peekCounter(protocol::FrameRole::kCommand);
-    can::CanFrame frame;
-    if (!codec_.encodeCommand(command, frame)) {
-        return can::IoResult::kInvalid;
-    }
-    const can::IoResult result = bus_.write(frame);
-    link_.onTransmit(result);
-    if (result == can::IoResult::kOk) {
-        last_counter_ = counter;
-    }
-    return result;
-}
-
-std::uint32_t ExoskeletonDriver::faults(std::int64_t now_ns) noexcept {
-    return link_.faults(now_ns, bus_.state());
 }
 
 }  // namespace haptic::devices

@@ -4,15 +4,6 @@ namespace haptic::devices {
 
 using protocol::ThimbleMessage;
 
-ThimbleDriver::ThimbleDriver(const config::DeviceConfig& device, can::CanBus& bus)
-    : bus_(bus), codec_(device), link_(device.can) {}
-
-int ThimbleDriver::poll(std::int64_t now_ns) noexcept {
-    return pollFrames(bus_, now_ns, [this](const can::CanFrame& frame, std::int64_t now) {
-        return handleFrame(frame, now);
-    });
-}
-
 bool ThimbleDriver::handleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept {
     const ThimbleMessage message = codec_.decode(frame);
     switch (message.type) {
@@ -37,20 +28,6 @@ bool ThimbleDriver::handleFrame(const can::CanFrame& frame, std::int64_t now_ns)
             break;
     }
     return true;
-}
-
-can::IoResult ThimbleDriver::sendCommand(const protocol::ThimbleCommand& command) noexcept {
-    can::CanFrame frame;
-    if (!codec_.encodeCommand(command, frame)) {
-        return can::IoResult::kInvalid;
-    }
-    const can::IoResult result = bus_.write(frame);
-    link_.onTransmit(result);
-    return result;
-}
-
-std::uint32_t ThimbleDriver::faults(std::int64_t now_ns) noexcept {
-    return link_.faults(now_ns, bus_.state());
 }
 
 }  // namespace haptic::devices

@@ -21,4 +21,12 @@ void initIceoryxRuntime(std::string_view app_name) {
         iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name.c_str(), name.size()));
 }
 
+std::optional<RoudiWatch> joinRoudi(bool uses_iceoryx, std::string_view app_name) {
+    if (!uses_iceoryx) {
+        return std::nullopt;
+    }
+    initIceoryxRuntime(app_name);
+    return RoudiWatch();
+}
+
 }  // namespace haptic::ipc

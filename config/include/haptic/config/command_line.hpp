@@ -9,6 +9,8 @@
 
 #include "haptic/config/common.hpp"
 #include "haptic/config/enums.hpp"
+#include "haptic/process/logging.hpp"
+#include "haptic/process/shutdown.hpp"
 
 namespace haptic::config {
 
@@ -55,6 +57,22 @@ template <class Config>
     }
     return overrides.log_level.empty() ? std::string(toString(config.log_level))
                                        : overrides.log_level;
+}
+
+// The start hapticd and handsim share once their command line is parsed: load the file
+// (`load`, which throws ConfigError), apply the common overrides and the program's own
+// (`adjust`), then set up logging and the SIGINT/SIGTERM handlers.
+template <class Config, class Load, class Adjust>
+[[nodiscard]] RunOptions<Config> startWithConfig(const char* program,
+                                                 const CommonOverrides& overrides, Load&& load,
+                                                 Adjust&& adjust) {
+    RunOptions<Config> options;
+    options.config = load(overrides.config_path);
+    options.duration_s = overrides.duration_s;
+    adjust(options.config);
+    process::setupLogging(program, applyCommonOverrides(overrides, options.config));
+    process::installShutdownHandlers();
+    return options;
 }
 
 }  // namespace haptic::config

@@ -128,14 +128,28 @@ WallMeasurement measureWall(const WallCase& wall, RenderingMethod method, RhoMod
     return m;
 }
 
+namespace {
+
+// The point device and renderer a dynamic wall experiment (slide, pumping) runs.
+struct WallRig {
+    WallRig(const WallCase& wall, RenderingMethod method, RhoMode rho_mode, double rho_override)
+        : device(actuatedDirection(wall.beta_rad), kStudyMaxForce),
+          renderer(device, parametersFor(wall, method, rho_mode, rho_override)) {
+        wallConstraint(2, C, d);
+    }
+    ConstraintMatrix C;
+    ConstraintVector d;
+    LinearPointDevice device;
+    KinestheticRenderer renderer;
+};
+
+}  // namespace
+
 SlideResult simulateSlide(const SlideCase& slide, RenderingMethod method, RhoMode rho_mode,
                           double rho_override) {
     const WallCase& wall = slide.wall;
-    ConstraintMatrix C;
-    ConstraintVector d;
-    wallConstraint(2, C, d);
-    const LinearPointDevice device(actuatedDirection(wall.beta_rad), kStudyMaxForce);
-    KinestheticRenderer renderer(device, parametersFor(wall, method, rho_mode, rho_override));
+    WallRig rig(wall, method, rho_mode, rho_override);
+    KinestheticRenderer& renderer = rig.renderer;
     const Eigen::Vector2d a = actuatedDirection(wall.beta_rad).col(0);
     // Quasi-static fully actuated force (§6.4) as the target of the best match.
     const double full = wall.k_a * wall.k_u * wall.depth_u_m / (wall.k_u + wall.k_a);
@@ -157,7 +171,7 @@ SlideResult simulateSlide(const SlideCase& slide, RenderingMethod method, RhoMod
         const Eigen::Vector2d x_u(slide.slide_speed_m_per_s * t, -wall.depth_u_m);
         const ConfigVector q = x;
         const ConfigVector q_dot = v;
-        renderer.tick(q, q_dot, C, d, out);
+        renderer.tick(q, q_dot, rig.C, rig.d, out);
         const Eigen::Vector2d f_r = out.rendered_force;
         const Eigen::Vector2d f_user =
             wall.k_u * (x_u - x) + slide.user_damping_n_s_per_m * (intent_velocity - v);
@@ -189,11 +203,8 @@ SlideResult simulateSlide(const SlideCase& slide, RenderingMethod method, RhoMod
 PumpingResult runEnergyPumping(const PumpingCase& pumping, RenderingMethod method, RhoMode rho_mode,
                                double rho_override, bool passivity_controller) {
     const WallCase& wall = pumping.wall;
-    ConstraintMatrix C;
-    ConstraintVector d;
-    wallConstraint(2, C, d);
-    const LinearPointDevice device(actuatedDirection(wall.beta_rad), kStudyMaxForce);
-    KinestheticRenderer renderer(device, parametersFor(wall, method, rho_mode, rho_override));
+    WallRig rig(wall, method, rho_mode, rho_override);
+    KinestheticRenderer& renderer = rig.renderer;
     PortGuardConfig guard_config;
     guard_config.period_s = pumping.period_s;
     guard_config.max_force_n = 1e3;
@@ -236,7 +247,7 @@ PumpingResult runEnergyPumping(const PumpingCase& pumping, RenderingMethod metho
         }
         const ConfigVector q = x;
         const ConfigVector q_dot = v;
-        renderer.tick(q, q_dot, C, d, out);
+        renderer.tick(q, q_dot, rig.C, rig.d, out);
         const PortCommand command = guard.apply(out.actuator_force[0], a.dot(x), true);
         const Eigen::Vector2d f_device = a * command.force_n;
         result.max_force_n = std::max(result.max_force_n, std::abs(command.force_n));

@@ -206,6 +206,17 @@ class DaemonCore {
 
     InputRejection account(DeviceSlot& slot, InputRejection reason,
                            const msgs::MessageHeader& header, std::int64_t now_ns) noexcept;
+    // Accounts a validated message and keeps it in `stored` when it is accepted.
+    template <class Message>
+    InputRejection admit(DeviceSlot& slot, InputRejection validation, const Message& message,
+                         Message& stored, bool& has_stored, std::int64_t now_ns) noexcept {
+        const InputRejection reason = account(slot, validation, message.header, now_ns);
+        if (reason == InputRejection::kNone) {
+            stored = message;
+            has_stored = true;
+        }
+        return reason;
+    }
     [[nodiscard]] static bool newer(const DeviceSlot& slot,
                                     const msgs::MessageHeader& header) noexcept;
     [[nodiscard]] double ageMs(const DeviceSlot& slot, std::int64_t now_ns) const noexcept;

@@ -11,9 +11,9 @@
 
 namespace haptic::can {
 
+// The status shows it as msgs::BusState (haptic/msgs/names.hpp names it); the driver has no
+// text of its own.
 enum class BusState : std::uint8_t { kErrorActive, kErrorWarning, kErrorPassive, kBusOff };
-
-[[nodiscard]] const char* toString(BusState state) noexcept;
 
 struct RecoveryPolicy {
     enum class Mode : std::uint8_t {

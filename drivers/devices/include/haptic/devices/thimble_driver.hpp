@@ -5,9 +5,7 @@
 
 #include <cstdint>
 
-#include "haptic/can/bus.hpp"
-#include "haptic/config/device.hpp"
-#include "haptic/devices/link_monitor.hpp"
+#include "haptic/devices/device_driver.hpp"
 #include "haptic/protocol/thimble_protocol.hpp"
 
 namespace haptic::devices {
@@ -20,25 +18,19 @@ struct ThimbleDriverState {
     protocol::FaultReport last_fault;
 };
 
-class ThimbleDriver {
+class ThimbleDriver
+    : public DeviceDriver<ThimbleDriver, protocol::ThimbleCodec, protocol::ThimbleCommand> {
   public:
     // Throws std::invalid_argument when the device is not a thimble.
-    ThimbleDriver(const config::DeviceConfig& device, can::CanBus& bus);
+    ThimbleDriver(const config::DeviceConfig& device, can::CanBus& bus)
+        : DeviceDriver(device, bus) {}
 
-    int poll(std::int64_t now_ns) noexcept;
+    // Returns true when the frame has one of this device's ids (accepted or rejected).
     bool handleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept;
-    // Refuses NaN/Inf and targets outside the servo range (kInvalid, counted).
-    can::IoResult sendCommand(const protocol::ThimbleCommand& command) noexcept;
-    [[nodiscard]] std::uint32_t faults(std::int64_t now_ns) noexcept;
 
     [[nodiscard]] const ThimbleDriverState& state() const noexcept { return state_; }
-    [[nodiscard]] const protocol::ThimbleCodec& codec() const noexcept { return codec_; }
-    [[nodiscard]] const LinkMonitor& link() const noexcept { return link_; }
 
   private:
-    can::CanBus& bus_;
-    protocol::ThimbleCodec codec_;
-    LinkMonitor link_;
     ThimbleDriverState state_;
 };
 

@@ -51,6 +51,10 @@ class RoudiWatch {
     bool segment_known_{false};
 };
 
+// What hapticd and handsim do at start: with an iceoryx sim link (`uses_iceoryx`), register
+// under `app_name` and watch that RouDi; over DDS they need no RouDi and get nullopt.
+[[nodiscard]] std::optional<RoudiWatch> joinRoudi(bool uses_iceoryx, std::string_view app_name);
+
 // EX_TEMPFAIL from sysexits.h: "try again later", which is what a restart achieves.
 inline constexpr int kRoudiLostExitCode = 75;
 
