@@ -110,17 +110,33 @@ struct Safety {
     std::optional<Field> max_stiffness_field;  // for the passivity margin
 };
 
-Safety readSafety(MapReader safety) {
+Safety readSafety(MapReader safety, DeviceType type) {
     SafetyLimits out;
     auto [max_force, max_force_field] =
         safety.requiredWithField("max_force_n", Real::positive(100.0));
     out.max_force_n = max_force;
-    auto [max_stiffness, max_stiffness_field] =
-        safety.requiredWithField("max_stiffness_n_per_m", Real::positive(20'000.0));
-    out.max_stiffness_n_per_m = max_stiffness;
     out.max_velocity_m_per_s = safety.required("max_velocity_m_per_s", Real::positive(5.0));
     out.max_force_rate_n_per_s =
         safety.required("max_force_rate_n_per_s", Real::positive(100'000.0));
+    if (type == DeviceType::kThimble) {
+        // The plate is position-controlled: the stiffness the finger meets is its own pad's,
+        // and a stale device is retracted at once rather than faded. Keys with no effect are
+        // refused, not ignored.
+        for (const char* key : {"max_stiffness_n_per_m", "fade_out_ms"}) {
+            if (const auto field = safety.take(key)) {
+                field->failWith(
+                    std::string("not a thimble key: the exoskeleton's only (the "
+                                "thimble's plate is position-controlled; its "
+                                "limits are max_force_n, max_force_rate_n_per_s "
+                                "and max_velocity_m_per_s)"));
+            }
+        }
+        safety.finish();
+        return Safety{out, std::move(max_force_field), std::nullopt};
+    }
+    auto [max_stiffness, max_stiffness_field] =
+        safety.requiredWithField("max_stiffness_n_per_m", Real::positive(20'000.0));
+    out.max_stiffness_n_per_m = max_stiffness;
     out.fade_out_ms = safety.required("fade_out_ms", spec::Integer<int>::closed(1, 2000));
     safety.finish();
     return Safety{out, std::move(max_force_field), std::move(max_stiffness_field)};
@@ -312,7 +328,7 @@ DeviceConfig readDevice(MapReader root, const std::filesystem::path& source,
     out.name = root.required("name", spec::Identifier{});
     const DeviceType type = root.required("type", spec::Enum<DeviceType>{});
     out.can = readCan(root.requiredMap("can"));
-    const Safety safety = readSafety(root.requiredMap("safety"));
+    const Safety safety = readSafety(root.requiredMap("safety"), type);
     out.safety = safety.limits;
     switch (type) {
         case DeviceType::kExoskeleton:

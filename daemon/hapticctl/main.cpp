@@ -219,7 +219,8 @@ void printReport(const std::string& csv_path, double clamp_n) {
         stdout);
 }
 
-int plotTelemetry(const std::string& csv_path, std::string png_path, double clamp_n) {
+int plotTelemetry(const std::string& csv_path, std::string png_path, double clamp_n,
+                  double thimble_max_force_n) {
     if (png_path.empty()) {
         png_path = csv_path + ".png";
     }
@@ -248,7 +249,8 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
                      std::strerror(spawned));
         return kExitError;
     }
-    const std::string script = haptic::ctl::telemetryPlotScript(csv_path, png_path, clamp_n);
+    const std::string script =
+        haptic::ctl::telemetryPlotScript(csv_path, png_path, clamp_n, thimble_max_force_n);
     const bool written =
         ::write(pipe_fds[1], script.data(), script.size()) == static_cast<ssize_t>(script.size());
     ::close(pipe_fds[1]);
@@ -381,6 +383,12 @@ int main(int argc, char** argv) {
                      "the exoskeleton's force clamp (safety.max_force_n) for the clamp figure")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
+    double plot_thimble_max_force_n = 1.5;
+    plot->add_option("--thimble-max-force-n", plot_thimble_max_force_n,
+                     "the thimble's pad force limit (safety.max_force_n): the pad-force axis "
+                     "shows twice it")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
 
     using haptic::msgs::CommandKind;
     struct Simple {
@@ -435,7 +443,7 @@ int main(int argc, char** argv) {
             return recordTelemetry(cfg, record_path, record_duration_s, timeout_s);
         }
         if (plot->parsed()) {
-            return plotTelemetry(plot_path, plot_output, plot_clamp_n);
+            return plotTelemetry(plot_path, plot_output, plot_clamp_n, plot_thimble_max_force_n);
         }
         if (method->parsed()) {
             return sendCommand(cfg, CommandKind::kSetMethod, method_name, timeout_s);

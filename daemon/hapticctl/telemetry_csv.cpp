@@ -52,6 +52,7 @@ std::string telemetryCsvHeader() {
     header +=
         ",thimble_reference_moment_x_nm,thimble_reference_moment_y_nm,"
         "thimble_reference_moment_z_nm";
+    header += ",thimble_pad_force_model_n,thimble_pad_limit_flags";
     return header + "\n";
 }
 
@@ -90,6 +91,8 @@ std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t or
     for (const double moment : sample.thimble.reference_moment_device_nm) {
         row += fmt::format(",{:.6f}", moment);
     }
+    row += fmt::format(",{:.4f},{}", sample.thimble.pad_force_model_n,
+                       static_cast<unsigned>(sample.thimble.pad_limit_flags));
     return row + "\n";
 }
 
@@ -118,7 +121,7 @@ int columnNumber(std::string_view name) {
 }  // namespace
 
 std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path,
-                                double exo_clamp_n) {
+                                double exo_clamp_n, double thimble_max_force_n) {
     // Columns: 1 tick, 2 time, 3 device, 4 device kind, 5 exoskeleton force command [N],
     // 6-8 thimble servo commands [rad], 9 tick work (read + compute + write), 10 wake-up
     // latency, 11 read, 12 write. One panel per device kind, each in its own unit.
@@ -148,10 +151,12 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
         fmt::arg("reference", columnNumber("exo_reference_actuator_force_n")),
         fmt::arg("command", columnNumber("actuator_force_cmd_n")),
         fmt::arg("felt", columnNumber("exo_actuator_force_n")));
-    // The sim's reference force on the pad, on the right axis.
-    script +=
+    // The sim's reference force on the pad and the pad model's for the commanded plate, on the
+    // right axis.
+    script += fmt::format(
         "set ylabel 'thimble servo angle command [rad]'\n"
-        "set y2label 'thimble reference pad force [N]'\nset y2tics\nplot ";
+        "set y2label 'thimble pad force [N]'\nset y2tics\nset y2range [0:{}]\nplot ",
+        2.0 * thimble_max_force_n);
     for (int servo = 0; servo < 3; ++servo) {
         script += fmt::format(
             "{sep}{csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):{column} with points "
@@ -163,11 +168,14 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
     script += fmt::format(
         ", {csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):"
         "(sqrt(${x}**2 + ${y}**2 + ${z}**2)) axes x1y2 with points pt 7 ps 0.3 "
-        "title '|reference pad force|'"
-        "\nunset y2label\nunset y2tics\n",
+        "title '|reference pad force|', "
+        "{csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):{model} axes x1y2 with points "
+        "pt 7 ps 0.3 title 'pad model force (plate commanded)'"
+        "\nunset y2label\nunset y2tics\nset y2range [*:*]\n",
         fmt::arg("csv", csv), fmt::arg("x", columnNumber("thimble_reference_force_x_n")),
         fmt::arg("y", columnNumber("thimble_reference_force_y_n")),
-        fmt::arg("z", columnNumber("thimble_reference_force_z_n")));
+        fmt::arg("z", columnNumber("thimble_reference_force_z_n")),
+        fmt::arg("model", columnNumber("thimble_pad_force_model_n")));
     script += fmt::format(
         "set ylabel 'loop timing [us, log scale]'\n"
         "set logscale y\n"

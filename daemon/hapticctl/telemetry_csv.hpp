@@ -16,8 +16,9 @@ std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t or
 
 // A gnuplot script reading `csv_path` and writing `png_path`.
 // `exo_clamp_n`: the exoskeleton's force clamp; its panel shows twice that either way (the
-// sim's reference can spike far beyond it on contact impacts).
+// sim's reference can spike far beyond it on contact impacts). `thimble_max_force_n`: the
+// thimble's pad force limit; its pad-force axis shows twice that.
 std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path,
-                                double exo_clamp_n = 10.0);
+                                double exo_clamp_n = 10.0, double thimble_max_force_n = 1.5);
 
 }  // namespace haptic::ctl

@@ -1,4 +1,6 @@
-// Google Benchmark of one contact-optimiser solve with 64 pad samples (target: p99 < 50 us).
+// Google Benchmark of one contact-optimiser solve with 64 pad samples (target: p99 < 50 us),
+// and of the pad safety limiter that follows it every tick (BM_PadLimit...: with the shipped
+// limits, and with a 0.05 N force limit that makes it bisect on every tick).
 // Each solve is timed on its own, so the p50/p99/max counters are per-solve wall-clock
 // latencies (they include preemption by other processes on a loaded machine); cpu_p50/p99 are
 // the same percentiles of the thread's CPU time. `allocations` counts operator new calls
@@ -19,6 +21,7 @@
 #include "haptic/config/device.hpp"
 #include "haptic/tactile/contact_optimiser.hpp"
 #include "haptic/tactile/fingertip_model.hpp"
+#include "haptic/tactile/pad_safety.hpp"
 
 namespace {
 
@@ -144,8 +147,72 @@ void BM_SolveClampedSteepPlane(benchmark::State& state) {
         state, optimiser, true, [&]() -> const auto& { return plane; });
 }
 
+// The limiter as ThimbleChannel calls it each tick: the blend from the retract pose to the
+// solved pose of the newest frame (a 100 Hz sim: a new frame every 10 ticks), at full gain.
+void BM_PadLimitMovingSphere(benchmark::State& state) {
+    const Fixture f;
+    const auto frames = f.movingSphere(240);
+    ContactSurfaceOptimiser optimiser(f.kinematics,
+                                      haptic::tactile::OptimiserSettings::fromConfig(f.config));
+    std::vector<haptic::tactile::PlatformDofs> solved;
+    for (const auto& frame : frames) {
+        solved.push_back(optimiser.solve(frame).dofs);
+    }
+    haptic::config::DeviceConfig device =
+        haptic::config::loadDeviceConfig(HAPTIC_DEFAULT_THIMBLE_CONFIG);
+    if (state.range(0) == 1) {
+        device.safety.max_force_n = 0.05;
+    }
+    haptic::tactile::PadSafetyLimiter limiter(
+        haptic::tactile::PadSafetySettings::fromConfig(device, 1e-3));
+    const haptic::tactile::PlatformDofs retract = f.kinematics.retractPose();
+    std::vector<double> latencies_us;
+    std::vector<double> cpu_us;
+    latencies_us.reserve(1 << 20);
+    cpu_us.reserve(1 << 20);
+    std::uint64_t allocations = 0;
+    long ticks = 0;
+    long limited = 0;
+    for (auto _ : state) {
+        const std::size_t frame = static_cast<std::size_t>(ticks / 10) % frames.size();
+        const haptic::tactile::PlatformDofs& target = solved[frame];
+        const auto pose_at = [&](double gain, haptic::tactile::PlatformPose& pose) {
+            haptic::tactile::PlatformDofs dofs;
+            dofs.height_m = retract.height_m + gain * (target.height_m - retract.height_m);
+            dofs.tilt_x_rad = retract.tilt_x_rad + gain * (target.tilt_x_rad - retract.tilt_x_rad);
+            dofs.tilt_y_rad = retract.tilt_y_rad + gain * (target.tilt_y_rad - retract.tilt_y_rad);
+            return f.kinematics.platformPose(dofs, pose) == haptic::tactile::KinematicsError::kNone;
+        };
+        haptic::testing::ScopedAllocationCounter counter;
+        const double cpu_start = threadCpuSeconds();
+        const auto start = std::chrono::steady_clock::now();
+        const haptic::tactile::PadLimit limit = limiter.limit(1.0, &frames[frame], pose_at);
+        const auto stop = std::chrono::steady_clock::now();
+        const double cpu_stop = threadCpuSeconds();
+        allocations += counter.allocations();
+        benchmark::DoNotOptimize(limit);
+        limited += limit.flags != 0 ? 1 : 0;
+        ++ticks;
+        const double seconds = std::chrono::duration<double>(stop - start).count();
+        state.SetIterationTime(seconds);
+        if (latencies_us.size() < latencies_us.capacity()) {
+            latencies_us.push_back(seconds * 1e6);
+            cpu_us.push_back((cpu_stop - cpu_start) * 1e6);
+        }
+    }
+    report(state, latencies_us, cpu_us, allocations);
+    state.counters["limited_share"] =
+        static_cast<double>(limited) / static_cast<double>(std::max(ticks, 1L));
+}
+
 BENCHMARK(BM_SolveWarmMovingSphere)->UseManualTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SolveColdFromRetract)->UseManualTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SolveClampedSteepPlane)->UseManualTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_PadLimitMovingSphere)
+    ->ArgName("tight")
+    ->Arg(0)
+    ->Arg(1)
+    ->UseManualTime()
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

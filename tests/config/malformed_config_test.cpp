@@ -374,8 +374,17 @@ TEST(ConfigMissingKeys, NestedRequiredKeyPointsAtItsMap) {
 TEST(ConfigMissingKeys, DeviceSafetyLimit) {
     const auto file = kDataDir / "devices/missing_required_key.yaml";
     expectError(deviceError("missing_required_key.yaml"),
-                {file.string(), lineOf(file, "max_force_n: 1.5"), 0, "safety.max_stiffness_n_per_m",
-                 "missing required key 'safety.max_stiffness_n_per_m' (a number in (0, 20000])"});
+                {file.string(), lineOf(file, "max_force_n: 1.5"), 0, "safety.max_velocity_m_per_s",
+                 "missing required key 'safety.max_velocity_m_per_s' (a number in (0, 5])"});
+}
+
+// A key that would have no effect is refused, not ignored: the thimble's plate is
+// position-controlled, so the exoskeleton's stiffness clamp and fade-out are not its keys.
+TEST(ConfigMissingKeys, AThimbleRefusesTheExoskeletonsSafetyKeys) {
+    const auto file = kDataDir / "devices/thimble_with_exoskeleton_key.yaml";
+    expectError(deviceError("thimble_with_exoskeleton_key.yaml"),
+                {file.string(), lineOf(file, "fade_out_ms"), 16, "safety.fade_out_ms",
+                 "not a thimble key"});
 }
 
 TEST(ConfigMissingKeys, ReplayNeedsAFile) {

@@ -134,6 +134,8 @@ TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
     sample.thimble.servo_angle_cmd_rad = {1.5, -0.25, 0.0};
     sample.thimble.reference_force_device_n = {0.25, 0.0, -1.0};
     sample.thimble.reference_moment_device_nm = {0.0, 0.001, 0.0};
+    sample.thimble.pad_force_model_n = 0.75;
+    sample.thimble.pad_limit_flags = 3;
     sample.tick_work_us = 7.3;
     sample.wakeup_latency_us = 55.5;
     sample.read_us = 3.25;
@@ -151,12 +153,14 @@ TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
               "servo_angle_2_rad,"
               "thimble_reference_force_x_n,thimble_reference_force_y_n,"
               "thimble_reference_force_z_n,thimble_reference_moment_x_nm,"
-              "thimble_reference_moment_y_nm,thimble_reference_moment_z_nm\n");
+              "thimble_reference_moment_y_nm,thimble_reference_moment_z_nm,"
+              "thimble_pad_force_model_n,thimble_pad_limit_flags\n");
     EXPECT_EQ(telemetryCsvRow(sample, 1'000'000'000),
               "1234,2.500000,1,thimble,2.0000,1.5000,-0.2500,0.0000,7.30,55.50,3.25,2.50,"
               "0.000000,0.000000,0.000000,0.000000,0.000000,0.000000,0.0000,"
               "0.000000,0.000000,0.000000,0.0000,0.000000,0.000000,0.000000,0.000000,"
-              "0.000000,0.0000,0.0000,0.0000,0.2500,0.0000,-1.0000,0.000000,0.001000,0.000000\n");
+              "0.000000,0.0000,0.0000,0.0000,0.2500,0.0000,-1.0000,0.000000,0.001000,0.000000,"
+              "0.7500,3\n");
 }
 
 TEST(TelemetryCsv, PlotScriptQuotesPathsForGnuplot) {
@@ -190,6 +194,9 @@ TEST(TelemetryCsv, PlotScriptPlotsTheNamedColumns) {
             << name << "\n"
             << script;
     }
+    EXPECT_NE(script.find("? $2 : 1/0):" + number("thimble_pad_force_model_n") + " axes x1y2"),
+              std::string::npos)
+        << script;
 }
 
 TEST(ClosedLoopReport, ReadsTheRecordingBackAndComparesFeltWithReference) {

@@ -45,6 +45,11 @@ class Filler {
             return;
         v = (rng_() & 1U) != 0;
     }
+    void fill(std::uint8_t& v) {
+        if (measure(1))
+            return;
+        v = static_cast<std::uint8_t>(rng_());
+    }
     void fill(std::uint16_t& v) {
         if (measure(2))
             return;
@@ -223,6 +228,8 @@ class Filler {
         fill(s.thimble.platform_tilt_y_rad);
         fill(s.thimble.reference_force_device_n);
         fill(s.thimble.reference_moment_device_nm);
+        fill(s.thimble.pad_force_model_n);
+        fill(s.thimble.pad_limit_flags);
         fill(s.tick_work_us);
         fill(s.read_us);
         fill(s.write_us);

@@ -25,11 +25,13 @@ ThimbleChannel::ThimbleChannel(const config::DeviceConfig& device, can::CanBus& 
       kinematics_(device.thimble()),
       optimiser_(kinematics_, tactile::OptimiserSettings::fromConfig(device.thimble())),
       retract_servo_rad_(retractAngles(kinematics_)),
+      pad_limiter_(tactile::PadSafetySettings::fromConfig(device, settings.period_s)),
       limiter_(device.thimble().servos, retract_servo_rad_) {
     solved_.dofs = kinematics_.retractPose();
     solved_.servo_rad = retract_servo_rad_;
     report_.kind = msgs::DeviceKind::kThimble;
     measured_dofs_ = kinematics_.retractPose();
+    sent_dofs_ = kinematics_.retractPose();
     command_.servo_target_rad = retract_servo_rad_;
     const auto& servos = device.thimble().servos;
     servo_lag_s_ = servos.lag_time_constant_s;
@@ -108,13 +110,18 @@ void ThimbleChannel::measure() noexcept {
     }
 }
 
-tactile::ServoAngles ThimbleChannel::blend(double gain) const noexcept {
+tactile::PlatformDofs ThimbleChannel::blendDofs(double gain) const noexcept {
     const tactile::PlatformDofs& retract = kinematics_.retractPose();
     tactile::PlatformDofs target;
     target.height_m = retract.height_m + gain * (solved_.dofs.height_m - retract.height_m);
     target.tilt_x_rad = retract.tilt_x_rad + gain * (solved_.dofs.tilt_x_rad - retract.tilt_x_rad);
     target.tilt_y_rad = retract.tilt_y_rad + gain * (solved_.dofs.tilt_y_rad - retract.tilt_y_rad);
-    const tactile::InverseResult ik = kinematics_.inverse(target, /*check_workspace=*/false);
+    return target;
+}
+
+tactile::ServoAngles ThimbleChannel::blend(double gain) const noexcept {
+    const tactile::InverseResult ik =
+        kinematics_.inverse(blendDofs(gain), /*check_workspace=*/false);
     if (ik.ok()) {
         return ik.servo_rad;
     }
@@ -143,8 +150,19 @@ void ThimbleChannel::compute(daemon::DaemonCore& core, std::size_t index,
 
     // A stale device state cannot be trusted to be where we think: retract as well.
     const double gain = heldSafe() || !state_fresh ? 0.0 : core.outputGain(index);
-    const tactile::LimitedServoCommand limited = limiter_.step(blend(gain), settings_.period_s);
+    // The safety limits judge the pose against the newest pad the sim sent, whether or not
+    // the optimiser could use it.
+    pad_limit_ = pad_limiter_.limit(gain, surface, [this](double g, tactile::PlatformPose& pose) {
+        return kinematics_.platformPose(blendDofs(g), pose) == tactile::KinematicsError::kNone;
+    });
+    const tactile::LimitedServoCommand limited =
+        limiter_.step(blend(pad_limit_.gain), settings_.period_s);
     command_.servo_target_rad = limited.servo_rad;
+    const tactile::ForwardResult sent = kinematics_.forward(limited.servo_rad, sent_dofs_);
+    if (sent.ok()) {
+        sent_dofs_ = sent.dofs;
+        pad_limit_.pad_force_n = pad_limiter_.commanded(sent.pose, surface);
+    }
 
     fillLinkReport(core.state(), gain, now_ns);
     for (std::size_t i = 0; i < 3; ++i) {
@@ -156,6 +174,8 @@ void ThimbleChannel::compute(daemon::DaemonCore& core, std::size_t index,
     report_.thimble.platform_height_m = solved_.dofs.height_m;
     report_.thimble.platform_tilt_x_rad = solved_.dofs.tilt_x_rad;
     report_.thimble.platform_tilt_y_rad = solved_.dofs.tilt_y_rad;
+    report_.thimble.pad_force_model_n = pad_limit_.pad_force_n;
+    report_.thimble.pad_limit_flags = pad_limit_.flags;
     if (surface != nullptr) {
         report_.thimble.reference_force_device_n = surface->reference_force_device_n;
         report_.thimble.reference_moment_device_nm = surface->reference_moment_device_nm;

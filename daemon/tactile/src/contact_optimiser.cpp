@@ -5,6 +5,8 @@
 #include <cmath>
 #include <utility>
 
+#include "haptic/tactile/pad_safety.hpp"
+
 namespace haptic::tactile {
 
 namespace {
@@ -234,18 +236,8 @@ PlatformDofs ContactSurfaceOptimiser::unscaled(const Eigen::Vector3d& z) const n
 }
 
 double ContactSurfaceOptimiser::rimWeight(double in_plane_radius_sq_m2) const noexcept {
-    // Squared radii: most samples are well inside or outside, no square root needed.
-    const double outer = kinematics_.config().plate_radius_m;
-    const double inner = outer - settings_.rim_blend_m;
-    if (in_plane_radius_sq_m2 <= inner * inner) {
-        return 1.0;
-    }
-    if (in_plane_radius_sq_m2 >= outer * outer) {
-        return 0.0;
-    }
-    const double in_plane_radius_m = std::sqrt(in_plane_radius_sq_m2);
-    const double t = (outer - in_plane_radius_m) / settings_.rim_blend_m;
-    return t * t * (3.0 - 2.0 * t);  // smoothstep
+    return plateRimWeight(in_plane_radius_sq_m2, kinematics_.config().plate_radius_m,
+                          settings_.rim_blend_m);
 }
 
 ContactSurfaceOptimiser::Evaluation ContactSurfaceOptimiser::evaluate(

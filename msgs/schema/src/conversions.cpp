@@ -422,6 +422,8 @@ idl::HapticTelemetry toIdl(const HapticTelemetry& in) {
         thimble.platform_tilt_y_rad(s.thimble.platform_tilt_y_rad);
         thimble.reference_force_device_n(s.thimble.reference_force_device_n);
         thimble.reference_moment_device_nm(s.thimble.reference_moment_device_nm);
+        thimble.pad_force_model_n(s.thimble.pad_force_model_n);
+        thimble.pad_limit_flags(s.thimble.pad_limit_flags);
         item.thimble(thimble);
         item.tick_work_us(s.tick_work_us);
         item.read_us(s.read_us);
@@ -464,6 +466,8 @@ ConversionResult fromIdl(const idl::HapticTelemetry& in, HapticTelemetry& out) {
         item.thimble.platform_tilt_y_rad = s.thimble().platform_tilt_y_rad();
         item.thimble.reference_force_device_n = s.thimble().reference_force_device_n();
         item.thimble.reference_moment_device_nm = s.thimble().reference_moment_device_nm();
+        item.thimble.pad_force_model_n = s.thimble().pad_force_model_n();
+        item.thimble.pad_limit_flags = s.thimble().pad_limit_flags();
         item.tick_work_us = s.tick_work_us();
         item.read_us = s.read_us();
         item.write_us = s.write_us();

@@ -83,11 +83,15 @@ struct CanConfig {
 
 // YAML: safety: {...}. Hard limits enforced by hapticd after rendering, whatever the method.
 struct SafetyLimits {
-    double max_force_n{0.0};             // at the device's interaction point
-    double max_stiffness_n_per_m{0.0};   // exo: the coupling along the actuator is clamped to it
-    double max_velocity_m_per_s{0.0};    // exo: actuator rod; thimble: contact plate
-    double max_force_rate_n_per_s{0.0};  // slew limit on the commanded force
-    int fade_out_ms{0};                  // ramp to zero force on stale input or disable
+    double max_force_n{0.0};  // exo: at the fingertip; thimble: on the pad, by its pad model
+    // exo: actuator rod speed above which a force driving it fades; thimble: the plate's
+    // approach speed towards the finger
+    double max_velocity_m_per_s{0.0};
+    // exo: slew limit on the commanded force; thimble: how fast the pad force may rise
+    double max_force_rate_n_per_s{0.0};
+    // Exoskeleton only (0 for a thimble, whose file may not carry them):
+    double max_stiffness_n_per_m{0.0};  // the coupling along the actuator is clamped to it
+    int fade_out_ms{0};                 // ramp to zero force on a stale device state
 };
 
 // --- exoskeleton (docs/algorithms.md §5.8)

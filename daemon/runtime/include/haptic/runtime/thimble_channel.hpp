@@ -19,6 +19,7 @@
 #include "haptic/devices/thimble_driver.hpp"
 #include "haptic/runtime/device_channel.hpp"
 #include "haptic/tactile/contact_optimiser.hpp"
+#include "haptic/tactile/pad_safety.hpp"
 #include "haptic/tactile/servo_limiter.hpp"
 #include "haptic/tactile/thimble_kinematics.hpp"
 
@@ -38,6 +39,9 @@ class ThimbleChannel final
         return retract_servo_rad_;
     }
     [[nodiscard]] const tactile::SolveReport& lastSolve() const noexcept { return solved_.report; }
+    // What the safety limits let through this tick: the blend gain, the pad model's force at
+    // the pose the servo targets sent put the plate, and which limit held it back.
+    [[nodiscard]] const tactile::PadLimit& padLimit() const noexcept { return pad_limit_; }
 
   protected:
     [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
@@ -49,12 +53,16 @@ class ThimbleChannel final
 
   private:
     void measure() noexcept;
+    [[nodiscard]] tactile::PlatformDofs blendDofs(double gain) const noexcept;
     [[nodiscard]] tactile::ServoAngles blend(double gain) const noexcept;
 
     tactile::ThimbleKinematics kinematics_;
     tactile::ContactSurfaceOptimiser optimiser_;
     tactile::ServoAngles retract_servo_rad_{};
+    tactile::PadSafetyLimiter pad_limiter_;
     tactile::ServoLimiter limiter_;
+    tactile::PadLimit pad_limit_{};
+    tactile::PlatformDofs sent_dofs_{};  // forward kinematics of the last servo targets sent
     tactile::TactileCommand solved_{};
     std::uint64_t solved_from_{0};  // DaemonCore::acceptedCount of the surface solved
     std::uint64_t state_updates_{0};

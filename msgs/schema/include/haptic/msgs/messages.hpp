@@ -218,6 +218,8 @@ struct ThimbleTelemetry {
     double platform_tilt_y_rad{0.0};
     std::array<double, 3> reference_force_device_n{};  // the sim's reference on the pad
     std::array<double, 3> reference_moment_device_nm{};
+    double pad_force_model_n{0.0};    // the pad model's force for the plate pose commanded
+    std::uint8_t pad_limit_flags{0};  // tactile::PadFlag bits: which safety limit held it back
     friend bool operator==(const ThimbleTelemetry&, const ThimbleTelemetry&) = default;
 };
 

@@ -1,0 +1,165 @@
+#pragma once
+
+// The thimble's safety limits (the device file's `safety:` block), enforced on the plate pose
+// hapticd is about to command, whatever the optimiser chose (docs/tactile.md, "Pad safety"):
+//   - max_force_n: the force the pad model predicts for the plate stays at or below it;
+//   - max_force_rate_n_per_s: that force rises at most this fast (it may always fall: a
+//     release is the safe direction);
+//   - max_velocity_m_per_s: the plate approaches the finger, along its normal, at most this
+//     fast (it may always withdraw).
+// The pad model is the one the contact surface carries: its samples are the undeformed pad in
+// the device frame and each weight is its patch's stiffness (N/m: area times the pad's
+// stiffness per area); a sample the plate passes by delta presses back with w delta, faded out
+// over the plate's rim as in the optimiser. A linear pad: the sim's weights assume one.
+//
+// The limiter searches the line from the retract pose (gain 0) to the caller's pose (its gain)
+// for the largest gain whose pose keeps all three limits, by bisection (kBisections steps)
+// from last tick's gain when that still keeps them, otherwise from the retract pose.
+// noexcept, allocation-free, bounded: it runs on the 1 kHz path.
+
+#include <cstdint>
+
+#include "haptic/config/device.hpp"
+#include "haptic/msgs/messages.hpp"
+#include "haptic/tactile/thimble_kinematics.hpp"
+
+namespace haptic::tactile {
+
+// Share of a pad patch at in-plane distance sqrt(in_plane_radius_sq_m2) from the plate centre
+// that the plate presses: 1 inside, a smoothstep to 0 over `rim_blend_m` at the rim.
+[[nodiscard]] double plateRimWeight(double in_plane_radius_sq_m2, double plate_radius_m,
+                                    double rim_blend_m) noexcept;
+
+// The net force (N, along the plate normal) the pad model predicts for the plate at `pose`.
+[[nodiscard]] double padForceN(const PlatformPose& pose, const msgs::ContactSurface& surface,
+                               double plate_radius_m, double rim_blend_m) noexcept;
+
+struct PadSafetySettings {
+    double max_force_n{1.5};
+    double max_force_rate_n_per_s{100.0};
+    double max_approach_speed_m_per_s{0.1};
+    double period_s{1e-3};
+    double plate_radius_m{0.008};
+    double rim_blend_m{0.001};  // as the optimiser's
+
+    [[nodiscard]] static PadSafetySettings fromConfig(const config::DeviceConfig& device,
+                                                      double period_s);
+};
+
+// Which limit held the plate back this tick (bits of PadLimit::flags).
+enum class PadFlag : std::uint8_t {
+    kForce = 1U << 0U,
+    kForceRate = 1U << 1U,
+    kApproachSpeed = 1U << 2U,
+};
+
+struct PadLimit {
+    double gain{0.0};
+    double pad_force_n{0.0};  // the pad model's force at the returned gain
+    std::uint8_t flags{0};    // PadFlag bits: what lowered the gain
+};
+
+class PadSafetyLimiter {
+  public:
+    // Resolution 1/65536 of the searched interval: on the shipped stroke (8 mm) 0.1 um, so even a
+    // pad of 45 kN/m rises by under 5 mN per step, well below a 0.02 N per tick rate limit.
+    static constexpr int kBisections = 16;
+
+    explicit PadSafetyLimiter(const PadSafetySettings& settings) noexcept : settings_(settings) {}
+
+    // `pose_at(gain, pose)` writes the platform pose at that gain of the blend and returns
+    // false when it has none (treated as beyond the limits; gain 0, the retract pose, is
+    // always taken). `surface` may be null (no pad known: no force).
+    template <class PoseAt>
+    [[nodiscard]] PadLimit limit(double gain, const msgs::ContactSurface* surface,
+                                 PoseAt&& pose_at) noexcept {
+        PadLimit result;
+        PlatformPose pose;
+        if (gain > 0.0 && pose_at(gain, pose)) {
+            const std::uint8_t violated = check(pose, surface, result.pad_force_n);
+            if (violated == 0) {
+                result.gain = gain;
+                return accept(result, pose);
+            }
+            result.flags = violated;
+        }
+        // Bisection on [low, gain], `low` keeping the limits: last tick's gain when it still
+        // does (so a stiff pad's force can creep up by less than one step of [0, gain]),
+        // otherwise 0, the retract pose.
+        double low = 0.0;
+        double high = gain;
+        PlatformPose low_pose;
+        double low_force = 0.0;
+        const double resume = previous_gain_ < gain ? previous_gain_ : 0.0;
+        if (resume > 0.0 && pose_at(resume, low_pose) && check(low_pose, surface, low_force) == 0) {
+            low = resume;
+        } else {
+            low_force = 0.0;
+        }
+        const bool retract_ok = low > 0.0 || pose_at(0.0, low_pose);
+        if (low == 0.0 && retract_ok && surface != nullptr) {
+            low_force =
+                padForceN(low_pose, *surface, settings_.plate_radius_m, settings_.rim_blend_m);
+        }
+        for (int i = 0; i < kBisections && gain > 0.0; ++i) {
+            const double mid = 0.5 * (low + high);
+            double force = 0.0;
+            if (pose_at(mid, pose) && check(pose, surface, force) == 0) {
+                low = mid;
+                low_pose = pose;
+                low_force = force;
+            } else {
+                high = mid;
+            }
+        }
+        result.gain = low;
+        result.pad_force_n = low_force;
+        if (!retract_ok) {
+            previous_gain_ = 0.0;
+            return result;
+        }
+        return accept(result, low_pose);
+    }
+
+    // The pose the servos were actually sent after the servo limiter (its forward
+    // kinematics), which replaces the accepted one as the reference for the next tick's rate
+    // and speed limits: a servo still catching up does not add to the plate's next step.
+    // Returns the pad model's force there.
+    double commanded(const PlatformPose& pose, const msgs::ContactSurface* surface) noexcept {
+        previous_pose_ = pose;
+        previous_force_n_ = surface == nullptr ? 0.0
+                                               : padForceN(pose, *surface, settings_.plate_radius_m,
+                                                           settings_.rim_blend_m);
+        has_previous_ = true;
+        return previous_force_n_;
+    }
+
+    // The last accepted pose and its force are the reference for the rate and speed limits;
+    // after a restart of the channel, start from `pose` with no force.
+    void reset(const PlatformPose& pose) noexcept {
+        previous_pose_ = pose;
+        previous_force_n_ = 0.0;
+        previous_gain_ = 0.0;
+        has_previous_ = true;
+    }
+    [[nodiscard]] const PadSafetySettings& settings() const noexcept { return settings_; }
+
+  private:
+    [[nodiscard]] std::uint8_t check(const PlatformPose& pose, const msgs::ContactSurface* surface,
+                                     double& force_n) const noexcept;
+    PadLimit accept(const PadLimit& result, const PlatformPose& pose) noexcept {
+        previous_gain_ = result.gain;
+        previous_pose_ = pose;
+        previous_force_n_ = result.pad_force_n;
+        has_previous_ = true;
+        return result;
+    }
+
+    PadSafetySettings settings_;
+    PlatformPose previous_pose_{};
+    double previous_force_n_{0.0};
+    double previous_gain_{0.0};
+    bool has_previous_{false};
+};
+
+}  // namespace haptic::tactile

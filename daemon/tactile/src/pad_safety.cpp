@@ -1,0 +1,75 @@
+#include "haptic/tactile/pad_safety.hpp"
+
+#include <cmath>
+
+namespace haptic::tactile {
+
+double plateRimWeight(double in_plane_radius_sq_m2, double plate_radius_m,
+                      double rim_blend_m) noexcept {
+    // Squared radii: most samples are well inside or outside, no square root needed.
+    const double outer = plate_radius_m;
+    const double inner = outer - rim_blend_m;
+    if (in_plane_radius_sq_m2 <= inner * inner) {
+        return 1.0;
+    }
+    if (in_plane_radius_sq_m2 >= outer * outer) {
+        return 0.0;
+    }
+    const double t = (outer - std::sqrt(in_plane_radius_sq_m2)) / rim_blend_m;
+    return t * t * (3.0 - 2.0 * t);  // smoothstep
+}
+
+double padForceN(const PlatformPose& pose, const msgs::ContactSurface& surface,
+                 double plate_radius_m, double rim_blend_m) noexcept {
+    const Eigen::Vector3d normal = pose.plateNormal();
+    double force_n = 0.0;
+    for (const msgs::ContactSample& sample : surface.samples) {
+        const Eigen::Vector3d rel =
+            Eigen::Vector3d(sample.p_device_m[0], sample.p_device_m[1], sample.p_device_m[2]) -
+            pose.position_m;
+        const double d = normal.dot(rel);  // positive: the patch is still on the finger side
+        if (!(d < 0.0) || !(sample.weight > 0.0)) {
+            continue;
+        }
+        force_n += sample.weight * -d *
+                   plateRimWeight(rel.squaredNorm() - d * d, plate_radius_m, rim_blend_m);
+    }
+    return force_n;
+}
+
+PadSafetySettings PadSafetySettings::fromConfig(const config::DeviceConfig& device,
+                                                double period_s) {
+    PadSafetySettings settings;
+    settings.max_force_n = device.safety.max_force_n;
+    settings.max_force_rate_n_per_s = device.safety.max_force_rate_n_per_s;
+    settings.max_approach_speed_m_per_s = device.safety.max_velocity_m_per_s;
+    settings.period_s = period_s;
+    settings.plate_radius_m = device.thimble().plate_radius_m;
+    return settings;
+}
+
+std::uint8_t PadSafetyLimiter::check(const PlatformPose& pose, const msgs::ContactSurface* surface,
+                                     double& force_n) const noexcept {
+    std::uint8_t violated = 0;
+    force_n = surface == nullptr
+                  ? 0.0
+                  : padForceN(pose, *surface, settings_.plate_radius_m, settings_.rim_blend_m);
+    if (!(force_n <= settings_.max_force_n)) {
+        violated |= static_cast<std::uint8_t>(PadFlag::kForce);
+    }
+    if (has_previous_) {
+        if (force_n > previous_force_n_ &&
+            !(force_n <=
+              previous_force_n_ + settings_.max_force_rate_n_per_s * settings_.period_s)) {
+            violated |= static_cast<std::uint8_t>(PadFlag::kForceRate);
+        }
+        const double approach_m =
+            previous_pose_.plateNormal().dot(pose.position_m - previous_pose_.position_m);
+        if (!(approach_m <= settings_.max_approach_speed_m_per_s * settings_.period_s)) {
+            violated |= static_cast<std::uint8_t>(PadFlag::kApproachSpeed);
+        }
+    }
+    return violated;
+}
+
+}  // namespace haptic::tactile

@@ -1,0 +1,230 @@
+// The thimble's safety limits on the plate (haptic/tactile/pad_safety.hpp): the pad model's
+// force, its rise per tick and the plate's approach speed, each on a flat pad whose forces
+// are known in closed form.
+
+#include "haptic/tactile/pad_safety.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "allocation_counter.hpp"
+
+namespace haptic::tactile {
+namespace {
+
+constexpr double kPadZ = 0.018;         // the undeformed pad, device frame
+constexpr double kRetractZ = 0.024;     // the plate far from it
+constexpr double kWeight = 50.0;        // N/m per patch
+constexpr double kPlateRadius = 0.008;  // the shipped plate
+constexpr double kRimBlend = 0.001;
+
+// A plate at height z, untilted: its normal (into the finger) is -z, so it presses the pad
+// once z < kPadZ.
+PlatformPose plateAt(double z) {
+    PlatformPose pose;
+    pose.position_m = Eigen::Vector3d(0.0, 0.0, z);
+    return pose;
+}
+
+// Nine patches 1 mm apart around the plate's centre.
+msgs::ContactSurface flatPad() {
+    msgs::ContactSurface surface;
+    for (int i = -1; i <= 1; ++i) {
+        for (int j = -1; j <= 1; ++j) {
+            msgs::ContactSample sample;
+            sample.p_device_m = {0.001 * i, 0.001 * j, kPadZ};
+            sample.signed_distance_m = -0.001;
+            sample.normal_device = {0.0, 0.0, 1.0};
+            sample.weight = kWeight;
+            surface.samples.push_back(sample);
+        }
+    }
+    return surface;
+}
+
+PadSafetySettings loose() {
+    PadSafetySettings settings;
+    settings.max_force_n = 100.0;
+    settings.max_force_rate_n_per_s = 1e9;
+    settings.max_approach_speed_m_per_s = 1e3;
+    settings.period_s = 1e-3;
+    settings.plate_radius_m = kPlateRadius;
+    settings.rim_blend_m = kRimBlend;
+    return settings;
+}
+
+// The blend the channel walks: the retract pose at gain 0, `target_z` at gain 1.
+auto blendTo(double target_z) {
+    return [target_z](double gain, PlatformPose& pose) {
+        pose = plateAt(kRetractZ + gain * (target_z - kRetractZ));
+        return true;
+    };
+}
+
+TEST(PadSafety, ThePadModelPressesBackWithTheStiffnessOfEveryPatchThePlatePasses) {
+    const msgs::ContactSurface pad = flatPad();
+    EXPECT_EQ(padForceN(plateAt(kPadZ + 0.0005), pad, kPlateRadius, kRimBlend), 0.0);
+    EXPECT_NEAR(padForceN(plateAt(kPadZ - 0.001), pad, kPlateRadius, kRimBlend),
+                9 * kWeight * 0.001, 1e-12);
+    EXPECT_NEAR(padForceN(plateAt(kPadZ - 0.002), pad, kPlateRadius, kRimBlend),
+                9 * kWeight * 0.002, 1e-12);
+
+    // Beyond the rim a patch is not pressed; in the rim's blend it counts by the smoothstep.
+    msgs::ContactSurface rim = pad;
+    rim.samples.clear();
+    msgs::ContactSample outside = pad.samples[0];
+    outside.p_device_m = {0.009, 0.0, kPadZ};
+    rim.samples.push_back(outside);
+    EXPECT_EQ(padForceN(plateAt(kPadZ - 0.001), rim, kPlateRadius, kRimBlend), 0.0);
+    rim.samples[0].p_device_m = {0.0075, 0.0, kPadZ};  // halfway through the blend
+    EXPECT_NEAR(padForceN(plateAt(kPadZ - 0.001), rim, kPlateRadius, kRimBlend),
+                0.5 * kWeight * 0.001, 1e-12);
+
+    // Patches with no stiffness or a NaN add nothing.
+    msgs::ContactSurface bad = pad;
+    bad.samples[0].weight = std::nan("");
+    bad.samples[1].p_device_m[2] = std::nan("");
+    EXPECT_NEAR(padForceN(plateAt(kPadZ - 0.001), bad, kPlateRadius, kRimBlend),
+                7 * kWeight * 0.001, 1e-12);
+}
+
+TEST(PadSafety, WithinTheLimitsThePlateGoesWhereItIsAsked) {
+    PadSafetyLimiter limiter(loose());
+    limiter.reset(plateAt(kRetractZ));
+    const msgs::ContactSurface pad = flatPad();
+    const PadLimit limit = limiter.limit(0.9, &pad, blendTo(kPadZ - 0.002));
+    EXPECT_EQ(limit.gain, 0.9);
+    EXPECT_EQ(limit.flags, 0);
+    const double z = kRetractZ + 0.9 * (kPadZ - 0.002 - kRetractZ);  // 1.2 mm in
+    EXPECT_NEAR(limit.pad_force_n, 9 * kWeight * (kPadZ - z), 1e-12);
+}
+
+TEST(PadSafety, MaxForceHoldsThePlateWhereThePadModelReachesIt) {
+    PadSafetySettings settings = loose();
+    settings.max_force_n = 9 * kWeight * 0.001;  // reached 1 mm into the pad
+    PadSafetyLimiter limiter(settings);
+    limiter.reset(plateAt(kRetractZ));
+    const msgs::ContactSurface pad = flatPad();
+    const PadLimit limit = limiter.limit(1.0, &pad, blendTo(kPadZ - 0.002));
+    EXPECT_EQ(limit.flags, static_cast<std::uint8_t>(PadFlag::kForce));
+    EXPECT_LE(limit.pad_force_n, settings.max_force_n);
+    // The gain where the plate is 1 mm in, within the bisection's 1/65536.
+    const double expected_gain = (kRetractZ - (kPadZ - 0.001)) / (kRetractZ - (kPadZ - 0.002));
+    EXPECT_LE(limit.gain, expected_gain);
+    EXPECT_GT(limit.gain, expected_gain - 1.0 / 65536.0);
+
+    // A smaller limit keeps the plate farther back: the key decides.
+    settings.max_force_n *= 0.5;
+    PadSafetyLimiter softer(settings);
+    softer.reset(plateAt(kRetractZ));
+    const PadLimit half = softer.limit(1.0, &pad, blendTo(kPadZ - 0.002));
+    EXPECT_LE(half.pad_force_n, settings.max_force_n);
+    EXPECT_LT(half.gain, limit.gain);
+}
+
+TEST(PadSafety, ThePadForceRisesAtMostAtMaxForceRateAndFallsAtOnce) {
+    PadSafetySettings settings = loose();
+    settings.max_force_rate_n_per_s = 100.0;  // 0.1 N per 1 ms tick
+    PadSafetyLimiter limiter(settings);
+    limiter.reset(plateAt(kRetractZ));
+    const msgs::ContactSurface pad = flatPad();
+    const double target_force = 9 * kWeight * 0.002;  // 0.9 N
+    double previous = 0.0;
+    int ticks = 0;
+    for (; ticks < 100 && previous < target_force - 1e-9; ++ticks) {
+        const PadLimit limit = limiter.limit(1.0, &pad, blendTo(kPadZ - 0.002));
+        ASSERT_LE(limit.pad_force_n, previous + 0.1 + 1e-12) << "tick " << ticks;
+        previous = limit.pad_force_n;
+    }
+    // 0.9 N at 0.1 N per tick: 9 ticks, one more for the bisection's resolution.
+    EXPECT_GE(ticks, 9);
+    EXPECT_LE(ticks, 11);
+    // Releasing is never slowed.
+    const PadLimit release = limiter.limit(0.0, &pad, blendTo(kPadZ - 0.002));
+    EXPECT_EQ(release.pad_force_n, 0.0);
+    EXPECT_EQ(release.flags, 0);
+
+    // A finger pushing into a plate that stays put raises the force too: the plate gives way.
+    PadSafetyLimiter held(settings);
+    held.reset(plateAt(kRetractZ));
+    msgs::ContactSurface moving = pad;
+    double force = 0.0;
+    for (int i = 0; i < 20; ++i) {
+        for (auto& sample : moving.samples) {
+            sample.p_device_m[2] = kPadZ + 0.0001 * i;  // 0.1 mm per tick towards the plate
+        }
+        const PadLimit limit = held.limit(1.0, &moving, blendTo(kPadZ));
+        ASSERT_LE(limit.pad_force_n, force + 0.1 + 1e-12) << "tick " << i;
+        force = limit.pad_force_n;
+    }
+}
+
+// On a stiff pad a coarse search stalls the plate short of the pad: with 12 bisection steps
+// over the stroke (8 mm / 4096, 2 um, 0.09 N here) no step fits a 0.02 N rise. The search
+// resumes from last tick's gain and resolves 1/65536 of what is left, so the force creeps up.
+TEST(PadSafety, OnAStiffPadTheForceStillRisesAtTheRateLimit) {
+    PadSafetySettings settings = loose();
+    settings.max_force_rate_n_per_s = 20.0;  // 0.02 N per tick
+    PadSafetyLimiter limiter(settings);
+    limiter.reset(plateAt(kRetractZ));
+    msgs::ContactSurface stiff = flatPad();
+    for (auto& sample : stiff.samples) {
+        sample.weight = 5000.0;  // 45 kN/m in all: 0.09 N per 2 um
+    }
+    double previous = 0.0;
+    for (int i = 0; i < 100; ++i) {
+        const PadLimit limit = limiter.limit(1.0, &stiff, blendTo(kPadZ - 0.002));
+        ASSERT_LE(limit.pad_force_n, previous + 0.02 + 1e-12) << "tick " << i;
+        previous = limit.pad_force_n;
+    }
+    EXPECT_GT(previous, 1.0) << "100 ticks at up to 0.02 N each";
+}
+
+TEST(PadSafety, ThePlateApproachesAtMostAtMaxVelocityAndWithdrawsAtOnce) {
+    PadSafetySettings settings = loose();
+    settings.max_approach_speed_m_per_s = 0.1;  // 0.1 mm per 1 ms tick
+    PadSafetyLimiter limiter(settings);
+    limiter.reset(plateAt(kRetractZ));
+    // No pad known: only the speed limit applies.
+    double z = kRetractZ;
+    const double target_z = kRetractZ - 0.004;
+    int ticks = 0;
+    for (; ticks < 100; ++ticks) {
+        PlatformPose pose;
+        const PadLimit limit = limiter.limit(1.0, nullptr, blendTo(target_z));
+        blendTo(target_z)(limit.gain, pose);
+        ASSERT_LE(z - pose.position_m.z(), 1e-4 + 1e-12) << "tick " << ticks;
+        z = pose.position_m.z();
+        if (limit.gain == 1.0) {
+            break;
+        }
+        EXPECT_EQ(limit.flags, static_cast<std::uint8_t>(PadFlag::kApproachSpeed));
+    }
+    // 4 mm at 0.1 mm per tick: 40 ticks, a few more for the bisection's resolution.
+    EXPECT_GE(ticks, 39);
+    EXPECT_LE(ticks, 45);
+    const PadLimit withdraw = limiter.limit(0.0, nullptr, blendTo(target_z));
+    EXPECT_EQ(withdraw.gain, 0.0);
+    EXPECT_EQ(withdraw.flags, 0);
+}
+
+TEST(PadSafety, LimitingAllocatesNothing) {
+    PadSafetySettings settings = loose();
+    settings.max_force_n = 0.2;
+    settings.max_force_rate_n_per_s = 100.0;
+    settings.max_approach_speed_m_per_s = 0.1;
+    PadSafetyLimiter limiter(settings);
+    limiter.reset(plateAt(kRetractZ));
+    const msgs::ContactSurface pad = flatPad();
+    double sum = 0.0;
+    testing::ScopedAllocationCounter counter;
+    for (int i = 0; i < 1000; ++i) {
+        sum += limiter.limit((i % 100) / 99.0, &pad, blendTo(kPadZ - 0.002)).gain;
+    }
+    EXPECT_EQ(counter.allocations(), 0U);
+    EXPECT_GT(sum, 0.0);
+}
+
+}  // namespace
+}  // namespace haptic::tactile
