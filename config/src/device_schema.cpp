@@ -108,6 +108,7 @@ struct Safety {
     SafetyLimits limits;
     std::optional<Field> max_force_field;      // for the check against the actuator
     std::optional<Field> max_stiffness_field;  // for the passivity margin
+    std::optional<Field> max_velocity_field;   // for the check against the drive's speed
 };
 
 Safety readSafety(MapReader safety, DeviceType type) {
@@ -115,7 +116,9 @@ Safety readSafety(MapReader safety, DeviceType type) {
     auto [max_force, max_force_field] =
         safety.requiredWithField("max_force_n", Real::positive(100.0));
     out.max_force_n = max_force;
-    out.max_velocity_m_per_s = safety.required("max_velocity_m_per_s", Real::positive(5.0));
+    auto [max_velocity, max_velocity_field] =
+        safety.requiredWithField("max_velocity_m_per_s", Real::positive(5.0));
+    out.max_velocity_m_per_s = max_velocity;
     out.max_force_rate_n_per_s =
         safety.required("max_force_rate_n_per_s", Real::positive(100'000.0));
     if (type == DeviceType::kThimble) {
@@ -132,14 +135,16 @@ Safety readSafety(MapReader safety, DeviceType type) {
             }
         }
         safety.finish();
-        return Safety{out, std::move(max_force_field), std::nullopt};
+        return Safety{out, std::move(max_force_field), std::nullopt,
+                      std::move(max_velocity_field)};
     }
     auto [max_stiffness, max_stiffness_field] =
         safety.requiredWithField("max_stiffness_n_per_m", Real::positive(20'000.0));
     out.max_stiffness_n_per_m = max_stiffness;
     out.fade_out_ms = safety.required("fade_out_ms", spec::Integer<int>::closed(1, 2000));
     safety.finish();
-    return Safety{out, std::move(max_force_field), std::move(max_stiffness_field)};
+    return Safety{out, std::move(max_force_field), std::move(max_stiffness_field),
+                  std::move(max_velocity_field)};
 }
 
 // --- exoskeleton ---
@@ -221,6 +226,13 @@ ExoskeletonConfig readExoskeleton(MapReader& root, const Safety& safety,
     if (safety.limits.max_force_n > out.actuator.max_force_n) {
         safety.max_force_field->fail("a number no greater than actuator.max_force_n (" +
                                      formatNumber(out.actuator.max_force_n) + ")");
+    }
+    // The velocity fade takes away a force that drives the rod along its motion; at and above
+    // the drive's no-load speed the drive itself delivers none, so a limit there does nothing.
+    if (!(safety.limits.max_velocity_m_per_s < out.actuator.max_speed_m_per_s)) {
+        safety.max_velocity_field->fail("a number below actuator.max_speed_m_per_s (" +
+                                        formatNumber(out.actuator.max_speed_m_per_s) +
+                                        "), the drive's no-load speed, or the limit does nothing");
     }
     // Colgate and Schenkel's sampled-data passivity along the actuator (docs/algorithms.md
     // §1.5, §6.9): b > K T / 2 + |b_v|, with K the stiffness the rendering is clamped to, b the

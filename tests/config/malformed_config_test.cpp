@@ -378,6 +378,15 @@ TEST(ConfigMissingKeys, DeviceSafetyLimit) {
                  "missing required key 'safety.max_velocity_m_per_s' (a number in (0, 5])"});
 }
 
+// A rod speed limit at or above the drive's no-load speed would never act: the drive itself
+// delivers no force along the rod's motion there.
+TEST(ConfigMissingKeys, AnExoskeletonVelocityLimitAboveTheDrivesSpeedIsRefused) {
+    const auto file = kDataDir / "devices/exo_velocity_limit_above_drive.yaml";
+    expectError(deviceError("exo_velocity_limit_above_drive.yaml"),
+                {file.string(), lineOf(file, "max_velocity_m_per_s"), -1,
+                 "safety.max_velocity_m_per_s", "below actuator.max_speed_m_per_s (0.08)"});
+}
+
 // A key that would have no effect is refused, not ignored: the thimble's plate is
 // position-controlled, so the exoskeleton's stiffness clamp and fade-out are not its keys.
 TEST(ConfigMissingKeys, AThimbleRefusesTheExoskeletonsSafetyKeys) {

@@ -127,6 +127,7 @@ TEST(ShippedConfig, Exoskeleton) {
     EXPECT_EQ(cfg.can.udp_slots, 4);
     EXPECT_DOUBLE_EQ(cfg.safety.max_force_n, 10.0);
     EXPECT_DOUBLE_EQ(cfg.safety.max_stiffness_n_per_m, 15000.0);
+    EXPECT_DOUBLE_EQ(cfg.safety.max_velocity_m_per_s, 0.05);
     EXPECT_EQ(cfg.safety.fade_out_ms, 100);
 
     const ExoskeletonConfig& exo = cfg.exoskeleton();
