@@ -135,8 +135,7 @@ Safety readSafety(MapReader safety, DeviceType type) {
             }
         }
         safety.finish();
-        return Safety{out, std::move(max_force_field), std::nullopt,
-                      std::move(max_velocity_field)};
+        return Safety{out, std::move(max_force_field), std::nullopt, std::move(max_velocity_field)};
     }
     auto [max_stiffness, max_stiffness_field] =
         safety.requiredWithField("max_stiffness_n_per_m", Real::positive(20'000.0));
