@@ -124,6 +124,21 @@ inline std::string faultsOf(const msgs::HapticStatus& status) {
     return text.empty() ? "no faults\n" : text;
 }
 
+// Waits until a helper process printed `token` (a line of its stdout); returns its output.
+inline std::string waitForOutput(EmulatorProcess& process, const std::string& token) {
+    using namespace std::chrono_literals;
+    const auto deadline = std::chrono::steady_clock::now() + 15s;
+    while (std::chrono::steady_clock::now() < deadline) {
+        const std::string out = process.output();
+        if (out.find(token) != std::string::npos) {
+            return out;
+        }
+        std::this_thread::sleep_for(20ms);
+    }
+    ADD_FAILURE() << "no '" << token << "' from " << process.output();
+    return process.output();
+}
+
 class DeviceSafetyTest : public ::testing::Test {
   protected:
     void SetUp() override {

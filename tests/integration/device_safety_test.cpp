@@ -12,20 +12,6 @@ namespace {
 using ::testing::HasSubstr;
 using namespace std::chrono_literals;
 
-// Waits until the injector printed `token` (a line of its stdout); returns its output.
-std::string waitForOutput(EmulatorProcess& process, const std::string& token) {
-    const auto deadline = std::chrono::steady_clock::now() + 15s;
-    while (std::chrono::steady_clock::now() < deadline) {
-        const std::string out = process.output();
-        if (out.find(token) != std::string::npos) {
-            return out;
-        }
-        std::this_thread::sleep_for(20ms);
-    }
-    ADD_FAILURE() << "no '" << token << "' from the injector: " << process.output();
-    return process.output();
-}
-
 bool targetsNear(const msgs::TelemetrySample& a, const msgs::TelemetrySample& b) {
     for (std::size_t k = 0; k < 3; ++k) {
         if (!(std::abs(a.thimble.servo_angle_cmd_rad[k] - b.thimble.servo_angle_cmd_rad[k]) <
