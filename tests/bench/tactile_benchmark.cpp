@@ -148,7 +148,9 @@ void BM_SolveClampedSteepPlane(benchmark::State& state) {
 }
 
 // The limiter as ThimbleChannel calls it each tick: the blend from the retract pose to the
-// solved pose of the newest frame (a 100 Hz sim: a new frame every 10 ticks), at full gain.
+// solved pose of the newest frame (a 100 Hz sim: a new frame every 10 ticks), at full gain,
+// then the pose sent as the next reference (servos that follow exactly: no forward
+// kinematics and no shortened servo step, which the channel adds when a servo lags).
 void BM_PadLimitMovingSphere(benchmark::State& state) {
     const Fixture f;
     const auto frames = f.movingSphere(240);
@@ -187,6 +189,7 @@ void BM_PadLimitMovingSphere(benchmark::State& state) {
         const double cpu_start = threadCpuSeconds();
         const auto start = std::chrono::steady_clock::now();
         const haptic::tactile::PadLimit limit = limiter.limit(1.0, &frames[frame], pose_at);
+        (void)limiter.commanded(limit.pose, &frames[frame]);
         const auto stop = std::chrono::steady_clock::now();
         const double cpu_stop = threadCpuSeconds();
         allocations += counter.allocations();

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 
 #include "allocation_counter.hpp"
@@ -62,6 +63,16 @@ auto blendTo(double target_z) {
     };
 }
 
+// One tick as the channel runs it when the servos follow exactly: limit, then send that pose.
+template <class PoseAt>
+PadLimit tick(PadSafetyLimiter& limiter, double gain, const msgs::ContactSurface* surface,
+              PoseAt&& pose_at) {
+    const PadLimit limit = limiter.limit(gain, surface, pose_at);
+    EXPECT_TRUE(limit.has_pose);
+    (void)limiter.commanded(limit.pose, surface);
+    return limit;
+}
+
 TEST(PadSafety, ThePadModelPressesBackWithTheStiffnessOfEveryPatchThePlatePasses) {
     const msgs::ContactSurface pad = flatPad();
     EXPECT_EQ(padForceN(plateAt(kPadZ + 0.0005), pad, kPlateRadius, kRimBlend), 0.0);
@@ -91,9 +102,9 @@ TEST(PadSafety, ThePadModelPressesBackWithTheStiffnessOfEveryPatchThePlatePasses
 
 TEST(PadSafety, WithinTheLimitsThePlateGoesWhereItIsAsked) {
     PadSafetyLimiter limiter(loose());
-    limiter.reset(plateAt(kRetractZ));
+    (void)limiter.commanded(plateAt(kRetractZ), nullptr);
     const msgs::ContactSurface pad = flatPad();
-    const PadLimit limit = limiter.limit(0.9, &pad, blendTo(kPadZ - 0.002));
+    const PadLimit limit = tick(limiter, 0.9, &pad, blendTo(kPadZ - 0.002));
     EXPECT_EQ(limit.gain, 0.9);
     EXPECT_EQ(limit.flags, 0);
     const double z = kRetractZ + 0.9 * (kPadZ - 0.002 - kRetractZ);  // 1.2 mm in
@@ -104,9 +115,9 @@ TEST(PadSafety, MaxForceHoldsThePlateWhereThePadModelReachesIt) {
     PadSafetySettings settings = loose();
     settings.max_force_n = 9 * kWeight * 0.001;  // reached 1 mm into the pad
     PadSafetyLimiter limiter(settings);
-    limiter.reset(plateAt(kRetractZ));
+    (void)limiter.commanded(plateAt(kRetractZ), nullptr);
     const msgs::ContactSurface pad = flatPad();
-    const PadLimit limit = limiter.limit(1.0, &pad, blendTo(kPadZ - 0.002));
+    const PadLimit limit = tick(limiter, 1.0, &pad, blendTo(kPadZ - 0.002));
     EXPECT_EQ(limit.flags, static_cast<std::uint8_t>(PadFlag::kForce));
     EXPECT_LE(limit.pad_force_n, settings.max_force_n);
     // The gain where the plate is 1 mm in, within the bisection's 1/65536.
@@ -117,8 +128,8 @@ TEST(PadSafety, MaxForceHoldsThePlateWhereThePadModelReachesIt) {
     // A smaller limit keeps the plate farther back: the key decides.
     settings.max_force_n *= 0.5;
     PadSafetyLimiter softer(settings);
-    softer.reset(plateAt(kRetractZ));
-    const PadLimit half = softer.limit(1.0, &pad, blendTo(kPadZ - 0.002));
+    (void)softer.commanded(plateAt(kRetractZ), nullptr);
+    const PadLimit half = tick(softer, 1.0, &pad, blendTo(kPadZ - 0.002));
     EXPECT_LE(half.pad_force_n, settings.max_force_n);
     EXPECT_LT(half.gain, limit.gain);
 }
@@ -127,13 +138,13 @@ TEST(PadSafety, ThePadForceRisesAtMostAtMaxForceRateAndFallsAtOnce) {
     PadSafetySettings settings = loose();
     settings.max_force_rate_n_per_s = 100.0;  // 0.1 N per 1 ms tick
     PadSafetyLimiter limiter(settings);
-    limiter.reset(plateAt(kRetractZ));
+    (void)limiter.commanded(plateAt(kRetractZ), nullptr);
     const msgs::ContactSurface pad = flatPad();
     const double target_force = 9 * kWeight * 0.002;  // 0.9 N
     double previous = 0.0;
     int ticks = 0;
     for (; ticks < 100 && previous < target_force - 1e-9; ++ticks) {
-        const PadLimit limit = limiter.limit(1.0, &pad, blendTo(kPadZ - 0.002));
+        const PadLimit limit = tick(limiter, 1.0, &pad, blendTo(kPadZ - 0.002));
         ASSERT_LE(limit.pad_force_n, previous + 0.1 + 1e-12) << "tick " << ticks;
         previous = limit.pad_force_n;
     }
@@ -141,58 +152,87 @@ TEST(PadSafety, ThePadForceRisesAtMostAtMaxForceRateAndFallsAtOnce) {
     EXPECT_GE(ticks, 9);
     EXPECT_LE(ticks, 11);
     // Releasing is never slowed.
-    const PadLimit release = limiter.limit(0.0, &pad, blendTo(kPadZ - 0.002));
+    const PadLimit release = tick(limiter, 0.0, &pad, blendTo(kPadZ - 0.002));
     EXPECT_EQ(release.pad_force_n, 0.0);
     EXPECT_EQ(release.flags, 0);
 
-    // A finger pushing into a plate that stays put raises the force too: the plate gives way.
+    // A finger pushing into a plate that stays put raises the force too (4.5 kN/m at 0.1 mm
+    // per tick: 0.45 N per tick): the plate gives way.
     PadSafetyLimiter held(settings);
-    held.reset(plateAt(kRetractZ));
+    (void)held.commanded(plateAt(kRetractZ), nullptr);
     msgs::ContactSurface moving = pad;
+    for (auto& sample : moving.samples) {
+        sample.weight = 500.0;
+    }
     double force = 0.0;
+    int gave_way = 0;
     for (int i = 0; i < 20; ++i) {
         for (auto& sample : moving.samples) {
             sample.p_device_m[2] = kPadZ + 0.0001 * i;  // 0.1 mm per tick towards the plate
         }
-        const PadLimit limit = held.limit(1.0, &moving, blendTo(kPadZ));
+        const PadLimit limit = tick(held, 1.0, &moving, blendTo(kPadZ));
         ASSERT_LE(limit.pad_force_n, force + 0.1 + 1e-12) << "tick " << i;
+        if (limit.gain < 1.0) {
+            ++gave_way;
+            EXPECT_TRUE(limit.flags & static_cast<std::uint8_t>(PadFlag::kForceRate));
+        }
         force = limit.pad_force_n;
     }
+    EXPECT_GT(gave_way, 5);
 }
 
-// On a stiff pad a coarse search stalls the plate short of the pad: with 12 bisection steps
-// over the stroke (8 mm / 4096, 2 um, 0.09 N here) no step fits a 0.02 N rise. The search
-// resumes from last tick's gain and resolves 1/65536 of what is left, so the force creeps up.
+// On a stiff pad a search over the whole stroke stalls the plate short of the pad: its 16
+// steps resolve 8 mm / 65536 = 0.12 um, 55 mN on this 450 kN/m pad, and no step fits a 0.02 N
+// rise. The search resumes from last tick's gain and resolves 1/65536 of the quarter of the
+// stroke that is left, 14 mN, so the force creeps up.
 TEST(PadSafety, OnAStiffPadTheForceStillRisesAtTheRateLimit) {
     PadSafetySettings settings = loose();
     settings.max_force_rate_n_per_s = 20.0;  // 0.02 N per tick
     PadSafetyLimiter limiter(settings);
-    limiter.reset(plateAt(kRetractZ));
+    (void)limiter.commanded(plateAt(kRetractZ), nullptr);
     msgs::ContactSurface stiff = flatPad();
     for (auto& sample : stiff.samples) {
-        sample.weight = 5000.0;  // 45 kN/m in all: 0.09 N per 2 um
+        sample.weight = 50000.0;  // 450 kN/m in all
     }
     double previous = 0.0;
     for (int i = 0; i < 100; ++i) {
-        const PadLimit limit = limiter.limit(1.0, &stiff, blendTo(kPadZ - 0.002));
+        const PadLimit limit = tick(limiter, 1.0, &stiff, blendTo(kPadZ - 0.002));
         ASSERT_LE(limit.pad_force_n, previous + 0.02 + 1e-12) << "tick " << i;
         previous = limit.pad_force_n;
     }
-    EXPECT_GT(previous, 1.0) << "100 ticks at up to 0.02 N each";
+    EXPECT_GT(previous, 0.5) << "100 ticks at up to 0.02 N each";
+}
+
+// A tilt about the plate's centre: the centre stays, the rim swings towards the finger.
+TEST(PadSafety, TheApproachLimitHoldsAtTheRimToo) {
+    PadSafetySettings settings = loose();
+    settings.max_approach_speed_m_per_s = 0.1;  // 0.1 mm per tick
+    PadSafetyLimiter limiter(settings);
+    (void)limiter.commanded(plateAt(kRetractZ), nullptr);
+    const double full_tilt_rad = std::asin(0.001 / kPlateRadius);  // rim 1 mm towards the finger
+    const auto tilt = [&](double gain, PlatformPose& pose) {
+        pose = plateAt(kRetractZ);
+        pose.rotation = Eigen::AngleAxisd(gain * full_tilt_rad, Eigen::Vector3d::UnitX()).matrix();
+        return true;
+    };
+    const PadLimit limit = tick(limiter, 1.0, nullptr, tilt);
+    EXPECT_TRUE(limit.flags & static_cast<std::uint8_t>(PadFlag::kApproachSpeed));
+    EXPECT_GT(limit.gain, 0.08);
+    EXPECT_LT(limit.gain, 0.11);  // 0.1 mm of the rim's 1 mm
 }
 
 TEST(PadSafety, ThePlateApproachesAtMostAtMaxVelocityAndWithdrawsAtOnce) {
     PadSafetySettings settings = loose();
     settings.max_approach_speed_m_per_s = 0.1;  // 0.1 mm per 1 ms tick
     PadSafetyLimiter limiter(settings);
-    limiter.reset(plateAt(kRetractZ));
+    (void)limiter.commanded(plateAt(kRetractZ), nullptr);
     // No pad known: only the speed limit applies.
     double z = kRetractZ;
     const double target_z = kRetractZ - 0.004;
     int ticks = 0;
     for (; ticks < 100; ++ticks) {
         PlatformPose pose;
-        const PadLimit limit = limiter.limit(1.0, nullptr, blendTo(target_z));
+        const PadLimit limit = tick(limiter, 1.0, nullptr, blendTo(target_z));
         blendTo(target_z)(limit.gain, pose);
         ASSERT_LE(z - pose.position_m.z(), 1e-4 + 1e-12) << "tick " << ticks;
         z = pose.position_m.z();
@@ -204,7 +244,7 @@ TEST(PadSafety, ThePlateApproachesAtMostAtMaxVelocityAndWithdrawsAtOnce) {
     // 4 mm at 0.1 mm per tick: 40 ticks, a few more for the bisection's resolution.
     EXPECT_GE(ticks, 39);
     EXPECT_LE(ticks, 45);
-    const PadLimit withdraw = limiter.limit(0.0, nullptr, blendTo(target_z));
+    const PadLimit withdraw = tick(limiter, 0.0, nullptr, blendTo(target_z));
     EXPECT_EQ(withdraw.gain, 0.0);
     EXPECT_EQ(withdraw.flags, 0);
 }
@@ -215,12 +255,12 @@ TEST(PadSafety, LimitingAllocatesNothing) {
     settings.max_force_rate_n_per_s = 100.0;
     settings.max_approach_speed_m_per_s = 0.1;
     PadSafetyLimiter limiter(settings);
-    limiter.reset(plateAt(kRetractZ));
+    (void)limiter.commanded(plateAt(kRetractZ), nullptr);
     const msgs::ContactSurface pad = flatPad();
     double sum = 0.0;
     testing::ScopedAllocationCounter counter;
     for (int i = 0; i < 1000; ++i) {
-        sum += limiter.limit((i % 100) / 99.0, &pad, blendTo(kPadZ - 0.002)).gain;
+        sum += tick(limiter, (i % 100) / 99.0, &pad, blendTo(kPadZ - 0.002)).gain;
     }
     EXPECT_EQ(counter.allocations(), 0U);
     EXPECT_GT(sum, 0.0);

@@ -32,6 +32,11 @@ ThimbleChannel::ThimbleChannel(const config::DeviceConfig& device, can::CanBus& 
     report_.kind = msgs::DeviceKind::kThimble;
     measured_dofs_ = kinematics_.retractPose();
     sent_dofs_ = kinematics_.retractPose();
+    // The rate and speed limits start from the retract pose the servo limiter starts at.
+    tactile::PlatformPose retract_pose;
+    if (kinematics_.platformPose(sent_dofs_, retract_pose) == tactile::KinematicsError::kNone) {
+        (void)pad_limiter_.commanded(retract_pose, nullptr);
+    }
     command_.servo_target_rad = retract_servo_rad_;
     const auto& servos = device.thimble().servos;
     servo_lag_s_ = servos.lag_time_constant_s;
@@ -155,10 +160,46 @@ void ThimbleChannel::compute(daemon::DaemonCore& core, std::size_t index,
     pad_limit_ = pad_limiter_.limit(gain, surface, [this](double g, tactile::PlatformPose& pose) {
         return kinematics_.platformPose(blendDofs(g), pose) == tactile::KinematicsError::kNone;
     });
-    const tactile::LimitedServoCommand limited =
+    const tactile::ServoAngles previous_sent = limiter_.last();
+    tactile::LimitedServoCommand limited =
         limiter_.step(blend(pad_limit_.gain), settings_.period_s);
+    // The servo limiter moves each servo on its own, and blend() falls back to blending the
+    // angles where a pose has no inverse kinematics: the pose sent need not be the one judged.
+    // Judge it too, and shorten the whole servo step by one factor until it keeps the limits.
+    tactile::ForwardResult sent = kinematics_.forward(limited.servo_rad, sent_dofs_);
+    double force_n = 0.0;
+    if (sent.ok() && pad_limiter_.allows(sent.pose, surface, force_n) != 0) {
+        double low = 0.0;
+        double high = 1.0;
+        bool shortened = false;
+        tactile::ServoAngles shorter = previous_sent;
+        for (int i = 0; i < tactile::PadSafetyLimiter::kBisections; ++i) {
+            const double mid = 0.5 * (low + high);
+            tactile::ServoAngles angles;
+            for (std::size_t k = 0; k < angles.size(); ++k) {
+                angles[k] = previous_sent[k] + mid * (limited.servo_rad[k] - previous_sent[k]);
+            }
+            const tactile::ForwardResult fk = kinematics_.forward(angles, sent_dofs_);
+            if (fk.ok() && pad_limiter_.allows(fk.pose, surface, force_n) == 0) {
+                low = mid;
+                shorter = angles;
+                sent = fk;
+                shortened = true;
+            } else {
+                high = mid;
+            }
+        }
+        // Not even a short step keeps them when the finger itself pushed into the plate: then
+        // the servos go on towards the pose limit() chose, which does.
+        if (shortened) {
+            limited.servo_rad = shorter;
+            limiter_.holdAt(shorter);
+            pad_limit_.flags |= static_cast<std::uint8_t>(tactile::PadFlag::kServoStep);
+        } else {
+            sent = kinematics_.forward(limited.servo_rad, sent_dofs_);
+        }
+    }
     command_.servo_target_rad = limited.servo_rad;
-    const tactile::ForwardResult sent = kinematics_.forward(limited.servo_rad, sent_dofs_);
     if (sent.ok()) {
         sent_dofs_ = sent.dofs;
         pad_limit_.pad_force_n = pad_limiter_.commanded(sent.pose, surface);

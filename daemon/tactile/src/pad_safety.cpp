@@ -1,5 +1,6 @@
 #include "haptic/tactile/pad_safety.hpp"
 
+#include <array>
 #include <cmath>
 
 namespace haptic::tactile {
@@ -48,8 +49,8 @@ PadSafetySettings PadSafetySettings::fromConfig(const config::DeviceConfig& devi
     return settings;
 }
 
-std::uint8_t PadSafetyLimiter::check(const PlatformPose& pose, const msgs::ContactSurface* surface,
-                                     double& force_n) const noexcept {
+std::uint8_t PadSafetyLimiter::allows(const PlatformPose& pose, const msgs::ContactSurface* surface,
+                                      double& force_n) const noexcept {
     std::uint8_t violated = 0;
     force_n = surface == nullptr
                   ? 0.0
@@ -57,17 +58,29 @@ std::uint8_t PadSafetyLimiter::check(const PlatformPose& pose, const msgs::Conta
     if (!(force_n <= settings_.max_force_n)) {
         violated |= static_cast<std::uint8_t>(PadFlag::kForce);
     }
-    if (has_previous_) {
-        if (force_n > previous_force_n_ &&
-            !(force_n <=
-              previous_force_n_ + settings_.max_force_rate_n_per_s * settings_.period_s)) {
-            violated |= static_cast<std::uint8_t>(PadFlag::kForceRate);
-        }
-        const double approach_m =
-            previous_pose_.plateNormal().dot(pose.position_m - previous_pose_.position_m);
-        if (!(approach_m <= settings_.max_approach_speed_m_per_s * settings_.period_s)) {
-            violated |= static_cast<std::uint8_t>(PadFlag::kApproachSpeed);
-        }
+    if (!has_previous_) {
+        return violated;
+    }
+    if (force_n > previous_force_n_ &&
+        !(force_n <= previous_force_n_ + settings_.max_force_rate_n_per_s * settings_.period_s)) {
+        violated |= static_cast<std::uint8_t>(PadFlag::kForceRate);
+    }
+    // The centre and four rim points: a tilt can bring the rim towards the pad while the
+    // centre stays where it was.
+    const double r = settings_.plate_radius_m;
+    const std::array<Eigen::Vector3d, 5> points{
+        Eigen::Vector3d::Zero(), Eigen::Vector3d(r, 0.0, 0.0), Eigen::Vector3d(-r, 0.0, 0.0),
+        Eigen::Vector3d(0.0, r, 0.0), Eigen::Vector3d(0.0, -r, 0.0)};
+    const Eigen::Vector3d towards_finger = previous_pose_.plateNormal();
+    double approach_m = 0.0;
+    for (const Eigen::Vector3d& point : points) {
+        const Eigen::Vector3d now = pose.position_m + pose.rotation * point;
+        const Eigen::Vector3d before = previous_pose_.position_m + previous_pose_.rotation * point;
+        const double step = towards_finger.dot(now - before);
+        approach_m = step > approach_m || !(step == step) ? step : approach_m;
+    }
+    if (!(approach_m <= settings_.max_approach_speed_m_per_s * settings_.period_s)) {
+        violated |= static_cast<std::uint8_t>(PadFlag::kApproachSpeed);
     }
     return violated;
 }

@@ -1,20 +1,22 @@
 #pragma once
 
 // The thimble's safety limits (the device file's `safety:` block), enforced on the plate pose
-// hapticd is about to command, whatever the optimiser chose (docs/tactile.md, "Pad safety"):
+// hapticd sends, whatever the optimiser chose (docs/tactile.md, "Pad safety"):
 //   - max_force_n: the force the pad model predicts for the plate stays at or below it;
 //   - max_force_rate_n_per_s: that force rises at most this fast (it may always fall: a
 //     release is the safe direction);
-//   - max_velocity_m_per_s: the plate approaches the finger, along its normal, at most this
-//     fast (it may always withdraw).
+//   - max_velocity_m_per_s: no point of the plate (its centre and four rim points) approaches
+//     the finger along the plate normal faster than this (it may always withdraw).
 // The pad model is the one the contact surface carries: its samples are the undeformed pad in
 // the device frame and each weight is its patch's stiffness (N/m: area times the pad's
 // stiffness per area); a sample the plate passes by delta presses back with w delta, faded out
 // over the plate's rim as in the optimiser. A linear pad: the sim's weights assume one.
 //
-// The limiter searches the line from the retract pose (gain 0) to the caller's pose (its gain)
-// for the largest gain whose pose keeps all three limits, by bisection (kBisections steps)
-// from last tick's gain when that still keeps them, otherwise from the retract pose.
+// Rate and speed are judged against the reference: the pose last sent (commanded()). Each
+// tick, limit() searches the line from the retract pose (gain 0) to the caller's pose (its
+// gain) for the largest gain whose pose keeps all three limits, by bisection (kBisections
+// steps) from last tick's gain when that still keeps them, otherwise from the retract pose;
+// allows() judges any other pose, e.g. the one a servo rate limit actually sends.
 // noexcept, allocation-free, bounded: it runs on the 1 kHz path.
 
 #include <cstdint>
@@ -51,18 +53,23 @@ enum class PadFlag : std::uint8_t {
     kForce = 1U << 0U,
     kForceRate = 1U << 1U,
     kApproachSpeed = 1U << 2U,
+    // The servos' own step (each servo rate-limited on its own, off the judged line) broke a
+    // limit and was shortened.
+    kServoStep = 1U << 3U,
 };
 
 struct PadLimit {
     double gain{0.0};
     double pad_force_n{0.0};  // the pad model's force at the returned gain
     std::uint8_t flags{0};    // PadFlag bits: what lowered the gain
+    PlatformPose pose{};      // the pose at the returned gain
+    bool has_pose{false};     // false only when not even the retract pose had one
 };
 
 class PadSafetyLimiter {
   public:
-    // Resolution 1/65536 of the searched interval: on the shipped stroke (8 mm) 0.1 um, so even a
-    // pad of 45 kN/m rises by under 5 mN per step, well below a 0.02 N per tick rate limit.
+    // Resolution 1/65536 of the searched interval: on the shipped stroke (8 mm) 0.12 um, so
+    // even a pad of 45 kN/m rises by about 5.5 mN per step, below a 0.02 N per tick rate limit.
     static constexpr int kBisections = 16;
 
     explicit PadSafetyLimiter(const PadSafetySettings& settings) noexcept : settings_(settings) {}
@@ -76,10 +83,10 @@ class PadSafetyLimiter {
         PadLimit result;
         PlatformPose pose;
         if (gain > 0.0 && pose_at(gain, pose)) {
-            const std::uint8_t violated = check(pose, surface, result.pad_force_n);
+            const std::uint8_t violated = allows(pose, surface, result.pad_force_n);
             if (violated == 0) {
                 result.gain = gain;
-                return accept(result, pose);
+                return found(result, pose);
             }
             result.flags = violated;
         }
@@ -91,20 +98,21 @@ class PadSafetyLimiter {
         PlatformPose low_pose;
         double low_force = 0.0;
         const double resume = previous_gain_ < gain ? previous_gain_ : 0.0;
-        if (resume > 0.0 && pose_at(resume, low_pose) && check(low_pose, surface, low_force) == 0) {
+        if (resume > 0.0 && pose_at(resume, low_pose) &&
+            allows(low_pose, surface, low_force) == 0) {
             low = resume;
-        } else {
-            low_force = 0.0;
         }
-        const bool retract_ok = low > 0.0 || pose_at(0.0, low_pose);
-        if (low == 0.0 && retract_ok && surface != nullptr) {
+        const bool has_low = low > 0.0 || pose_at(0.0, low_pose);
+        if (low == 0.0) {
             low_force =
-                padForceN(low_pose, *surface, settings_.plate_radius_m, settings_.rim_blend_m);
+                has_low && surface != nullptr
+                    ? padForceN(low_pose, *surface, settings_.plate_radius_m, settings_.rim_blend_m)
+                    : 0.0;
         }
         for (int i = 0; i < kBisections && gain > 0.0; ++i) {
             const double mid = 0.5 * (low + high);
             double force = 0.0;
-            if (pose_at(mid, pose) && check(pose, surface, force) == 0) {
+            if (pose_at(mid, pose) && allows(pose, surface, force) == 0) {
                 low = mid;
                 low_pose = pose;
                 low_force = force;
@@ -114,17 +122,20 @@ class PadSafetyLimiter {
         }
         result.gain = low;
         result.pad_force_n = low_force;
-        if (!retract_ok) {
+        if (!has_low) {
             previous_gain_ = 0.0;
             return result;
         }
-        return accept(result, low_pose);
+        return found(result, low_pose);
     }
 
-    // The pose the servos were actually sent after the servo limiter (its forward
-    // kinematics), which replaces the accepted one as the reference for the next tick's rate
-    // and speed limits: a servo still catching up does not add to the plate's next step.
-    // Returns the pad model's force there.
+    // Which limits `pose` would break against the reference (PadFlag bits, 0: none); `force_n`
+    // gets the pad model's force there.
+    [[nodiscard]] std::uint8_t allows(const PlatformPose& pose, const msgs::ContactSurface* surface,
+                                      double& force_n) const noexcept;
+
+    // The pose the servos were actually sent (the forward kinematics of their targets): the
+    // reference for the next tick's rate and speed limits. Returns the pad model's force.
     double commanded(const PlatformPose& pose, const msgs::ContactSurface* surface) noexcept {
         previous_pose_ = pose;
         previous_force_n_ = surface == nullptr ? 0.0
@@ -134,24 +145,13 @@ class PadSafetyLimiter {
         return previous_force_n_;
     }
 
-    // The last accepted pose and its force are the reference for the rate and speed limits;
-    // after a restart of the channel, start from `pose` with no force.
-    void reset(const PlatformPose& pose) noexcept {
-        previous_pose_ = pose;
-        previous_force_n_ = 0.0;
-        previous_gain_ = 0.0;
-        has_previous_ = true;
-    }
     [[nodiscard]] const PadSafetySettings& settings() const noexcept { return settings_; }
 
   private:
-    [[nodiscard]] std::uint8_t check(const PlatformPose& pose, const msgs::ContactSurface* surface,
-                                     double& force_n) const noexcept;
-    PadLimit accept(const PadLimit& result, const PlatformPose& pose) noexcept {
+    PadLimit found(PadLimit result, const PlatformPose& pose) noexcept {
         previous_gain_ = result.gain;
-        previous_pose_ = pose;
-        previous_force_n_ = result.pad_force_n;
-        has_previous_ = true;
+        result.pose = pose;
+        result.has_pose = true;
         return result;
     }
 

@@ -24,6 +24,9 @@ class ServoLimiter {
 
     [[nodiscard]] LimitedServoCommand step(const ServoAngles& target_rad, double period_s) noexcept;
     [[nodiscard]] const ServoAngles& last() const noexcept { return last_; }
+    // The caller sent `sent_rad` instead of step()'s result (a shorter step towards it): the
+    // next step starts from there.
+    void holdAt(const ServoAngles& sent_rad) noexcept { last_ = sent_rad; }
 
   private:
     config::ServoConfig servos_;
