@@ -167,7 +167,8 @@ class ExoskeletonEmulator final : private CodecOwner<protocol::ExoskeletonCodec>
                                       (activeFault() != 0 ? protocol::kExoFaulted : 0) |
                                       (model_.atStrokeMin() ? protocol::kExoAtStrokeMin : 0) |
                                       (model_.atStrokeMax() ? protocol::kExoAtStrokeMax : 0));
-        actuator.command_echo = last_command_counter_;
+        actuator.command_echo = static_cast<std::uint8_t>(
+            (last_command_counter_ + faults_.echoOffset()) % protocol::kCounterModulo);
         can::CanFrame frame;
         if (codec_.encodeActuatorState(actuator, frame)) {
             send(frame, now_ns);

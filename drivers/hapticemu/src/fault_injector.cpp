@@ -129,6 +129,8 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
         stuck_enable_ = argument == "on";
     } else if (verb == "servo-stuck" && has_number && number <= 3) {
         stuck_servo_ = static_cast<std::uint8_t>(number);
+    } else if (verb == "echo-offset" && has_number && number <= 15) {
+        echo_offset_ = static_cast<std::uint8_t>(number);
     } else if (verb == "clear" && argument.empty()) {
         drop_next_ = 0;
         drop_every_ = 0;
@@ -137,6 +139,7 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
         heartbeat_stopped_ = false;
         stuck_enable_ = false;
         stuck_servo_ = 0;
+        echo_offset_ = 0;
         force_percent_ = 100;
         if (bus_off_) {
             bus_off_ = false;
@@ -150,6 +153,7 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
         error = "unknown fault command '" + std::string(line) +
                 "' (drop N, drop-every N, delay MS, corrupt N, heartbeat stop|start, busoff, "
                 "recover, fault CODE, reboot, stuck-enable on|off, force-percent P, servo-stuck N, "
+                "echo-offset N, "
                 "clear)";
         return false;
     }

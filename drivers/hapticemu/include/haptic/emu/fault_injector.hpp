@@ -51,6 +51,9 @@ class FaultInjector {
     [[nodiscard]] double forceFraction() const noexcept { return force_percent_ * 0.01; }
     // The thimble servo (1-3) that holds its angle, 0 when none.
     [[nodiscard]] std::uint8_t stuckServo() const noexcept { return stuck_servo_; }
+    // Added to the command counter the exoskeleton echoes: the echo of a device that obeys
+    // another host's commands, not the ones it is sent here (0: the true echo).
+    [[nodiscard]] std::uint8_t echoOffset() const noexcept { return echo_offset_; }
     [[nodiscard]] std::uint64_t droppedFrames() const noexcept { return dropped_; }
     [[nodiscard]] std::uint64_t corruptedFrames() const noexcept { return corrupted_; }
 
@@ -76,6 +79,7 @@ class FaultInjector {
     bool reboot_{false};
     bool stuck_enable_{false};
     std::uint8_t stuck_servo_{0};
+    std::uint8_t echo_offset_{0};
     std::uint32_t force_percent_{100};
     std::array<Delayed, kDelayCapacity> delayed_{};
     std::size_t delayed_head_{0};
