@@ -11,8 +11,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "device_safety_rig.hpp"
 #include "haptic/can/udp_bus.hpp"
+#include "haptic/common/clock.hpp"
 #include "haptic/config/device.hpp"
 #include "haptic/protocol/exoskeleton_protocol.hpp"
 #include "haptic/protocol/thimble_protocol.hpp"
@@ -34,8 +34,8 @@ class BusListener {
 
     std::vector<Heard<Message>> listen(std::chrono::milliseconds duration) {
         std::vector<Heard<Message>> heard;
-        const std::int64_t end = monotonicNs() + duration.count() * 1'000'000;
-        while (monotonicNs() < end) {
+        const std::int64_t end = common::monotonicNowNs() + duration.count() * 1'000'000;
+        while (common::monotonicNowNs() < end) {
             pollfd fd{bus_.pollFd(), POLLIN, 0};
             (void)::poll(&fd, 1, 1);
             can::CanFrame frame;
@@ -43,7 +43,7 @@ class BusListener {
                 const Message message = codec_.decode(frame);
                 if (message.type != Message::Type::kNotForThisDevice &&
                     message.type != Message::Type::kRejected) {
-                    heard.push_back({monotonicNs(), message});
+                    heard.push_back({common::monotonicNowNs(), message});
                 }
             }
         }

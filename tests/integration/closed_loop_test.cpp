@@ -3,7 +3,8 @@
 // the UDP bus and publishing its hand on tracking/hand), hapticd, and handsim tracking that
 // topic, all with the shipped configuration. One recorded run is judged by what the finger
 // gets (closed_loop_report.hpp): force only in contact, no clamp, a passive port, the thimble
-// pressing only in contact, and live method switches while rendering.
+// pressing only in contact, and live method switches while rendering. And a tracker that stops
+// during contact: the force is gone within the tracking timeout plus sim_timeout_ms.
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -18,8 +19,12 @@
 #include <string>
 #include <thread>
 
+#include "bus_listener.hpp"
 #include "child_process.hpp"
 #include "closed_loop_report.hpp"
+#include "emulator_process.hpp"
+#include "haptic/config/daemon.hpp"
+#include "haptic/config/sim.hpp"
 #include "haptic/ipc/iceoryx_runtime.hpp"
 
 namespace haptic::testing {
@@ -210,6 +215,104 @@ TEST(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitches
     for (ChildProcess* process : {&sim, &daemon, &user}) {
         EXPECT_EQ(process->terminate(), std::optional<int>(0));
     }
+    EXPECT_EQ(roudi.terminate(), std::optional<int>(0));
+}
+
+// The tracker stops while the finger presses the block (a camera covered, a tracking process
+// hung): handsim stops sending targets after scene.tracking.timeout_ms without a pose, and
+// hapticd fades the force to zero by loop.sim_timeout_ms after the last target. Judged on
+// the exoskeleton's own state frames on its bus.
+TEST(ClosedLoop, ATrackerThatStopsDuringContactTakesTheForceAwayWithinItsTimeouts) {
+    if (HAPTIC_SANITIZED != 0) {
+        GTEST_SKIP() << "under the sanitizers handsim steps at ~4 Hz: no steady contact to stop";
+    }
+    const config::SimConfig sim_config = config::loadSimConfig(kConfigDir + "/sim.yaml");
+    const config::DaemonConfig daemon_config =
+        config::loadDaemonConfig(kConfigDir + "/daemon.yaml");
+    const config::DeviceConfig& exo_device = daemon_config.devices.at(0);
+    ASSERT_TRUE(exo_device.isExoskeleton());
+    ASSERT_FALSE(ipc::probeRoudi().reachable) << "an iox-roudi is already running; stop it";
+    ChildProcess roudi({IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l", "warning"},
+                       "roudi");
+    for (auto deadline = std::chrono::steady_clock::now() + 10s; !ipc::probeRoudi().reachable;) {
+        ASSERT_TRUE(roudi.running()) << roudi.stderrText();
+        ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
+        std::this_thread::sleep_for(20ms);
+    }
+    EmulatorProcess user(withFifoPriority(
+        {HAPTICEMU_PATH, "--user", kConfigDir + "/user.yaml", "--dds-domain", domainArgument()},
+        70));
+    ChildProcess daemon({HAPTICD_PATH, "--realtime", "ignore", "--dds-domain", domainArgument()},
+                        "hapticd");
+    ChildProcess sim(
+        {HANDSIM_PATH, "--dds-domain", domainArgument(), "--tracking-topic", "tracking/hand"},
+        "handsim");
+    ExoListener exo_bus(exo_device);
+    CommandResult enabled;
+    for (auto deadline = std::chrono::steady_clock::now() + 30s;
+         std::chrono::steady_clock::now() < deadline;) {
+        ASSERT_TRUE(daemon.running()) << daemon.stderrText();
+        ASSERT_TRUE(sim.running()) << sim.stderrText();
+        enabled = ctl({"enable"});
+        if (enabled.exit_code == 0) {
+            break;
+        }
+        std::this_thread::sleep_for(500ms);
+    }
+    ASSERT_EQ(enabled.exit_code, 0) << enabled.err;
+
+    // The onset of a contact (free, then pushing): the script presses the block for about
+    // 2.5 s of each 6 s period, so 300 ms after the onset the finger is well inside it.
+    bool was_free = false;
+    bool onset = false;
+    for (auto deadline = std::chrono::steady_clock::now() + 20s;
+         !onset && std::chrono::steady_clock::now() < deadline;) {
+        const auto window = exo_bus.listen(50ms);
+        const auto pushing = std::count_if(window.begin(), window.end(), [](const auto& h) {
+            return enabledWithForce(h.message, 0.5);
+        });
+        onset = was_free && pushing > 20;
+        was_free = was_free || pushing == 0;
+    }
+    ASSERT_TRUE(onset) << "no contact onset";
+    std::this_thread::sleep_for(300ms);
+
+    const std::int64_t stopped_ns = common::monotonicNowNs();
+    ASSERT_TRUE(user.sendCommand("tracker stop"));
+    const auto heard = exo_bus.listen(1500ms);
+    // The first state after which the force stays below 0.05 N.
+    std::optional<std::int64_t> gone_ns;
+    for (const auto& h : heard) {
+        if (h.message.type != ExoType::kActuatorState) {
+            continue;
+        }
+        if (std::abs(h.message.actuator.force_n) >= 0.05) {
+            gone_ns.reset();
+        } else if (!gone_ns) {
+            gone_ns = h.at_ns - stopped_ns;
+        }
+    }
+    ASSERT_TRUE(gone_ns.has_value()) << "the force never went away";
+    // Still pushing well after the stop: it was the timeouts that took the force, not the
+    // script's own release.
+    EXPECT_TRUE(std::any_of(heard.begin(), heard.end(), [&](const auto& h) {
+        return h.at_ns - stopped_ns > 50'000'000 && enabledWithForce(h.message, 0.3);
+    })) << "the force went before the tracker timeout could act";
+    // The tracker's last pose may be up to one tracker period (90 Hz) old at the stop, the
+    // sim's last step one sim period (100 Hz); the actuator's lag (5 ms) and scheduling on a
+    // 2-core VM come on top.
+    const std::int64_t bound_ns = (static_cast<std::int64_t>(sim_config.scene.tracking.timeout_ms) +
+                                   daemon_config.loop.sim_timeout_ms + 12 + 10 + 5 + 25) *
+                                  1'000'000;
+    std::printf("tracker stopped: force gone after %.1f ms (bound %.1f ms)\n",
+                static_cast<double>(*gone_ns) * 1e-6, static_cast<double>(bound_ns) * 1e-6);
+    EXPECT_LE(*gone_ns, bound_ns);
+
+    ASSERT_TRUE(user.sendCommand("tracker start"));
+    for (ChildProcess* process : {&sim, &daemon}) {
+        EXPECT_EQ(process->terminate(), std::optional<int>(0));
+    }
+    user.stop();
     EXPECT_EQ(roudi.terminate(), std::optional<int>(0));
 }
 

@@ -192,11 +192,12 @@ class DeviceSafetyTest : public ::testing::Test {
     }
 
     // hapticd on the copied configuration (also a restart, as systemd's Restart= would do it).
-    void startDaemon() {
-        daemon_ = std::make_unique<ChildProcess>(
-            std::vector<std::string>{HAPTICD_PATH, "-c", (config_.dir / "daemon.yaml").string(),
-                                     "--realtime", "ignore", "--dds-domain", domain()},
-            "hapticd");
+    void startDaemon(const std::vector<std::string>& extra = {}) {
+        std::vector<std::string> argv{
+            HAPTICD_PATH,   "-c",    (config_.dir / "daemon.yaml").string(), "--realtime", "ignore",
+            "--dds-domain", domain()};
+        argv.insert(argv.end(), extra.begin(), extra.end());
+        daemon_ = std::make_unique<ChildProcess>(argv, "hapticd");
     }
 
     // The emulator takes the port block from the device file, as hapticd does.

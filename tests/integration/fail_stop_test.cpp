@@ -5,6 +5,7 @@
 //   restart  a new hapticd on the same RouDi comes up IDLE and renders after `enable`.
 //   SIGTERM  hapticd's fail-stop writes the safe commands within two ticks and exits 0.
 //   SIGSTOP  the devices time out on their own; hapticd wakes up, blames its own stall.
+//   --duration ending while rendering: the same fail-stop as SIGTERM.
 //   E-stop   the relay on the exoskeleton's bus reports pressed, or falls silent: E-STOP
 //            within a tick of hapticd reading it, and only release + clear + enable re-arm.
 
@@ -235,6 +236,58 @@ TEST_F(FailStopTest, SigtermWritesTheSafeCommandsWithinTwoTicksAndExitsCleanly) 
     });
     ASSERT_NE(last_command, thimble.rend());
     EXPECT_LT(fromRetract(last_command->message.command.servo_target_rad), 1e-3);
+}
+
+// `hapticd --duration` ending while the exoskeleton pushes: the same fail-stop as SIGTERM.
+// The device must go limp on hapticd's own safe command, well before its command timeout
+// (which would also make it limp, but only after can.command_timeout_ms of silence).
+TEST_F(FailStopTest, ADurationThatEndsWhileRenderingWritesTheSafeCommandsBeforeExiting) {
+    ASSERT_EQ(daemon_->terminate(), std::optional<int>(0));
+    // Long enough for the injector, hapticctl's discovery and a few seconds of force (under
+    // the sanitizers a fresh hapticctl alone takes seconds).
+    startDaemon({"--duration", HAPTIC_SANITIZED != 0 ? "25" : "8"});
+    waitForStatus("both devices READY", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kIdle && s.devices.size() == 2 &&
+               s.devices[0].state == msgs::DeviceRunState::kReady &&
+               s.devices[1].state == msgs::DeviceRunState::kReady;
+    });
+    EmulatorProcess injector({SIM_INPUT_INJECTOR_PATH});
+    waitForOutput(injector, "ready");
+    ASSERT_TRUE(command("enable"));
+    std::vector<Heard<protocol::ExoskeletonMessage>> heard;
+    for (auto deadline = std::chrono::steady_clock::now() + 40s;
+         daemon_->running() && std::chrono::steady_clock::now() < deadline;) {
+        auto window = exo_bus_.listen(50ms);
+        heard.insert(heard.end(), window.begin(), window.end());
+    }
+    auto window = exo_bus_.listen(100ms);  // what the socket held at the exit
+    heard.insert(heard.end(), window.begin(), window.end());
+    EXPECT_EQ(daemon_->waitFor(10s), std::optional<int>(0)) << daemon_->stderrText();
+    daemon_.reset();
+    injector.stop();
+
+    const auto last_push = std::find_if(heard.rbegin(), heard.rend(), [](const auto& h) {
+        return enabledWithForce(h.message, 1.0);
+    });
+    ASSERT_NE(last_push, heard.rend()) << "the exoskeleton never pushed";
+    const auto from = last_push.base();
+    const auto safe_command = std::find_if(from, heard.end(), [](const auto& h) {
+        return h.message.type == ExoType::kCommand && !h.message.command.enable &&
+               h.message.command.force_n == 0.0;
+    });
+    ASSERT_NE(safe_command, heard.end()) << "hapticd exited without commanding the safe state";
+    const auto first_limp =
+        std::find_if(from, heard.end(), [](const auto& h) { return limp(h.message); });
+    ASSERT_NE(first_limp, heard.end());
+    const std::int64_t limp_after_ns = first_limp->at_ns - last_push->at_ns;
+    std::printf("--duration: exoskeleton limp %.2f ms after its last push\n",
+                static_cast<double>(limp_after_ns) * 1e-6);
+    EXPECT_LE(safe_command->at_ns, first_limp->at_ns + kTickNs)
+        << "the device went limp before hapticd's safe command: by its own timeout";
+    EXPECT_LT(limp_after_ns,
+              static_cast<std::int64_t>(exo_device_.can.command_timeout_ms) * 1'000'000 +
+                  (HAPTIC_SANITIZED != 0 ? kSlackNs : 0))
+        << "no faster than the device's own command timeout";
 }
 
 // A drive that ignores the disable (hapticemu's `stuck-enable on`): hapticd cannot stop it
