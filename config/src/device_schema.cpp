@@ -231,7 +231,7 @@ ExoskeletonConfig readExoskeleton(MapReader& root, const Safety& safety,
     if (!(safety.limits.max_velocity_m_per_s < out.actuator.max_speed_m_per_s)) {
         safety.max_velocity_field->fail("a number below actuator.max_speed_m_per_s (" +
                                         formatNumber(out.actuator.max_speed_m_per_s) +
-                                        "), the drive's no-load speed, or the limit does nothing");
+                                        ", the drive's no-load speed: a limit there does nothing)");
     }
     // Colgate and Schenkel's sampled-data passivity along the actuator (docs/algorithms.md
     // §1.5, §6.9): b > K T / 2 + |b_v|, with K the stiffness the rendering is clamped to, b the

@@ -9,7 +9,9 @@
 #include <exception>
 #include <limits>
 #include <memory>
+#include <string_view>
 #include <system_error>
+#include <vector>
 
 #include "scalar.hpp"
 
@@ -21,6 +23,33 @@ using detail::classify;
 using detail::Kind;
 using detail::sanitise;
 using detail::Scalar;
+
+// Edits (insert, delete, substitute, swap two neighbours) from a to b, or `limit` + 1 once
+// the distance exceeds `limit`: enough to tell a misspelt key from another key.
+std::size_t editDistance(std::string_view a, std::string_view b, std::size_t limit) {
+    const std::size_t n = a.size();
+    const std::size_t m = b.size();
+    if ((n > m ? n - m : m - n) > limit) {
+        return limit + 1;
+    }
+    std::vector<std::vector<std::size_t>> d(n + 1, std::vector<std::size_t>(m + 1, 0));
+    for (std::size_t i = 0; i <= n; ++i) {
+        d[i][0] = i;
+    }
+    for (std::size_t j = 0; j <= m; ++j) {
+        d[0][j] = j;
+    }
+    for (std::size_t i = 1; i <= n; ++i) {
+        for (std::size_t j = 1; j <= m; ++j) {
+            const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+            d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
+                d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+            }
+        }
+    }
+    return std::min(d[n][m], limit + 1);
+}
 
 }  // namespace
 
@@ -267,8 +296,17 @@ Field MapReader::takeRequired(std::string_view key, std::string_view expected) {
         return *std::move(field);
     }
     const std::string full = childKey(key);
-    throw ConfigError(self_.file(), self_.line(), 0, full,
-                      "missing required key '" + full + "' (" + std::string(expected) + ")");
+    std::string message = "missing required key '" + full + "' (" + std::string(expected) + ")";
+    // A key of this map no reader has taken yet that is one or two edits away is most likely
+    // the same key misspelt: name it, or the operator hunts for a key that is "there".
+    for (const Entry& entry : entries_) {
+        if (!entry.consumed && editDistance(entry.name, key, 2) <= 2) {
+            message += "; is '" + entry.name + "' (line " + std::to_string(entry.key.line()) +
+                       ") a misspelling of it?";
+            break;
+        }
+    }
+    throw ConfigError(self_.file(), self_.line(), 0, full, message);
 }
 
 MapReader MapReader::requiredMap(std::string_view key) {

@@ -27,6 +27,7 @@
 #include "closed_loop_report.hpp"
 #include "haptic/common/clock.hpp"
 #include "haptic/config/daemon.hpp"
+#include "haptic/config/enums.hpp"
 #include "haptic/config/error.hpp"
 #include "haptic/ipc/dds_participant.hpp"
 #include "haptic/ipc/topics.hpp"
@@ -129,13 +130,19 @@ int watchStatus(const haptic::config::DaemonConfig& cfg, double interval_s, int 
         haptic::ipc::kStatusTopic, haptic::ipc::TopicKind::kLatestState);
     haptic::idl::HapticStatus sample;
     std::string screen;
+    const bool to_terminal = ::isatty(STDOUT_FILENO) == 1;
     for (int drawn = 0; count == 0 || drawn < count; ++drawn) {
         const bool fresh = reader.waitAndTake(sample, toMs(std::max(interval_s, 2.0)));
         if (haptic::process::shutdownRequested()) {
             break;
         }
-        // Home the cursor and clear the screen, as watch(1) does.
-        std::cout << "\033[H\033[2J";
+        // Home the cursor and clear the screen, as watch(1) does, on a terminal; piped, one
+        // snapshot after the other with no control codes.
+        if (to_terminal) {
+            std::cout << "\033[H\033[2J";
+        } else if (drawn > 0) {
+            std::cout << "\n";
+        }
         if (!fresh) {
             std::cout << "● hapticd - no status on '" << haptic::ipc::kStatusTopic << "' (domain "
                       << cfg.dds.domain_id << "); waiting for the daemon\n";
@@ -158,11 +165,17 @@ int watchStatus(const haptic::config::DaemonConfig& cfg, double interval_s, int 
 int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& path,
                     double duration_s, double timeout_s) {
     haptic::process::installShutdownHandlers();
-    std::ofstream out(path);
-    if (!out) {
-        std::fprintf(stderr, "hapticctl: cannot write '%s'\n", path.c_str());
-        return kExitError;
+    // "-" is standard output (then the summary goes to stderr, out of the data's way).
+    const bool to_stdout = path == "-";
+    std::ofstream file;
+    if (!to_stdout) {
+        file.open(path);
+        if (!file) {
+            std::fprintf(stderr, "hapticctl: cannot write '%s'\n", path.c_str());
+            return kExitError;
+        }
     }
+    std::ostream& out = to_stdout ? std::cout : file;
     haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
     auto reader = participant.createReader<haptic::idl::HapticTelemetryPubSubType>(
         haptic::ipc::kTelemetryTopic, haptic::ipc::TopicKind::kStream);
@@ -202,7 +215,8 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
         std::fprintf(stderr, "hapticctl: writing '%s' failed\n", path.c_str());
         return kExitError;
     }
-    std::printf("%llu rows written to %s\n", static_cast<unsigned long long>(rows), path.c_str());
+    std::fprintf(to_stdout ? stderr : stdout, "%llu rows written to %s\n",
+                 static_cast<unsigned long long>(rows), to_stdout ? "stdout" : path.c_str());
     return EXIT_SUCCESS;
 }
 
@@ -336,6 +350,7 @@ int main(int argc, char** argv) {
     CLI::App app{
         "hapticctl - status and commands for the haptic runtime (over hapticd's DDS "
         "topics)"};
+    app.set_version_flag("--version", "hapticctl " HAPTIC_VERSION);
     app.require_subcommand(1);
     // Global options may follow the subcommand too (hapticctl status --timeout 5).
     app.fallthrough();
@@ -369,7 +384,7 @@ int main(int argc, char** argv) {
     std::string record_path;
     double record_duration_s = 5.0;
     auto* record = app.add_subcommand("record", "write haptic/telemetry to a CSV file");
-    record->add_option("file", record_path, "CSV file to write")->required();
+    record->add_option("file", record_path, "CSV file to write ('-': standard output)")->required();
     record->add_option("--duration", record_duration_s, "seconds to record")
         ->capture_default_str()
         ->check(CLI::PositiveNumber);
@@ -407,9 +422,17 @@ int main(int argc, char** argv) {
         entry.sub = app.add_subcommand(entry.name, entry.help);
     }
     std::string method_name;
+    // The names hapticd knows, for --help; hapticd itself judges the name (it answers with
+    // exit 2 and "unknown rendering method" for any other).
+    std::string method_names;
+    for (const auto& entry :
+         haptic::config::EnumTraits<haptic::config::RenderingMethod>::kEntries) {
+        method_names += (method_names.empty() ? "" : ", ") + std::string(entry.name);
+    }
     auto* method =
         app.add_subcommand("method", "choose the rendering method (IDLE, or live while RENDERING)");
-    method->add_option("name", method_name, "rendering method, as in the device YAML")->required();
+    method->add_option("name", method_name, "the exoskeleton's rendering method: " + method_names)
+        ->required();
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {

@@ -10,6 +10,7 @@
 
 int main(int argc, char** argv) {
     CLI::App app{"hapticd - hard real-time haptic rendering daemon (1 kHz)"};
+    app.set_version_flag("--version", "hapticd " HAPTIC_VERSION);
     haptic::config::CommonOverrides overrides;
     overrides.config_path = HAPTIC_DEFAULT_CONFIG_DIR "/daemon.yaml";
     haptic::config::addCommonOptions(app, overrides, "daemon configuration file");
@@ -22,6 +23,10 @@ int main(int argc, char** argv) {
 
     return haptic::process::runMain("hapticd", [&] {
         using haptic::config::DaemonConfig;
+        if (overrides.check_only) {
+            return haptic::config::checkConfig("hapticd", overrides,
+                                               haptic::config::loadDaemonConfig);
+        }
         return haptic::hapticd::runDaemon(haptic::config::startWithConfig<DaemonConfig>(
             "hapticd", overrides, haptic::config::loadDaemonConfig, [&](DaemonConfig& config) {
                 if (!realtime.empty()) {

@@ -7,6 +7,8 @@
 //   hapticemu -d config/devices/thimble.yaml --bus socketcan --interface vcan0
 //   hapticemu --user config/user.yaml     every device the user wears, one hand, and the
 //                                         tracker publishing that hand on tracking/hand
+//                                         ("tracker stop" on stdin silences the tracker,
+//                                         "tracker start" resumes it)
 //   ... --estop-relay 0x0E0               also the E-stop relay's status on that id
 //                                         ("estop press" on stdin presses its button)
 //
@@ -78,8 +80,9 @@ bool applyFaultCommand(std::vector<EmulatedDevice>& devices, const std::string& 
 class CommandReader {
   public:
     // Returns false at end of input.
-    bool readAvailable(std::vector<EmulatedDevice>& devices,
-                       haptic::emu::EstopRelayEmulator* relay) {
+    // `tracker_silenced` is null without a virtual user.
+    bool readAvailable(std::vector<EmulatedDevice>& devices, haptic::emu::EstopRelayEmulator* relay,
+                       bool* tracker_silenced) {
         char buffer[512];
         const ssize_t count = ::read(STDIN_FILENO, buffer, sizeof(buffer));
         if (count <= 0) {
@@ -95,7 +98,22 @@ class CommandReader {
             }
             std::string error;
             const bool for_relay = line.rfind("estop ", 0) == 0;
-            if (for_relay && relay == nullptr) {
+            const bool for_tracker = line.rfind("tracker ", 0) == 0;
+            if (for_tracker) {
+                const std::string verb = line.substr(8);
+                if (tracker_silenced == nullptr) {
+                    error = "no tracker (start with --user FILE)";
+                } else if (verb == "stop" || verb == "start") {
+                    *tracker_silenced = verb == "stop";
+                } else {
+                    error = "tracker stop|start";
+                }
+                if (error.empty()) {
+                    std::printf("ok %s\n", line.c_str());
+                } else {
+                    std::printf("error: %s\n", error.c_str());
+                }
+            } else if (for_relay && relay == nullptr) {
                 error = "no E-stop relay emulated (start with --estop-relay ID)";
             } else if (for_relay ? relay->command(line.substr(6), error)
                                  : applyFaultCommand(devices, line, error)) {
@@ -126,6 +144,7 @@ std::string readFile(const std::filesystem::path& path) {
 
 int main(int argc, char** argv) {
     CLI::App app{"hapticemu - CAN device emulator for the exoskeleton and the thimble"};
+    app.set_version_flag("--version", "hapticemu " HAPTIC_VERSION);
     std::vector<std::string> device_paths;
     std::string user_path;
     bool check_only = false;
@@ -311,6 +330,7 @@ int main(int argc, char** argv) {
         constexpr std::int64_t kTickNs = 1'000'000;
         std::int64_t next_tick_ns = start_ns;
         std::uint64_t tracker_dropped = 0;
+        bool tracker_silenced = false;
         while (!haptic::process::shutdownRequested()) {
             std::int64_t now_ns = haptic::common::monotonicNowNs();
             if (duration_ns > 0 && now_ns - start_ns >= duration_ns) {
@@ -351,7 +371,8 @@ int main(int argc, char** argv) {
                 relay->tick(*bus, now_ns);
             }
             if (user) {
-                if (const auto pose = user->track(now_ns, t_s)) {
+                const auto pose = user->track(now_ns, t_s);
+                if (pose && !tracker_silenced) {
                     if (!tracker_writer.write(haptic::msgs::toIdl(*pose))) {
                         ++tracker_dropped;
                     }
@@ -374,7 +395,8 @@ int main(int argc, char** argv) {
                 throw std::runtime_error(std::string("poll: ") + std::strerror(errno));
             }
             if ((fds[1].revents & (POLLIN | POLLHUP)) != 0) {
-                stdin_open = commands.readAvailable(devices, relay.get());
+                stdin_open = commands.readAvailable(devices, relay.get(),
+                                                    user ? &tracker_silenced : nullptr);
             }
         }
         for (const EmulatedDevice& device : devices) {

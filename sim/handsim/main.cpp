@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
     mallopt(M_TRIM_THRESHOLD, 512 << 20);
     mallopt(M_TOP_PAD, 64 << 20);
     CLI::App app{"handsim - hand simulation publishing proxy targets and contact surfaces"};
+    app.set_version_flag("--version", "handsim " HAPTIC_VERSION);
     haptic::config::CommonOverrides overrides;
     overrides.config_path = HAPTIC_DEFAULT_CONFIG_DIR "/sim.yaml";
     haptic::config::addCommonOptions(app, overrides, "sim configuration file");
@@ -30,6 +31,9 @@ int main(int argc, char** argv) {
 
     return haptic::process::runMain("handsim", [&] {
         using haptic::config::SimConfig;
+        if (overrides.check_only) {
+            return haptic::config::checkConfig("handsim", overrides, haptic::config::loadSimConfig);
+        }
         return haptic::handsim::runSim(haptic::config::startWithConfig<SimConfig>(
             "handsim", overrides, haptic::config::loadSimConfig, [&](SimConfig& config) {
                 if (!tracking_topic.empty()) {

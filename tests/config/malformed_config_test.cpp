@@ -371,6 +371,16 @@ TEST(ConfigMissingKeys, NestedRequiredKeyPointsAtItsMap) {
                   ": missing required key 'loop.sim_timeout_ms' (an integer in [1, 1000])");
 }
 
+// A misspelt key is named beside the key it stands for, not left for the operator to find.
+TEST(ConfigMissingKeys, AMisspeltKeyIsNamedWithTheMissingOne) {
+    const auto file = kDataDir / "misspelt_key.yaml";
+    expectError(daemonError("misspelt_key.yaml"),
+                {file.string(), lineOf(file, "rate_hz"), 0, "loop.sim_timeout_ms",
+                 "missing required key 'loop.sim_timeout_ms' (an integer in [1, 1000]); is "
+                 "'sim_timout_ms' (line " +
+                     std::to_string(lineOf(file, "sim_timout_ms")) + ") a misspelling of it?"});
+}
+
 TEST(ConfigMissingKeys, DeviceSafetyLimit) {
     const auto file = kDataDir / "devices/missing_required_key.yaml";
     expectError(deviceError("missing_required_key.yaml"),
@@ -384,7 +394,7 @@ TEST(ConfigMissingKeys, AnExoskeletonVelocityLimitAboveTheDrivesSpeedIsRefused) 
     const auto file = kDataDir / "devices/exo_velocity_limit_above_drive.yaml";
     expectError(deviceError("exo_velocity_limit_above_drive.yaml"),
                 {file.string(), lineOf(file, "max_velocity_m_per_s"), -1,
-                 "safety.max_velocity_m_per_s", "below actuator.max_speed_m_per_s (0.08)"});
+                 "safety.max_velocity_m_per_s", "below actuator.max_speed_m_per_s (0.08, "});
 }
 
 // A key that would have no effect is refused, not ignored: the thimble's plate is

@@ -46,6 +46,14 @@ std::size_t lineCount(const std::string& text) {
     return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
 }
 
+std::size_t countOf(const std::string& text, const std::string& needle) {
+    std::size_t count = 0;
+    for (auto at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) {
+        ++count;
+    }
+    return count;
+}
+
 void expectNoIceoryxLeftovers() {
     EXPECT_FALSE(std::filesystem::exists("/dev/shm/iceoryx_mgmt")) << "RouDi left its segment";
     EXPECT_FALSE(std::filesystem::exists("/tmp/roudi")) << "RouDi left its socket";
@@ -251,11 +259,19 @@ TEST_F(RoudiTest, EstopAndClearFromHapticctlDriveTheDaemonStateMachine) {
     result = ctl({"method", "naive"});
     ASSERT_EQ(result.exit_code, 0) << result.err;
 
-    // watch redraws the screen (home + clear, then the status); --count bounds it here.
+    // watch redraws the screen on a terminal; piped, as here, it prints one snapshot after the
+    // other with no control codes. --count bounds it.
     result = ctl({"watch", "--interval", "0.2", "--count", "2"});
     ASSERT_EQ(result.exit_code, 0) << result.err;
-    EXPECT_EQ(std::count(result.out.begin(), result.out.end(), '\033'), 4) << "two redraws";
-    EXPECT_THAT(result.out, HasSubstr("State: IDLE   rendering method: naive"));
+    EXPECT_EQ(std::count(result.out.begin(), result.out.end(), '\033'), 0) << "piped: plain";
+    EXPECT_EQ(countOf(result.out, "State: IDLE   rendering method: naive"), 2U) << result.out;
+    // --version, and the methods in method --help.
+    result = ctl({"--version"});
+    EXPECT_EQ(result.exit_code, 0);
+    EXPECT_THAT(result.out, HasSubstr("hapticctl " HAPTIC_VERSION));
+    result = ctl({"method", "--help"});
+    EXPECT_THAT(result.out, HasSubstr("standard, naive, nullspace, subspace, linearized_subspace, "
+                                      "anisotropic"));
 
     // Telemetry: one CSV row per device per tick, no tick missing, and a PNG from gnuplot.
     const std::string csv = "/tmp/haptic-e2e-telemetry-" + std::to_string(::getpid()) + ".csv";
@@ -482,6 +498,28 @@ TEST(FailFast, MalformedConfigIsAOneLineErrorNamingFileLineAndKey) {
     EXPECT_THAT(result.err, HasSubstr("out_of_range.yaml:3:"));
     EXPECT_THAT(result.err, HasSubstr("loop.rate_hz"));
     EXPECT_EQ(lineCount(result.err), 1U) << result.err;
+}
+
+// nginx -t for the operator: `--check` validates the shipped files (and every file they name)
+// and starts nothing, so it needs no RouDi, no DDS peer and no devices; a bad file is the same
+// one-line error as at a start, with exit 1.
+TEST(FailFast, CheckValidatesTheConfigurationAndStartsNothing) {
+    ASSERT_FALSE(ipc::probeRoudi().reachable) << "an iox-roudi is already running; stop it";
+    for (const char* program : {HAPTICD_PATH, HANDSIM_PATH}) {
+        const auto result = runCommand({program, "--check"}, 20s);
+        EXPECT_EQ(result.exit_code, 0) << program << ": " << result.err;
+        EXPECT_THAT(result.out, HasSubstr(": configuration OK")) << program;
+        EXPECT_THAT(result.out, HasSubstr("device 'exo' (exoskeleton): "));
+        EXPECT_THAT(result.out, HasSubstr("device 'thimble' (thimble): "));
+        EXPECT_FALSE(ipc::probeRoudi().reachable) << program << " started RouDi?";
+    }
+    const std::string out_of_range = HAPTIC_CONFIG_TEST_DATA_DIR "/out_of_range.yaml";
+    const auto result = runCommand({HAPTICD_PATH, "--check", "--config", out_of_range}, 10s);
+    EXPECT_EQ(result.exit_code, 1);
+    EXPECT_THAT(result.err, HasSubstr("out_of_range.yaml:3:"));
+    EXPECT_THAT(result.err, HasSubstr("loop.rate_hz"));
+    EXPECT_EQ(lineCount(result.err), 1U) << result.err;
+    EXPECT_EQ(result.out, "");
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 // configuration, so the two cannot drift apart. Header only; the executables link CLI11.
 
 #include <CLI/CLI.hpp>
+#include <cstdio>
 #include <string>
 
 #include "haptic/config/common.hpp"
@@ -20,6 +21,7 @@ struct CommonOverrides {
     int dds_domain{-1};       // negative: the file's dds.domain_id
     std::string sim_link;     // empty: the file's sim_link.transport
     double duration_s{0.0};   // 0 = run until SIGINT/SIGTERM
+    bool check_only{false};   // --check: validate the files, print a summary, exit
 };
 
 inline void addCommonOptions(CLI::App& app, CommonOverrides& overrides,
@@ -35,6 +37,9 @@ inline void addCommonOptions(CLI::App& app, CommonOverrides& overrides,
     app.add_option("--duration", overrides.duration_s,
                    "stop after this many seconds (0 = run until signalled)")
         ->check(CLI::NonNegativeNumber);
+    app.add_flag("--check", overrides.check_only,
+                 "validate the configuration and every file it names, print what it holds and "
+                 "exit (0 valid; 1 with file, line and key of the first error); starts nothing");
 }
 
 // What hapticd and handsim run with: the loaded configuration, overrides applied.
@@ -57,6 +62,20 @@ template <class Config>
     }
     return overrides.log_level.empty() ? std::string(toString(config.log_level))
                                        : overrides.log_level;
+}
+
+// --check: loads the file as a start would (`load` throws ConfigError on the first error),
+// prints one line per file it read and returns the exit status. Nothing is started.
+template <class Load>
+[[nodiscard]] int checkConfig(const char* program, const CommonOverrides& overrides, Load&& load) {
+    const auto config = load(overrides.config_path);
+    std::printf("%s: %s: configuration OK\n", program, config.source.string().c_str());
+    for (const auto& device : config.devices) {
+        std::printf("  device '%s' (%s): %s\n", device.name.c_str(),
+                    device.isExoskeleton() ? "exoskeleton" : "thimble",
+                    device.source.string().c_str());
+    }
+    return 0;
 }
 
 // The start hapticd and handsim share once their command line is parsed: load the file
