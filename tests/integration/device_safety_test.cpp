@@ -185,7 +185,10 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroAndOnlyAnEnab
                 << "tick " << exo_after[i].tick;
         }
     }
-    EXPECT_GT(checked, 400U);
+    // 600 ms of telemetry; under the sanitizers fewer samples reach this reader in that
+    // window (299 of ~580 in a CI rehearsal), every one of them checked.
+    const std::size_t enough = HAPTIC_SANITIZED != 0 ? 200U : 400U;
+    EXPECT_GT(checked, enough);
 
     // The thimble: at gain zero the commanded pose is the retract pose, which the servo
     // limiter approaches at exactly servos.max_rate_deg_per_s (400 deg/s: 6.98 mrad per tick)
@@ -203,7 +206,7 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroAndOnlyAnEnab
             << "tick " << thimble_after[i].tick;
         ++ramped;
     }
-    EXPECT_GT(ramped, 400U);
+    EXPECT_GT(ramped, enough);
     ASSERT_FALSE(thimble_after.empty());
     EXPECT_LT(fromRetract(thimble_after.back(), retract), 1e-9) << "not back at the retract pose";
     waitForStatus("sim link down",

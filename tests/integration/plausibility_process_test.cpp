@@ -120,13 +120,27 @@ TEST_F(PlausibilityProcessTest, AThimbleServoThatDoesNotFollowItsTargetLatchesIt
     ASSERT_TRUE(command("disable"));
     const std::string message = implausibleFault("thimble");
     EXPECT_THAT(message, HasSubstr("servo 2 at ")) << message;
-    // The device's own frames: servos 1 and 3 reached the retract pose, servo 2 did not.
-    const auto heard = thimble_bus_.listen(200ms);
-    const auto last = std::find_if(heard.rbegin(), heard.rend(), [](const auto& h) {
-        return h.message.type == ThimbleType::kState;
-    });
-    ASSERT_NE(last, heard.rend()) << "no thimble state frame";
-    const auto& angles = last->message.state.servo_angle_rad;
+    // The device's own frames: servos 1 and 3 reach the retract pose, servo 2 does not (within
+    // 2 s: a sanitized hapticd is slow, and the pad limits may slow a withdrawal that tilts).
+    std::array<double, 3> angles{};
+    bool seen = false;
+    for (auto deadline = std::chrono::steady_clock::now() + 2s;
+         std::chrono::steady_clock::now() < deadline;) {
+        const auto heard = thimble_bus_.listen(100ms);
+        const auto last = std::find_if(heard.rbegin(), heard.rend(), [](const auto& h) {
+            return h.message.type == ThimbleType::kState;
+        });
+        if (last == heard.rend()) {
+            continue;
+        }
+        seen = true;
+        angles = last->message.state.servo_angle_rad;
+        if (std::abs(angles[0] - retract_rad_[0]) < 0.02 &&
+            std::abs(angles[2] - retract_rad_[2]) < 0.02) {
+            break;
+        }
+    }
+    ASSERT_TRUE(seen) << "no thimble state frame";
     EXPECT_NEAR(angles[0], retract_rad_[0], 0.02);
     EXPECT_NEAR(angles[2], retract_rad_[2], 0.02);
     EXPECT_GT(std::abs(angles[1] - retract_rad_[1]), 0.1) << "servo 2 was stuck off retract";
