@@ -184,6 +184,8 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
     haptic::msgs::HapticTelemetry batch;
     std::int64_t origin_ns = -1;
     std::uint64_t rows = 0;
+    haptic::ctl::TickGapCounter gaps(
+        static_cast<std::uint64_t>(std::max(cfg.loop.telemetry_decimation, 1)));
     auto deadline = std::chrono::steady_clock::now() + toMs(timeout_s);
     while (!haptic::process::shutdownRequested() && std::chrono::steady_clock::now() < deadline) {
         if (!reader.waitAndTake(sample, 100ms)) {
@@ -199,7 +201,9 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
                 origin_ns = batch.samples[i].stamp_ns;
                 deadline = std::chrono::steady_clock::now() + toMs(duration_s);
             }
-            out << haptic::ctl::telemetryCsvRow(batch.samples[i], origin_ns);
+            const haptic::msgs::TelemetrySample& s = batch.samples[i];
+            gaps.add(s.device_index, s.tick);
+            out << haptic::ctl::telemetryCsvRow(s, origin_ns);
             ++rows;
         }
     }
@@ -217,6 +221,12 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
     }
     std::fprintf(to_stdout ? stderr : stdout, "%llu rows written to %s\n",
                  static_cast<unsigned long long>(rows), to_stdout ? "stdout" : path.c_str());
+    if (const std::uint64_t missing = gaps.missing(); missing > 0) {
+        std::fprintf(stderr,
+                     "hapticctl: %llu samples missing (gaps in the tick numbers): hapticd "
+                     "dropped them (see its log) or DDS lost them\n",
+                     static_cast<unsigned long long>(missing));
+    }
     return EXIT_SUCCESS;
 }
 

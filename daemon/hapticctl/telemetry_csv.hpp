@@ -4,6 +4,7 @@
 // script that turns such a file into a PNG of commanded forces and loop timing.
 
 #include <cstdint>
+#include <map>
 #include <string>
 
 #include "haptic/msgs/messages.hpp"
@@ -20,5 +21,25 @@ std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t or
 // thimble's pad force limit; its pad-force axis shows twice that.
 std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path,
                                 double exo_clamp_n = 10.0, double thimble_max_force_n = 1.5);
+
+// Samples missing from a recording: hapticd sends every `step`-th tick
+// (loop.telemetry_decimation), so per device a larger step between consecutive ticks is samples
+// hapticd dropped or DDS lost.
+class TickGapCounter {
+  public:
+    explicit TickGapCounter(std::uint64_t step) : step_(step > 0 ? step : 1) {}
+    void add(std::uint16_t device, std::uint64_t tick) {
+        if (const auto it = last_.find(device); it != last_.end() && tick > it->second + step_) {
+            missing_ += (tick - it->second) / step_ - 1;
+        }
+        last_[device] = tick;
+    }
+    [[nodiscard]] std::uint64_t missing() const noexcept { return missing_; }
+
+  private:
+    std::uint64_t step_;
+    std::map<std::uint16_t, std::uint64_t> last_;
+    std::uint64_t missing_{0};
+};
 
 }  // namespace haptic::ctl

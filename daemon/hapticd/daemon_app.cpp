@@ -21,6 +21,7 @@
 #include "haptic/daemon/daemon_core.hpp"
 #include "haptic/daemon/seqlock.hpp"
 #include "haptic/daemon/spsc_queue.hpp"
+#include "haptic/daemon/status_journal.hpp"
 #include "haptic/daemon/watchdog_gate.hpp"
 #include "haptic/ipc/dds_participant.hpp"
 #include "haptic/ipc/iceoryx_channels.hpp"
@@ -307,6 +308,23 @@ class RealtimeLoop {
     std::thread thread_;
 };
 
+// Logs what changed since the last snapshot (status_journal.hpp).
+void journal(const msgs::HapticStatus* before, const msgs::HapticStatus& after) {
+    for (const daemon::JournalLine& line : daemon::statusChanges(before, after)) {
+        switch (line.level) {
+            case daemon::JournalLine::Level::kError:
+                spdlog::error("{}", line.text);
+                break;
+            case daemon::JournalLine::Level::kWarning:
+                spdlog::warn("{}", line.text);
+                break;
+            case daemon::JournalLine::Level::kInfo:
+                spdlog::info("{}", line.text);
+                break;
+        }
+    }
+}
+
 }  // namespace
 
 int runDaemon(const DaemonOptions& options) {
@@ -441,8 +459,12 @@ int runDaemon(const DaemonOptions& options) {
     daemon::WatchdogGate watchdog_gate(static_cast<std::int64_t>(watchdog_usec) * 1000 / 2,
                                        cfg.loop.rate_hz);
     auto last_roudi_check = started;
+    std::uint64_t dropped_reported = 0;
     int exit_code = EXIT_SUCCESS;
     msgs::HapticStatus status;
+    // The last snapshot written to the journal: faults and state changes are logged from here,
+    // since the RT thread that raises them never logs.
+    std::optional<msgs::HapticStatus> journaled;
     // Wake often enough for every job: commands within ~10 ms, each status snapshot, and,
     // under systemd, the watchdog at least twice per WatchdogSec.
     auto wake_period = std::min(std::chrono::duration_cast<std::chrono::nanoseconds>(status_period),
@@ -458,10 +480,19 @@ int runDaemon(const DaemonOptions& options) {
         if (snapshots.version() != last_version && snapshots.load(status)) {
             last_version = snapshots.version();
             status_writer.write(msgs::toIdl(status));
+            journal(journaled ? &*journaled : nullptr, status);
+            journaled = status;
         }
         const auto now = std::chrono::steady_clock::now();
         if (now - last_roudi_check >= std::chrono::milliseconds(200)) {
             last_roudi_check = now;
+            // A recording with holes must not be a surprise found at exit: say so as it
+            // happens (the RT thread drops rather than waits when the queue is full).
+            if (const std::uint64_t dropped = loop.telemetryDropped(); dropped > dropped_reported) {
+                spdlog::warn("{} telemetry samples dropped (queue full; {} in all)",
+                             dropped - dropped_reported, dropped);
+                dropped_reported = dropped;
+            }
             if (const auto lost = roudi_watch ? roudi_watch->check() : std::nullopt) {
                 // Stale sim input has already faded the forces to zero; stopping the loop
                 // below holds the devices safe. A fresh hapticd can register with the new

@@ -66,26 +66,55 @@ double threadCpuSeconds() {
     return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-void report(benchmark::State& state, std::vector<double>& wall_us, std::vector<double>& cpu_us,
-            std::uint64_t allocations) {
-    const haptic::common::PercentileSummary wall = haptic::common::summarize(wall_us);
-    const haptic::common::PercentileSummary cpu = haptic::common::summarize(cpu_us);
-    state.counters["p50_us"] = wall.p50;
-    state.counters["p99_us"] = wall.p99;
-    state.counters["max_us"] = wall.max;
-    state.counters["cpu_p50_us"] = cpu.p50;
-    state.counters["cpu_p99_us"] = cpu.p99;
-    state.counters["allocations"] = static_cast<double>(allocations);
-}
+// Times calls one by one: wall-clock and thread-CPU time and the allocations inside each
+// timed call, reported as the counters every benchmark here prints.
+class CallTimer {
+  public:
+    CallTimer() {
+        wall_us_.reserve(1 << 20);
+        cpu_us_.reserve(1 << 20);
+    }
+
+    template <typename Call>
+    auto time(benchmark::State& state, Call&& call) {
+        haptic::testing::ScopedAllocationCounter counter;
+        const double cpu_start = threadCpuSeconds();
+        const auto start = std::chrono::steady_clock::now();
+        auto result = call();
+        const auto stop = std::chrono::steady_clock::now();
+        const double cpu_stop = threadCpuSeconds();
+        allocations_ += counter.allocations();
+        benchmark::DoNotOptimize(result);
+        const double seconds = std::chrono::duration<double>(stop - start).count();
+        state.SetIterationTime(seconds);
+        if (wall_us_.size() < wall_us_.capacity()) {
+            wall_us_.push_back(seconds * 1e6);
+            cpu_us_.push_back((cpu_stop - cpu_start) * 1e6);
+        }
+        return result;
+    }
+
+    void report(benchmark::State& state) {
+        const haptic::common::PercentileSummary wall = haptic::common::summarize(wall_us_);
+        const haptic::common::PercentileSummary cpu = haptic::common::summarize(cpu_us_);
+        state.counters["p50_us"] = wall.p50;
+        state.counters["p99_us"] = wall.p99;
+        state.counters["max_us"] = wall.max;
+        state.counters["cpu_p50_us"] = cpu.p50;
+        state.counters["cpu_p99_us"] = cpu.p99;
+        state.counters["allocations"] = static_cast<double>(allocations_);
+    }
+
+  private:
+    std::vector<double> wall_us_;
+    std::vector<double> cpu_us_;
+    std::uint64_t allocations_{0};
+};
 
 template <typename NextSurface>
 void runSolves(benchmark::State& state, ContactSurfaceOptimiser& optimiser, bool cold,
                NextSurface next) {
-    std::vector<double> latencies_us;
-    std::vector<double> cpu_us;
-    latencies_us.reserve(1 << 20);
-    cpu_us.reserve(1 << 20);
-    std::uint64_t allocations = 0;
+    CallTimer timer;
     long iterations_sum = 0;
     int iterations_max = 0;
     long solves = 0;
@@ -94,25 +123,12 @@ void runSolves(benchmark::State& state, ContactSurfaceOptimiser& optimiser, bool
         if (cold) {
             optimiser.reset();
         }
-        haptic::testing::ScopedAllocationCounter counter;
-        const double cpu_start = threadCpuSeconds();
-        const auto start = std::chrono::steady_clock::now();
-        const auto command = optimiser.solve(surface);
-        const auto stop = std::chrono::steady_clock::now();
-        const double cpu_stop = threadCpuSeconds();
-        allocations += counter.allocations();
-        benchmark::DoNotOptimize(command);
+        const auto command = timer.time(state, [&] { return optimiser.solve(surface); });
         iterations_sum += command.report.iterations;
         iterations_max = std::max(iterations_max, command.report.iterations);
         ++solves;
-        const double seconds = std::chrono::duration<double>(stop - start).count();
-        state.SetIterationTime(seconds);
-        if (latencies_us.size() < latencies_us.capacity()) {
-            latencies_us.push_back(seconds * 1e6);
-            cpu_us.push_back((cpu_stop - cpu_start) * 1e6);
-        }
     }
-    report(state, latencies_us, cpu_us, allocations);
+    timer.report(state);
     state.counters["iterations_mean"] =
         static_cast<double>(iterations_sum) / static_cast<double>(std::max(solves, 1L));
     state.counters["iterations_max"] = iterations_max;
@@ -168,11 +184,7 @@ void BM_PadLimitMovingSphere(benchmark::State& state) {
     haptic::tactile::PadSafetyLimiter limiter(
         haptic::tactile::PadSafetySettings::fromConfig(device, 1e-3));
     const haptic::tactile::PlatformDofs retract = f.kinematics.retractPose();
-    std::vector<double> latencies_us;
-    std::vector<double> cpu_us;
-    latencies_us.reserve(1 << 20);
-    cpu_us.reserve(1 << 20);
-    std::uint64_t allocations = 0;
+    CallTimer timer;
     long ticks = 0;
     long limited = 0;
     for (auto _ : state) {
@@ -185,25 +197,15 @@ void BM_PadLimitMovingSphere(benchmark::State& state) {
             dofs.tilt_y_rad = retract.tilt_y_rad + gain * (target.tilt_y_rad - retract.tilt_y_rad);
             return f.kinematics.platformPose(dofs, pose) == haptic::tactile::KinematicsError::kNone;
         };
-        haptic::testing::ScopedAllocationCounter counter;
-        const double cpu_start = threadCpuSeconds();
-        const auto start = std::chrono::steady_clock::now();
-        const haptic::tactile::PadLimit limit = limiter.limit(1.0, &frames[frame], pose_at);
-        (void)limiter.commanded(limit.pose, &frames[frame]);
-        const auto stop = std::chrono::steady_clock::now();
-        const double cpu_stop = threadCpuSeconds();
-        allocations += counter.allocations();
-        benchmark::DoNotOptimize(limit);
+        const haptic::tactile::PadLimit limit = timer.time(state, [&] {
+            const haptic::tactile::PadLimit result = limiter.limit(1.0, &frames[frame], pose_at);
+            (void)limiter.commanded(result.pose, &frames[frame]);
+            return result;
+        });
         limited += limit.flags != 0 ? 1 : 0;
         ++ticks;
-        const double seconds = std::chrono::duration<double>(stop - start).count();
-        state.SetIterationTime(seconds);
-        if (latencies_us.size() < latencies_us.capacity()) {
-            latencies_us.push_back(seconds * 1e6);
-            cpu_us.push_back((cpu_stop - cpu_start) * 1e6);
-        }
     }
-    report(state, latencies_us, cpu_us, allocations);
+    timer.report(state);
     state.counters["limited_share"] =
         static_cast<double>(limited) / static_cast<double>(std::max(ticks, 1L));
 }

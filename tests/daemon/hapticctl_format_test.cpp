@@ -163,6 +163,19 @@ TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
               "0.7500,3\n");
 }
 
+// Every 10th tick sent: per device, a step of 30 is two samples missing.
+TEST(TelemetryCsv, GapsInEachDevicesTickNumbersCountAsMissingSamples) {
+    TickGapCounter gaps(10);
+    for (const std::uint64_t tick : {100U, 110U, 120U}) {
+        gaps.add(0, tick);
+        gaps.add(1, tick);
+    }
+    EXPECT_EQ(gaps.missing(), 0U);
+    gaps.add(0, 150);  // 130 and 140 missing
+    gaps.add(1, 130);
+    EXPECT_EQ(gaps.missing(), 2U);
+}
+
 TEST(TelemetryCsv, PlotScriptQuotesPathsForGnuplot) {
     const auto script = telemetryPlotScript("/tmp/it's.csv", "/tmp/out.png");
     EXPECT_NE(script.find("set output '/tmp/out.png'"), std::string::npos) << script;

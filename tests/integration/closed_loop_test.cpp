@@ -66,45 +66,75 @@ std::vector<bool> settledWithout(const std::vector<double>& reference, double th
     return out;
 }
 
-TEST(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitches) {
-    if (HAPTIC_SANITIZED != 0) {
-        GTEST_SKIP() << "under the sanitizers handsim steps at ~4 Hz, so hapticd fades every "
-                        "sim input as stale and no contact is rendered to judge";
-    }
-    ASSERT_FALSE(ipc::probeRoudi().reachable) << "an iox-roudi is already running; stop it";
-    ChildProcess roudi({IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l", "warning"},
-                       "roudi");
-    for (auto deadline = std::chrono::steady_clock::now() + 10s; !ipc::probeRoudi().reachable;) {
-        ASSERT_TRUE(roudi.running()) << roudi.stderrText();
-        ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
-        std::this_thread::sleep_for(20ms);
-    }
-    // The devices' firmware and the user's hand run at FIFO priority below hapticd's (80).
-    ChildProcess user(withFifoPriority({HAPTICEMU_PATH, "--user", kConfigDir + "/user.yaml",
-                                        "--dds-domain", domainArgument()},
-                                       70),
-                      "hapticemu");
-    ChildProcess daemon({HAPTICD_PATH, "--realtime", "ignore", "--dds-domain", domainArgument()},
-                        "hapticd");
-    ChildProcess sim(
-        {HANDSIM_PATH, "--dds-domain", domainArgument(), "--tracking-topic", "tracking/hand"},
-        "handsim");
-
-    // hapticd accepts enable once both devices report in.
-    CommandResult enabled;
-    for (auto deadline = std::chrono::steady_clock::now() + 30s;
-         std::chrono::steady_clock::now() < deadline;) {
-        ASSERT_TRUE(user.running()) << user.stderrText();
-        ASSERT_TRUE(daemon.running()) << daemon.stderrText();
-        ASSERT_TRUE(sim.running()) << sim.stderrText();
-        enabled = ctl({"enable"});
-        if (enabled.exit_code == 0) {
-            break;
+// The closed loop of the demo, up and enabled: iox-roudi, the virtual user (hapticemu --user,
+// at FIFO 70 below hapticd's 80, as the devices' firmware and the user's hand), hapticd and
+// handsim tracking the user's topic. Under the sanitizers handsim steps at ~4 Hz, so hapticd
+// fades every sim input as stale and no contact is rendered to judge: skipped there.
+class ClosedLoop : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        if (HAPTIC_SANITIZED != 0) {
+            GTEST_SKIP() << "under the sanitizers handsim steps at ~4 Hz: no contact to judge";
         }
-        std::this_thread::sleep_for(500ms);
+        ASSERT_FALSE(ipc::probeRoudi().reachable) << "an iox-roudi is already running; stop it";
+        roudi_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l",
+                                     "warning"},
+            "roudi");
+        for (auto deadline = std::chrono::steady_clock::now() + 10s;
+             !ipc::probeRoudi().reachable;) {
+            ASSERT_TRUE(roudi_->running()) << roudi_->stderrText();
+            ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
+            std::this_thread::sleep_for(20ms);
+        }
+        user_ = std::make_unique<EmulatorProcess>(withFifoPriority(
+            {HAPTICEMU_PATH, "--user", kConfigDir + "/user.yaml", "--dds-domain", domainArgument()},
+            70));
+        daemon_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{HAPTICD_PATH, "--realtime", "ignore", "--dds-domain",
+                                     domainArgument()},
+            "hapticd");
+        sim_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{HANDSIM_PATH, "--dds-domain", domainArgument(),
+                                     "--tracking-topic", "tracking/hand"},
+            "handsim");
+        // hapticd accepts enable once both devices report in.
+        CommandResult enabled;
+        for (auto deadline = std::chrono::steady_clock::now() + 30s;
+             std::chrono::steady_clock::now() < deadline;) {
+            ASSERT_TRUE(user_->running()) << user_->output();
+            ASSERT_TRUE(daemon_->running()) << daemon_->stderrText();
+            ASSERT_TRUE(sim_->running()) << sim_->stderrText();
+            enabled = ctl({"enable"});
+            if (enabled.exit_code == 0) {
+                break;
+            }
+            std::this_thread::sleep_for(500ms);
+        }
+        ASSERT_EQ(enabled.exit_code, 0) << enabled.err;
     }
-    ASSERT_EQ(enabled.exit_code, 0) << enabled.err;
 
+    void TearDown() override {
+        for (auto* process : {sim_.get(), daemon_.get()}) {
+            if (process != nullptr) {
+                EXPECT_EQ(process->terminate(), std::optional<int>(0)) << process->stderrText();
+            }
+        }
+        if (user_) {
+            EXPECT_EQ(user_->stop(), 0) << user_->output();
+        }
+        if (roudi_) {
+            EXPECT_EQ(roudi_->terminate(), std::optional<int>(0));
+        }
+    }
+
+    std::unique_ptr<ChildProcess> roudi_;
+    std::unique_ptr<EmulatorProcess> user_;
+    std::unique_ptr<ChildProcess> daemon_;
+    std::unique_ptr<ChildProcess> sim_;
+};
+
+TEST_F(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitches) {
     // Two periods of the default scene's script (6 s each), with every method switched in
     // live during the second.
     const std::string csv = "/tmp/haptic-closed-loop-" + std::to_string(::getpid()) + ".csv";
@@ -211,55 +241,19 @@ TEST(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitches
     EXPECT_GT(static_cast<double>(pressing), 0.9 * static_cast<double>(pressed_ticks));
     ASSERT_GT(free_pad_ticks, 1000U);
     EXPECT_EQ(retracted, free_pad_ticks);
-
-    for (ChildProcess* process : {&sim, &daemon, &user}) {
-        EXPECT_EQ(process->terminate(), std::optional<int>(0));
-    }
-    EXPECT_EQ(roudi.terminate(), std::optional<int>(0));
 }
 
 // The tracker stops while the finger presses the block (a camera covered, a tracking process
 // hung): handsim stops sending targets after scene.tracking.timeout_ms without a pose, and
 // hapticd fades the force to zero by loop.sim_timeout_ms after the last target. Judged on
 // the exoskeleton's own state frames on its bus.
-TEST(ClosedLoop, ATrackerThatStopsDuringContactTakesTheForceAwayWithinItsTimeouts) {
-    if (HAPTIC_SANITIZED != 0) {
-        GTEST_SKIP() << "under the sanitizers handsim steps at ~4 Hz: no steady contact to stop";
-    }
+TEST_F(ClosedLoop, ATrackerThatStopsDuringContactTakesTheForceAwayWithinItsTimeouts) {
     const config::SimConfig sim_config = config::loadSimConfig(kConfigDir + "/sim.yaml");
     const config::DaemonConfig daemon_config =
         config::loadDaemonConfig(kConfigDir + "/daemon.yaml");
     const config::DeviceConfig& exo_device = daemon_config.devices.at(0);
     ASSERT_TRUE(exo_device.isExoskeleton());
-    ASSERT_FALSE(ipc::probeRoudi().reachable) << "an iox-roudi is already running; stop it";
-    ChildProcess roudi({IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l", "warning"},
-                       "roudi");
-    for (auto deadline = std::chrono::steady_clock::now() + 10s; !ipc::probeRoudi().reachable;) {
-        ASSERT_TRUE(roudi.running()) << roudi.stderrText();
-        ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
-        std::this_thread::sleep_for(20ms);
-    }
-    EmulatorProcess user(withFifoPriority(
-        {HAPTICEMU_PATH, "--user", kConfigDir + "/user.yaml", "--dds-domain", domainArgument()},
-        70));
-    ChildProcess daemon({HAPTICD_PATH, "--realtime", "ignore", "--dds-domain", domainArgument()},
-                        "hapticd");
-    ChildProcess sim(
-        {HANDSIM_PATH, "--dds-domain", domainArgument(), "--tracking-topic", "tracking/hand"},
-        "handsim");
     ExoListener exo_bus(exo_device);
-    CommandResult enabled;
-    for (auto deadline = std::chrono::steady_clock::now() + 30s;
-         std::chrono::steady_clock::now() < deadline;) {
-        ASSERT_TRUE(daemon.running()) << daemon.stderrText();
-        ASSERT_TRUE(sim.running()) << sim.stderrText();
-        enabled = ctl({"enable"});
-        if (enabled.exit_code == 0) {
-            break;
-        }
-        std::this_thread::sleep_for(500ms);
-    }
-    ASSERT_EQ(enabled.exit_code, 0) << enabled.err;
 
     // The onset of a contact (free, then pushing): the script presses the block for about
     // 2.5 s of each 6 s period, so 300 ms after the onset the finger is well inside it.
@@ -278,7 +272,7 @@ TEST(ClosedLoop, ATrackerThatStopsDuringContactTakesTheForceAwayWithinItsTimeout
     std::this_thread::sleep_for(300ms);
 
     const std::int64_t stopped_ns = common::monotonicNowNs();
-    ASSERT_TRUE(user.sendCommand("tracker stop"));
+    ASSERT_TRUE(user_->sendCommand("tracker stop"));
     const auto heard = exo_bus.listen(1500ms);
     // The first state after which the force stays below 0.05 N.
     std::optional<std::int64_t> gone_ns;
@@ -308,12 +302,7 @@ TEST(ClosedLoop, ATrackerThatStopsDuringContactTakesTheForceAwayWithinItsTimeout
                 static_cast<double>(*gone_ns) * 1e-6, static_cast<double>(bound_ns) * 1e-6);
     EXPECT_LE(*gone_ns, bound_ns);
 
-    ASSERT_TRUE(user.sendCommand("tracker start"));
-    for (ChildProcess* process : {&sim, &daemon}) {
-        EXPECT_EQ(process->terminate(), std::optional<int>(0));
-    }
-    user.stop();
-    EXPECT_EQ(roudi.terminate(), std::optional<int>(0));
+    ASSERT_TRUE(user_->sendCommand("tracker start"));
 }
 
 }  // namespace

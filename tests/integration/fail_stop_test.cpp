@@ -12,11 +12,9 @@
 #include <cstdio>
 #include <optional>
 
-#include "bus_listener.hpp"
-#include "device_safety_rig.hpp"
+#include "bus_watching_test.hpp"
 #include "haptic/config/device.hpp"
 #include "haptic/daemon/daemon_core.hpp"
-#include "haptic/tactile/thimble_kinematics.hpp"
 
 namespace haptic::testing {
 namespace {
@@ -29,17 +27,8 @@ namespace {
 constexpr std::int64_t kSlackNs = HAPTIC_SANITIZED != 0 ? 40'000'000 : 6'000'000;
 constexpr std::int64_t kTickNs = 1'000'000;
 
-class FailStopTest : public DeviceSafetyTest {
+class FailStopTest : public BusWatchingTest {
   protected:
-    FailStopTest()
-        : exo_device_(config::loadDeviceConfig(config_.dir / "devices/exoskeleton.yaml")),
-          thimble_device_(config::loadDeviceConfig(config_.dir / "devices/thimble.yaml")),
-          exo_bus_(exo_device_),
-          thimble_bus_(thimble_device_) {
-        const tactile::ThimbleKinematics kinematics(thimble_device_.thimble());
-        retract_rad_ = kinematics.inverse(kinematics.retractPose()).servo_rad;
-    }
-
     // Rendering with the sim running, until the exoskeleton reports itself enabled with force
     // (or, when the emulated user's finger never meets the object within 6 s, enabled).
     void renderUntilTheExoskeletonPushes() {
@@ -67,20 +56,6 @@ class FailStopTest : public DeviceSafetyTest {
         }
         ASSERT_TRUE(enabled) << "the exoskeleton never reported itself enabled";
     }
-
-    double fromRetract(const std::array<double, 3>& angles) const {
-        double largest = 0.0;
-        for (std::size_t k = 0; k < 3; ++k) {
-            largest = std::max(largest, std::abs(angles[k] - retract_rad_[k]));
-        }
-        return largest;
-    }
-
-    config::DeviceConfig exo_device_;
-    config::DeviceConfig thimble_device_;
-    ExoListener exo_bus_;
-    ThimbleListener thimble_bus_;
-    std::array<double, 3> retract_rad_{};
 };
 
 TEST_F(FailStopTest, SigkillLeavesBothDevicesSafeByThemselvesAndARestartRendersAfterEnable) {

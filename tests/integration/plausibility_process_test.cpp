@@ -5,9 +5,7 @@
 // naming that device, and the device's own frames, read on its bus by this test, must show it
 // made safe. The checks themselves and their tolerances: runtime_test's Plausibility.*.
 
-#include "bus_listener.hpp"
-#include "device_safety_rig.hpp"
-#include "haptic/tactile/thimble_kinematics.hpp"
+#include "bus_watching_test.hpp"
 
 namespace haptic::testing {
 namespace {
@@ -15,17 +13,8 @@ namespace {
 using ::testing::HasSubstr;
 using namespace std::chrono_literals;
 
-class PlausibilityProcessTest : public DeviceSafetyTest {
+class PlausibilityProcessTest : public BusWatchingTest {
   protected:
-    PlausibilityProcessTest()
-        : exo_device_(config::loadDeviceConfig(config_.dir / "devices/exoskeleton.yaml")),
-          thimble_device_(config::loadDeviceConfig(config_.dir / "devices/thimble.yaml")),
-          exo_bus_(exo_device_),
-          thimble_bus_(thimble_device_) {
-        const tactile::ThimbleKinematics kinematics(thimble_device_.thimble());
-        retract_rad_ = kinematics.inverse(kinematics.retractPose()).servo_rad;
-    }
-
     // Enables rendering on the injector's input until the exoskeleton reports itself at
     // more than half its clamp.
     void renderAtTheClamp() {
@@ -60,6 +49,16 @@ class PlausibilityProcessTest : public DeviceSafetyTest {
             return {};
         }
         EXPECT_EQ(fault->device_id.view(), device) << faultsOf(status);
+        // The journal says so too: hapticd's non-RT thread logs each fault as it latches.
+        const std::string journal_line = "fault [105] " + device + ": ";
+        bool journaled = false;
+        for (auto deadline = std::chrono::steady_clock::now() + 2s;
+             !journaled && std::chrono::steady_clock::now() < deadline;
+             std::this_thread::sleep_for(20ms)) {
+            journaled = daemon_->stderrText().find(journal_line) != std::string::npos;
+        }
+        EXPECT_TRUE(journaled) << "no '" << journal_line << "' in hapticd's log:\n"
+                               << daemon_->stderrText();
         for (const msgs::Fault& other : status.faults) {
             EXPECT_TRUE(other.code == 105U || (HAPTIC_SANITIZED != 0 && other.code == 110U))
                 << "blamed: " << faultsOf(status);
@@ -91,11 +90,6 @@ class PlausibilityProcessTest : public DeviceSafetyTest {
         DeviceSafetyTest::TearDown();
     }
 
-    config::DeviceConfig exo_device_;
-    config::DeviceConfig thimble_device_;
-    ExoListener exo_bus_;
-    ThimbleListener thimble_bus_;
-    tactile::ServoAngles retract_rad_{};
     std::unique_ptr<EmulatorProcess> injector_;
 };
 

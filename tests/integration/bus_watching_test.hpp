@@ -1,0 +1,43 @@
+#pragma once
+
+// DeviceSafetyTest with this test as one more party on both devices' UDP buses: the devices'
+// own frames, decoded as they arrive, are what the process tests judge the devices by.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "bus_listener.hpp"
+#include "device_safety_rig.hpp"
+#include "haptic/tactile/thimble_kinematics.hpp"
+
+namespace haptic::testing {
+
+class BusWatchingTest : public DeviceSafetyTest {
+  protected:
+    BusWatchingTest()
+        : exo_device_(config::loadDeviceConfig(config_.dir / "devices/exoskeleton.yaml")),
+          thimble_device_(config::loadDeviceConfig(config_.dir / "devices/thimble.yaml")),
+          exo_bus_(exo_device_),
+          thimble_bus_(thimble_device_) {
+        const tactile::ThimbleKinematics kinematics(thimble_device_.thimble());
+        retract_rad_ = kinematics.inverse(kinematics.retractPose()).servo_rad;
+    }
+
+    // The largest servo angle off the thimble's retract pose (rad).
+    double fromRetract(const std::array<double, 3>& angles) const {
+        double largest = 0.0;
+        for (std::size_t k = 0; k < 3; ++k) {
+            largest = std::max(largest, std::abs(angles[k] - retract_rad_[k]));
+        }
+        return largest;
+    }
+
+    config::DeviceConfig exo_device_;
+    config::DeviceConfig thimble_device_;
+    ExoListener exo_bus_;
+    ThimbleListener thimble_bus_;
+    std::array<double, 3> retract_rad_{};
+};
+
+}  // namespace haptic::testing
