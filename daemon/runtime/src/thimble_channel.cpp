@@ -191,12 +191,11 @@ void ThimbleChannel::compute(daemon::DaemonCore& core, std::size_t index,
         }
         // Not even a short step keeps them when the finger itself pushed into the plate: then
         // the servos go on towards the pose limit() chose, which does.
+        // (`sent` is still the forward kinematics of the full step then.)
         if (shortened) {
             limited.servo_rad = shorter;
             limiter_.holdAt(shorter);
             pad_limit_.flags |= static_cast<std::uint8_t>(tactile::PadFlag::kServoStep);
-        } else {
-            sent = kinematics_.forward(limited.servo_rad, sent_dofs_);
         }
     }
     command_.servo_target_rad = limited.servo_rad;

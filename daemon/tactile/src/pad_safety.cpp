@@ -77,7 +77,9 @@ std::uint8_t PadSafetyLimiter::allows(const PlatformPose& pose, const msgs::Cont
         const Eigen::Vector3d now = pose.position_m + pose.rotation * point;
         const Eigen::Vector3d before = previous_pose_.position_m + previous_pose_.rotation * point;
         const double step = towards_finger.dot(now - before);
-        approach_m = step > approach_m || !(step == step) ? step : approach_m;
+        if (std::isnan(step) || step > approach_m) {
+            approach_m = step;  // a NaN stays and breaks the limit below
+        }
     }
     if (!(approach_m <= settings_.max_approach_speed_m_per_s * settings_.period_s)) {
         violated |= static_cast<std::uint8_t>(PadFlag::kApproachSpeed);
