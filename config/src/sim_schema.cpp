@@ -10,7 +10,9 @@ TrackingFilterConfig readTrackingFilter(MapReader map) {
     using spec::Real;
     TrackingFilterConfig out;
     out.min_cutoff_hz = map.required("min_cutoff_hz", Real::closed(0.01, 100.0));
-    out.angle_beta_s_per_rad = map.required("angle_beta_s_per_rad", Real::closed(0.0, 1000.0));
+    if (auto angle_beta = map.take("angle_beta_s_per_rad")) {
+        out.angle_beta_s_per_rad = Real::closed(0.0, 1000.0).parse(*angle_beta);
+    }
     out.position_beta_s_per_m = map.required("position_beta_s_per_m", Real::closed(0.0, 10000.0));
     out.derivative_cutoff_hz = map.required("derivative_cutoff_hz", Real::closed(0.01, 100.0));
     map.finish();

@@ -95,10 +95,16 @@ class TopicSource final : public TrackingSource {
           topic_(scene.tracking.topic),
           gap_s_(1e-3 * scene.tracking.timeout_ms) {
         if (filter) {
-            filter_.emplace(softhand::TrackingFilterSettings{
-                {filter->min_cutoff_hz, filter->angle_beta_s_per_rad, filter->derivative_cutoff_hz},
-                {filter->min_cutoff_hz, filter->position_beta_s_per_m,
-                 filter->derivative_cutoff_hz}});
+            softhand::TrackingFilterSettings settings;
+            settings.angles.reset();
+            if (filter->angle_beta_s_per_rad) {
+                settings.angles = softhand::OneEuroParameters{filter->min_cutoff_hz,
+                                                              *filter->angle_beta_s_per_rad,
+                                                              filter->derivative_cutoff_hz};
+            }
+            settings.position = {filter->min_cutoff_hz, filter->position_beta_s_per_m,
+                                 filter->derivative_cutoff_hz};
+            filter_.emplace(settings);
         }
         // Until the tracker speaks, the hand waits well above the scene's objects.
         initial_.wrist.position_m.z() += 0.3;

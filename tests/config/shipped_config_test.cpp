@@ -105,8 +105,11 @@ TEST(ShippedConfig, Sim) {
     for (const DeviceConfig& device : cfg.devices) {
         EXPECT_TRUE(cfg.scene.devices.contains(device.name)) << device.name;
     }
-    // Off as shipped (config/sim.yaml says why).
-    EXPECT_FALSE(cfg.tracking_filter.has_value());
+    // The wrist position only, as shipped (config/sim.yaml says why).
+    ASSERT_TRUE(cfg.tracking_filter.has_value());
+    EXPECT_FALSE(cfg.tracking_filter->angle_beta_s_per_rad.has_value());
+    EXPECT_EQ(cfg.tracking_filter->min_cutoff_hz, 2.0);
+    EXPECT_EQ(cfg.tracking_filter->position_beta_s_per_m, 50.0);
 }
 
 TEST(ShippedConfig, Exoskeleton) {
@@ -311,7 +314,7 @@ TEST(ConfigTestData, LoadsAndCoversEveryShape) {
     EXPECT_FALSE(sim.iceoryx.has_value());
     ASSERT_TRUE(sim.tracking_filter.has_value());
     EXPECT_EQ(sim.tracking_filter->min_cutoff_hz, 1.5);
-    EXPECT_EQ(sim.tracking_filter->angle_beta_s_per_rad, 8.0);
+    EXPECT_EQ(sim.tracking_filter->angle_beta_s_per_rad, std::optional<double>(8.0));
     EXPECT_EQ(sim.tracking_filter->position_beta_s_per_m, 40.0);
     EXPECT_EQ(sim.tracking_filter->derivative_cutoff_hz, 1.2);
 

@@ -17,9 +17,10 @@ constexpr double kTrackerRateHz = 90.0;  // config/user.yaml's tracker
 constexpr double kAngleNoiseRad = 0.002;
 constexpr double kPositionNoiseM = 0.0002;
 
-// The values sim.yaml documents for its (commented-out) tracking_filter block.
-TrackingFilterSettings shippedSettings() {
-    return {{2.0, 10.0, 1.0}, {2.0, 50.0, 1.0}};
+// sim.yaml's tracking_filter values with the angle channel on (angle_beta_s_per_rad: 10, as
+// measured); sim.yaml ships without it, filtering the wrist position only.
+TrackingFilterSettings settingsWithAngles() {
+    return {OneEuroParameters{2.0, 10.0, 1.0}, {2.0, 50.0, 1.0}};
 }
 
 double rms(const std::vector<double>& values) {
@@ -31,7 +32,7 @@ double rms(const std::vector<double>& values) {
 }
 
 TEST(TrackingFilter, AHandAtRestLosesMostOfTheTrackersJitter) {
-    HandPoseFilter filter(shippedSettings());
+    HandPoseFilter filter(settingsWithAngles());
     std::mt19937 random(7);
     std::normal_distribution<double> angle_noise(0.0, kAngleNoiseRad);
     std::normal_distribution<double> position_noise(0.0, kPositionNoiseM);
@@ -75,7 +76,7 @@ TEST(TrackingFilter, AHandAtRestLosesMostOfTheTrackersJitter) {
 // A flexion at 1 rad/s, the speed of a quick press, and a wrist sliding at 0.1 m/s: the
 // filtered pose trails the true one by a bounded time once the motion is under way.
 TEST(TrackingFilter, AMovingHandIsFollowedWithABoundedLag) {
-    HandPoseFilter filter(shippedSettings());
+    HandPoseFilter filter(settingsWithAngles());
     HandPoseInput pose;
     double angle_lag_s = 0.0;
     double position_lag_s = 0.0;
@@ -111,15 +112,15 @@ TEST(TrackingFilter, EveryParameterChangesTheLag) {
         }
         return lag;
     };
-    const TrackingFilterSettings base = shippedSettings();
+    const TrackingFilterSettings base = settingsWithAngles();
     const auto [angle_lag, position_lag] = lags(base);
     TrackingFilterSettings faster = base;
-    faster.angles.min_cutoff_hz *= 2.0;
+    faster.angles->min_cutoff_hz *= 2.0;
     faster.position.min_cutoff_hz *= 2.0;
     EXPECT_LT(lags(faster).first, angle_lag);
     EXPECT_LT(lags(faster).second, position_lag);
     TrackingFilterSettings angle_beta = base;
-    angle_beta.angles.beta *= 2.0;
+    angle_beta.angles->beta *= 2.0;
     EXPECT_LT(lags(angle_beta).first, angle_lag);
     EXPECT_EQ(lags(angle_beta).second, position_lag);
     TrackingFilterSettings position_beta = base;
@@ -127,14 +128,43 @@ TEST(TrackingFilter, EveryParameterChangesTheLag) {
     EXPECT_EQ(lags(position_beta).first, angle_lag);
     EXPECT_LT(lags(position_beta).second, position_lag);
     TrackingFilterSettings slow_derivative = base;
-    slow_derivative.angles.derivative_cutoff_hz *= 0.25;
+    slow_derivative.angles->derivative_cutoff_hz *= 0.25;
     slow_derivative.position.derivative_cutoff_hz *= 0.25;
     EXPECT_GT(lags(slow_derivative).first, angle_lag);
     EXPECT_GT(lags(slow_derivative).second, position_lag);
 }
 
+// As shipped (no angle_beta_s_per_rad): the wrist position is filtered as before, the angles
+// and the wrist's orientation reach the hand exactly as tracked.
+TEST(TrackingFilter, WithoutTheAngleChannelOnlyTheWristPositionIsFiltered) {
+    TrackingFilterSettings settings = settingsWithAngles();
+    settings.angles.reset();
+    HandPoseFilter position_only(settings);
+    HandPoseFilter both(settingsWithAngles());
+    std::mt19937 random(3);
+    std::normal_distribution<double> noise(0.0, kAngleNoiseRad);
+    for (int i = 0; i < 90; ++i) {
+        HandPoseInput noisy;
+        for (double& angle : noisy.flexion_rad) {
+            angle = 0.3 + noise(random);
+        }
+        noisy.wrist.position_m = Vec3(0.1 + 0.1 * noise(random), 0.0, 0.05);
+        const Vec3 tilt(noise(random), noise(random), noise(random));
+        noisy.wrist.rotation = Eigen::AngleAxisd(tilt.norm(), tilt.normalized()).toRotationMatrix();
+        const double t = i / kTrackerRateHz;
+        const HandPoseInput out = position_only.filter(noisy, t, 0.1);
+        const HandPoseInput reference = both.filter(noisy, t, 0.1);
+        EXPECT_EQ(out.flexion_rad, noisy.flexion_rad) << i;
+        EXPECT_TRUE(out.wrist.rotation.isApprox(noisy.wrist.rotation, 1e-12)) << i;
+        EXPECT_EQ(out.wrist.position_m, reference.wrist.position_m) << i;
+        if (i > 0) {
+            EXPECT_NE(out.wrist.position_m.x(), noisy.wrist.position_m.x()) << i;
+        }
+    }
+}
+
 TEST(TrackingFilter, AGapOrAStampThatGoesBackRestartsAtTheNewPose) {
-    HandPoseFilter filter(shippedSettings());
+    HandPoseFilter filter(settingsWithAngles());
     HandPoseInput a;
     a.flexion_rad.fill(0.0);
     HandPoseInput jitter = a;

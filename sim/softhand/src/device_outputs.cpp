@@ -56,7 +56,14 @@ KinestheticOutput::KinestheticOutput(const HandModel& model, const HandKinematic
     chain_ = *chain;
     for (std::size_t s = 0; s < 3; ++s) {
         const BoneInfo& bone = model.bones[static_cast<std::size_t>(chain_.bones[s])];
-        skin_[s] = skinOf(model.simulation, bone);
+        const Simulation& sim = model.simulation;
+        RigidSkin& skin = skin_[s];
+        skin.body = bone.body;
+        skin.nodes = skinOf(sim, bone);
+        for (int node : skin.nodes) {
+            skin.p_bone.push_back(sim.bodyRotation(bone.body).transpose() *
+                                  (sim.nodePosition(node) - sim.bodyPosition(bone.body)));
+        }
         nodes_[s] = {bone.first_node, bone.first_node + bone.node_count};
     }
 }
@@ -79,16 +86,22 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) co
         anchors[j] = kinematics_.anchor(sim, chain_.joints[j]);
     }
     for (std::size_t s = 0; s < 3; ++s) {
+        const RigidSkin& skin = skin_[s];
+        const Vec3& bone_position = sim.bodyPosition(skin.body);
+        const Mat3& bone_rotation = sim.bodyRotation(skin.body);
         for (int collider = 0; collider < sim.colliderCount(); ++collider) {
-            // The closest skin node of this phalanx to this object stands for the contact.
+            // The skin point of this phalanx deepest in this object stands for the contact.
             int closest = -1;
+            Vec3 point = Vec3::Zero();
             SurfaceQuery nearest;
             nearest.phi_m = std::numeric_limits<double>::infinity();
-            for (int node : skin_[s]) {
-                const SurfaceQuery query = sim.queryCollider(collider, sim.nodePosition(node));
+            for (std::size_t i = 0; i < skin.p_bone.size(); ++i) {
+                const Vec3 p_world = bone_position + bone_rotation * skin.p_bone[i];
+                const SurfaceQuery query = sim.queryCollider(collider, p_world);
                 if (query.phi_m < nearest.phi_m) {
                     nearest = query;
-                    closest = node;
+                    closest = skin.nodes[i];
+                    point = p_world;
                 }
             }
             if (closest < 0 || !(nearest.phi_m < settings_.contact_margin_m) ||
@@ -100,8 +113,7 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) co
             double b = -nearest.phi_m;
             double norm_squared = 0.0;
             for (std::size_t j = 0; j <= s; ++j) {
-                const double a =
-                    nearest.normal.dot(axes[j].cross(sim.nodePosition(closest) - anchors[j]));
+                const double a = nearest.normal.dot(axes[j].cross(point - anchors[j]));
                 constraint.a[j] = a;
                 b += a * q[j];
                 norm_squared += a * a;

@@ -32,7 +32,7 @@ double OneEuroFilter::filter(double value, double dt_s) {
 HandPoseFilter::HandPoseFilter(const TrackingFilterSettings& settings)
     : orientation_(settings.angles) {
     for (auto& filter : angles_) {
-        filter.setParameters(settings.angles);
+        filter.setParameters(settings.angles.value_or(OneEuroParameters{}));
     }
     for (auto& filter : position_) {
         filter.setParameters(settings.position);
@@ -68,12 +68,15 @@ HandPoseInput HandPoseFilter::filter(const HandPoseInput& sample, double t_s, do
     const double dt_s = t_s - *last_t_s_;
     last_t_s_ = t_s;
     HandPoseInput out = sample;
-    for (std::size_t i = 0; i < angles_.size(); ++i) {
-        out.flexion_rad[i] = angles_[i].filter(sample.flexion_rad[i], dt_s);
-    }
     for (int axis = 0; axis < 3; ++axis) {
         out.wrist.position_m[axis] =
             position_[static_cast<std::size_t>(axis)].filter(sample.wrist.position_m[axis], dt_s);
+    }
+    if (!orientation_) {
+        return out;
+    }
+    for (std::size_t i = 0; i < angles_.size(); ++i) {
+        out.flexion_rad[i] = angles_[i].filter(sample.flexion_rad[i], dt_s);
     }
     // The orientation as one channel: the rotation from the last filtered orientation to the
     // sample, per second, low-passed as a vector (so that a tracker's jitter averages out, as
@@ -81,9 +84,9 @@ HandPoseInput HandPoseFilter::filter(const HandPoseInput& sample, double t_s, do
     const Eigen::AngleAxisd step(last_orientation_.conjugate() * orientation);
     const Vec3 rate = step.axis() * (step.angle() / dt_s);
     angular_velocity_ +=
-        smoothing(orientation_.derivative_cutoff_hz, dt_s) * (rate - angular_velocity_);
+        smoothing(orientation_->derivative_cutoff_hz, dt_s) * (rate - angular_velocity_);
     const double cutoff_hz =
-        orientation_.min_cutoff_hz + orientation_.beta * angular_velocity_.norm();
+        orientation_->min_cutoff_hz + orientation_->beta * angular_velocity_.norm();
     last_orientation_ =
         last_orientation_.slerp(smoothing(cutoff_hz, dt_s), orientation).normalized();
     out.wrist.rotation = last_orientation_.toRotationMatrix();

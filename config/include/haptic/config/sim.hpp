@@ -17,8 +17,10 @@ namespace haptic::config {
 // The One Euro filter handsim applies to poses from a HandPose topic, i.e. a real tracker
 // (haptic/softhand/tracking_filter.hpp).
 struct TrackingFilterConfig {
-    double min_cutoff_hz{1.0};          // cutoff at rest
-    double angle_beta_s_per_rad{0.0};   // cutoff rise per rad/s of a flexion angle or the wrist
+    double min_cutoff_hz{1.0};  // cutoff at rest
+    // Cutoff rise per rad/s of a flexion angle or the wrist's rotation. Absent: the angles and
+    // the wrist's orientation pass as tracked and only the wrist position is filtered.
+    std::optional<double> angle_beta_s_per_rad;
     double position_beta_s_per_m{0.0};  // cutoff rise per m/s of the wrist
     double derivative_cutoff_hz{1.0};   // low-pass of the speed that sets the cutoff
 };

@@ -39,7 +39,17 @@ class KinestheticOutput {
     HandKinematics kinematics_;
     KinestheticOutputSettings settings_;
     FingerChain chain_;
-    std::array<std::vector<int>, 3> skin_;  // skin nodes of each phalanx
+    // The skin of each phalanx as built, rigid with its bone: the finger the exoskeleton's
+    // kinematics model (g(chi(q)) of ALGORITHMS.md section 5.4), not the tissue the contact
+    // deforms. A constraint from deformed skin sits wherever the sim's bone is (the pressed
+    // tissue lies on the surface), so it would move with the tracked hand, its noise and its
+    // latency, and the 1 kHz loop would follow the tracker instead of the object.
+    struct RigidSkin {
+        int body{-1};
+        std::vector<int> nodes;    // node ids, for the contact forces' lever arms
+        std::vector<Vec3> p_bone;  // rest positions in the bone frame
+    };
+    std::array<RigidSkin, 3> skin_;
     // [first, end) node ids of each phalanx, for the reference torques of its contacts
     std::array<std::pair<int, int>, 3> nodes_{};
 };

@@ -43,9 +43,10 @@ class OneEuroFilter {
 };
 
 struct TrackingFilterSettings {
-    OneEuroParameters angles{};    // the 15 flexion angles, beta in s/rad
+    // The 15 flexion angles, beta in s/rad; absent: they pass unfiltered, and so does the
+    // wrist orientation, which uses the angles' parameters on its angular speed.
+    std::optional<OneEuroParameters> angles{OneEuroParameters{}};
     OneEuroParameters position{};  // the wrist position, beta in s/m
-    // The wrist orientation uses the angles' parameters on its angular speed.
 };
 
 class HandPoseFilter {
@@ -60,8 +61,8 @@ class HandPoseFilter {
   private:
     std::array<OneEuroFilter, kHandPoseAngles> angles_;
     std::array<OneEuroFilter, 3> position_;
-    OneEuroParameters orientation_;
-    Vec3 angular_velocity_{Vec3::Zero()};  // low-passed, of the wrist orientation (rad/s)
+    std::optional<OneEuroParameters> orientation_;  // absent: angles and orientation pass
+    Vec3 angular_velocity_{Vec3::Zero()};           // low-passed, of the wrist orientation (rad/s)
     std::optional<double> last_t_s_;
     Eigen::Quaterniond last_orientation_{Eigen::Quaterniond::Identity()};
 };
