@@ -24,6 +24,9 @@ std::vector<int> skinOf(const Simulation& sim, const BoneInfo& bone) {
     return nodes;
 }
 
+// Below this the simulated skin does not press on the object: no normal to take from it.
+constexpr double kMinPressForceN = 1e-6;
+
 const BoneInfo& distalBone(const HandModel& model, config::Finger finger) {
     for (const auto& bone : model.bones) {
         if (bone.finger == finger && bone.segment == Segment::kDistal) {
@@ -108,12 +111,33 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) co
                 out.constraints.full()) {
                 continue;
             }
+            // Outside a convex object the distance's gradient is continuous, inside it is
+            // not: 1-2 mm inside a box near an edge the side face can be the nearest one for
+            // a frame, and a constraint along it asks for several times the force. So a
+            // penetrating contact is pushed out along the normal the object presses the
+            // simulated skin with (the normal parts of its contact forces on this phalanx).
+            Vec3 normal = nearest.normal;
+            if (nearest.phi_m < 0.0) {
+                Vec3 pressed = Vec3::Zero();
+                for (const Simulation::ContactForce& contact : sim.contactForces()) {
+                    if (contact.collider != collider || contact.node < nodes_[s].first ||
+                        contact.node >= nodes_[s].second) {
+                        continue;
+                    }
+                    const Vec3 n =
+                        sim.queryCollider(collider, sim.nodePosition(contact.node)).normal;
+                    pressed += std::max(contact.force_n.dot(n), 0.0) * n;
+                }
+                if (pressed.norm() > kMinPressForceN) {
+                    normal = pressed.normalized();
+                }
+            }
             // A node on phalanx s moves with joints 0..s: d phi / d q_j = n . (u_j x r_j).
             msgs::LinearConstraint constraint;
             double b = -nearest.phi_m;
             double norm_squared = 0.0;
             for (std::size_t j = 0; j <= s; ++j) {
-                const double a = nearest.normal.dot(axes[j].cross(point - anchors[j]));
+                const double a = normal.dot(axes[j].cross(point - anchors[j]));
                 constraint.a[j] = a;
                 b += a * q[j];
                 norm_squared += a * a;
