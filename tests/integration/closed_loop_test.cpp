@@ -200,13 +200,14 @@ TEST_F(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitch
         << pushing << " of " << contact_ticks << " contact ticks with force";
 
     // In contact: never pinned at the clamp (the demo's old failure: 61 % of contact ticks),
-    // and passive. NOT asserted, because it does not hold yet (docs/benchmarks.md, "Closed
-    // loop", 2026-11-26): chatter at most 5 % of the mean force. Since the passivity budget
-    // credits the sim's moving objects the force is present in every contact window (1.1-1.5 N
-    // against a 4-5 N reference), but a 15-60 Hz ripple of the finger, the coupling and the
-    // actuator's lag keeps the chatter at 20-50 %. The report above prints both for every run.
+    // and passive. Chatter: the target is 5 % of the mean force; this run, with its six live
+    // method switches and the first contact after start, measured 6.8-8.3 % (the demo, one
+    // method per 12 s: 1.6-3.6 %; docs/benchmarks.md, "Closed loop", 2026-11-26, second
+    // section). Asserted at 12 %: constraints that followed the tracked finger or flipped to
+    // a box's side face gave 15-30 %.
     const ctl::ExoskeletonReport report = ctl::exoskeletonReport(exo, settings);
     EXPECT_LE(report.quality.clampFraction(), 0.05);
+    EXPECT_LE(report.quality.chatterFraction(), 0.12);
     // Passive with respect to the port and the sim's moving objects together: the device gave
     // the finger no more than the objects' motion put into the coupling (port_safety.hpp).
     EXPECT_LE(report.excessEnergy(), 1e-3) << "the exoskeleton stays passive";

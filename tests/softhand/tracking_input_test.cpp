@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include "haptic/config/scene.hpp"
@@ -388,6 +389,56 @@ TEST(SceneSimulationFingertip, ThimbleSamplesFollowTheScriptAndExoskeletonIsRefu
     const StepReport report = sim.step(0.01);
     EXPECT_TRUE(report.rejected_input);
     EXPECT_THAT(report.rejection_reason, HasSubstr("hand pose"));
+}
+
+// The shipped default scene, as handsim runs it: the script presses the pad on the block and
+// slides it over the block's edge. What the exoskeleton is asked for, per constraint row, is
+// the joint motion that takes the finger out, -g / |a| (g = a.q_sim - b). It must follow the
+// press, not jump for a frame: with each rigid point's own nearest face, the distal row's
+// escape went from 0.015-0.017 rad to 0.06-0.09 rad for single frames at the edge (the side
+// face was nearest), and the device pushed 3-4 N spikes.
+TEST(SceneSimulationScripted, TheExoskeletonsConstraintsDoNotJumpWhenThePadSlidesOverAnEdge) {
+    const config::SceneConfig scene =
+        config::loadSceneConfig(std::string(HAPTIC_SOURCE_DIR) + "/config/scenes/default.yaml");
+    const DeviceRequest exo{"exo", config::Finger::kIndex, true, {}, 64};
+    SceneSimulation sim(scene, {exo}, realtimeSceneSettings(scene.solver));
+    const PressSlideEdgeScript script(sim.trackedHand(), scene.hand, *scene.findObject("block"),
+                                      true);
+    sim.reset(script.at(0.0));
+    const double dt = 1.0 / scene.rate_hz;
+    msgs::ConstraintSet set;
+    std::optional<double> previous_escape;
+    double largest_escape = 0.0;
+    int pressed_frames = 0;
+    for (int step = 1; step * dt <= 4.0; ++step) {  // press, slide, over the edge, lift
+        ASSERT_EQ(sim.setHandPose(script.at(step * dt)), std::nullopt);
+        (void)sim.step(dt);
+        sim.fill(0, set);
+        // The distal phalanx's row with the block (the last one the output writes).
+        std::optional<double> escape;
+        for (const msgs::LinearConstraint& row : set.constraints.used()) {
+            double g = -row.b;
+            double a_squared = 0.0;
+            for (std::size_t j = 0; j < 3; ++j) {
+                g += row.a[j] * set.q_sim_rad[j];
+                a_squared += row.a[j] * row.a[j];
+            }
+            if (row.a[2] != 0.0 && g < 0.0) {
+                escape = -g / std::sqrt(a_squared);
+            }
+        }
+        if (escape && previous_escape) {
+            ++pressed_frames;
+            largest_escape = std::max(largest_escape, *escape);
+            EXPECT_LT(*escape, 2.0 * *previous_escape + 0.002)
+                << "t = " << step * dt << " s: the distal row asks for " << *escape
+                << " rad, the frame before for " << *previous_escape << " rad";
+        }
+        previous_escape = escape;
+    }
+    EXPECT_GT(pressed_frames, 150) << "the script presses the pad for about 2 s";
+    std::printf("distal row: largest escape %.4f rad over %d pressed frames\n", largest_escape,
+                pressed_frames);
 }
 
 }  // namespace
