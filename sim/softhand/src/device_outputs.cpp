@@ -62,10 +62,11 @@ KinestheticOutput::KinestheticOutput(const HandModel& model, const HandKinematic
         const Simulation& sim = model.simulation;
         RigidSkin& skin = skin_[s];
         skin.body = bone.body;
-        skin.nodes = skinOf(sim, bone);
-        for (int node : skin.nodes) {
-            skin.p_bone.push_back(sim.bodyRotation(bone.body).transpose() *
-                                  (sim.nodePosition(node) - sim.bodyPosition(bone.body)));
+        // From the build (rest) pose, wherever the hand is now.
+        const BonePose& built = kinematics_.buildPose(chain_.bones[s]);
+        for (int node : skinOf(sim, bone)) {
+            skin.p_bone.push_back(built.rotation.transpose() *
+                                  (sim.nodeRestPosition(node) - built.position_m));
         }
         nodes_[s] = {bone.first_node, bone.first_node + bone.node_count};
     }
@@ -94,21 +95,18 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) co
         const Mat3& bone_rotation = sim.bodyRotation(skin.body);
         for (int collider = 0; collider < sim.colliderCount(); ++collider) {
             // The skin point of this phalanx deepest in this object stands for the contact.
-            int closest = -1;
             Vec3 point = Vec3::Zero();
             SurfaceQuery nearest;
             nearest.phi_m = std::numeric_limits<double>::infinity();
-            for (std::size_t i = 0; i < skin.p_bone.size(); ++i) {
-                const Vec3 p_world = bone_position + bone_rotation * skin.p_bone[i];
+            for (const Vec3& p_bone : skin.p_bone) {
+                const Vec3 p_world = bone_position + bone_rotation * p_bone;
                 const SurfaceQuery query = sim.queryCollider(collider, p_world);
                 if (query.phi_m < nearest.phi_m) {
                     nearest = query;
-                    closest = skin.nodes[i];
                     point = p_world;
                 }
             }
-            if (closest < 0 || !(nearest.phi_m < settings_.contact_margin_m) ||
-                out.constraints.full()) {
+            if (!(nearest.phi_m < settings_.contact_margin_m) || out.constraints.full()) {
                 continue;
             }
             // Outside a convex object the distance's gradient is continuous, inside it is
@@ -116,6 +114,10 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) co
             // a frame, and a constraint along it asks for several times the force. So a
             // penetrating contact is pushed out along the normal the object presses the
             // simulated skin with (the normal parts of its contact forces on this phalanx).
+            // Its depth stays the point's distance to its nearest face: continuous, and at an
+            // edge less than the depth along that normal, so an edge renders rounded over the
+            // depth of the press (measuring along a blended normal to a plane cut deep into
+            // the box there and asked for 10 times the force).
             Vec3 normal = nearest.normal;
             if (nearest.phi_m < 0.0) {
                 Vec3 pressed = Vec3::Zero();

@@ -5,9 +5,12 @@
 //
 // Kinesthetic (exoskeleton on a finger): q_sim_rad = the simulated finger's flexion
 // [MCP, PIP, DIP] (rad, flexion positive, HandKinematics), and for each (phalanx, object)
-// pair whose closest skin node is nearer than the contact margin one linearised
-// non-penetration constraint a^T q >= b: phi(q_sim) + a^T (q - q_sim) >= 0 with
-// a_j = n . (axis_j x (x_node - anchor_j)), the node carried rigidly by its phalanx.
+// pair whose rigid skin (the build-pose skin carried by its bone) comes nearer than the
+// contact margin one linearised non-penetration constraint a^T q >= b:
+// phi(q_sim) + a^T (q - q_sim) >= 0 with a_j = n . (axis_j x (x - anchor_j)), x the rigid
+// skin point deepest in the object, phi its signed distance. n is the object's normal at x
+// while x is outside; inside, the direction of the normal forces the object presses the
+// simulated skin with (docs/softhand.md, "Exoskeleton: ConstraintSet").
 //
 // Tactile (thimble on the fingertip): the finger-pad skin nodes, carried rigidly by the
 // distal phalanx (the undeformed pad), in the device base frame D, with their signed distance
@@ -40,13 +43,12 @@ class KinestheticOutput {
     KinestheticOutputSettings settings_;
     FingerChain chain_;
     // The skin of each phalanx as built, rigid with its bone: the finger the exoskeleton's
-    // kinematics model (g(chi(q)) of ALGORITHMS.md section 5.4), not the tissue the contact
-    // deforms. A constraint from deformed skin sits wherever the sim's bone is (the pressed
+    // kinematics model (g(chi(q)) of docs/algorithms.md, subspace proxy), not the tissue the
+    // contact deforms. A constraint from deformed skin sits wherever the sim's bone is (the pressed
     // tissue lies on the surface), so it would move with the tracked hand, its noise and its
     // latency, and the 1 kHz loop would follow the tracker instead of the object.
     struct RigidSkin {
         int body{-1};
-        std::vector<int> nodes;    // node ids, for the contact forces' lever arms
         std::vector<Vec3> p_bone;  // rest positions in the bone frame
     };
     std::array<RigidSkin, 3> skin_;

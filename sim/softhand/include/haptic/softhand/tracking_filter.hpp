@@ -6,9 +6,9 @@
 // jitter, which would otherwise move the simulated contact, the device constraints and the
 // reference force every frame; in motion it lags little. Per channel:
 //   cutoff = min_cutoff + beta * |dx/dt|,  alpha = 1 / (1 + 1 / (2 pi cutoff dt))
-// with dx/dt itself low-passed at derivative_cutoff. Each of the 15 flexion angles and each
-// wrist position axis is a channel; the wrist orientation is slerped by the alpha of its
-// low-passed angular velocity. docs/softhand.md, "Tracking filter".
+// with dx/dt itself low-passed at derivative_cutoff. Each wrist position axis is a channel;
+// with angle parameters, so is each of the 15 flexion angles, and the wrist orientation is
+// slerped by the alpha of its low-passed angular velocity. docs/softhand.md, "Tracking filter".
 
 #include <Eigen/Geometry>
 #include <array>
