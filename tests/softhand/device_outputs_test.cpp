@@ -140,7 +140,7 @@ TEST_F(KinestheticOutputTest, FarPlaneGivesNoConstraint) {
     HandModel far = buildHand(handConfig(config::HandModel::kFinger), SolverSettings{});
     far.simulation.addCollider({HalfSpace{}, Vec3(0, 0, -0.02), Mat3::Identity(), 0.5});
     const HandKinematics far_kinematics(far);
-    const KinestheticOutput far_output(far, far_kinematics, config::Finger::kIndex);
+    KinestheticOutput far_output(far, far_kinematics, config::Finger::kIndex);
     msgs::ConstraintSet set;
     far_output.fill(far.simulation, set);
     EXPECT_EQ(set.constraints.size(), 0U);

@@ -77,7 +77,11 @@ std::array<double, 3> KinestheticOutput::jointAngles(const Simulation& sim) cons
             kinematics_.flexion(sim, chain_.joints[2])};
 }
 
-void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) const {
+void KinestheticOutput::reset() {
+    last_normal_.clear();
+}
+
+void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) {
     const auto q = jointAngles(sim);
     out.dof = 3;
     out.q_sim_rad.fill(0.0);
@@ -89,6 +93,7 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) co
         axes[j] = kinematics_.axis(sim, chain_.joints[j]);
         anchors[j] = kinematics_.anchor(sim, chain_.joints[j]);
     }
+    last_normal_.resize(static_cast<std::size_t>(sim.colliderCount()));
     for (std::size_t s = 0; s < 3; ++s) {
         const RigidSkin& skin = skin_[s];
         const Vec3& bone_position = sim.bodyPosition(skin.body);
@@ -106,7 +111,9 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) co
                     point = p_world;
                 }
             }
+            std::optional<Vec3>& last_normal = last_normal_[static_cast<std::size_t>(collider)][s];
             if (!(nearest.phi_m < settings_.contact_margin_m) || out.constraints.full()) {
+                last_normal.reset();
                 continue;
             }
             // Outside a convex object the distance's gradient is continuous, inside it is
@@ -134,6 +141,19 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) co
                     normal = pressed.normalized();
                 }
             }
+            // In the closed loop the pressed skin can still lie on the side face, or lift, for a
+            // single frame at an edge (the soak's 4-6 N spikes, all at the script's edge phase):
+            // the row's normal follows the contact's at a bounded turn rate.
+            if (last_normal) {
+                const Vec3 axis = last_normal->cross(normal);
+                const double angle = std::atan2(axis.norm(), last_normal->dot(normal));
+                if (angle > kMaxNormalTurnRad) {
+                    normal = axis.norm() > 1e-12
+                                 ? Vec3(Eigen::AngleAxisd(kMaxNormalTurnRad, axis.normalized()) *
+                                        *last_normal)
+                                 : *last_normal;  // opposite: no direction to turn in
+                }
+            }
             // A node on phalanx s moves with joints 0..s: d phi / d q_j = n . (u_j x r_j).
             msgs::LinearConstraint constraint;
             double b = -nearest.phi_m;
@@ -145,8 +165,10 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) co
                 norm_squared += a * a;
             }
             if (!(norm_squared > settings_.min_gradient_m * settings_.min_gradient_m)) {
+                last_normal.reset();
                 continue;
             }
+            last_normal = normal;
             constraint.b = b;
             out.constraints.push_back(constraint);
         }

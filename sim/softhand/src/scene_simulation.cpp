@@ -54,6 +54,11 @@ void SceneSimulation::reset(const HandPoseInput& pose) {
         sim.setTrackingTarget(bone.body, poses_[k].position_m, poses_[k].rotation);
     }
     tracking_->resetToModel(model_);
+    for (auto& output : kinesthetic_) {
+        if (output) {
+            output->reset();
+        }
+    }
 }
 
 std::optional<std::string> SceneSimulation::setHandPose(const HandPoseInput& pose) {
@@ -79,7 +84,7 @@ StepReport SceneSimulation::step(double dt_s) {
     return report;
 }
 
-void SceneSimulation::fill(std::size_t device, msgs::ConstraintSet& out) const {
+void SceneSimulation::fill(std::size_t device, msgs::ConstraintSet& out) {
     kinesthetic_.at(device).value().fill(model_.simulation, out);
 }
 

@@ -17,6 +17,9 @@
 // to the nearest object (negative = penetrating), that object's outward normal in D, and
 // weight = sample area x pad stiffness per area (N/m).
 
+#include <optional>
+#include <vector>
+
 #include "haptic/config/types.hpp"
 #include "haptic/msgs/messages.hpp"
 #include "haptic/softhand/hand_kinematics.hpp"
@@ -35,8 +38,16 @@ class KinestheticOutput {
                       config::Finger finger, KinestheticOutputSettings settings = {});
 
     [[nodiscard]] std::array<double, 3> jointAngles(const Simulation& sim) const;
-    // Fills everything but the header.
-    void fill(const Simulation& sim, msgs::ConstraintSet& out) const;
+    // Fills everything but the header. Once per simulation step: each row's normal turns by
+    // at most kMaxNormalTurnRad from the one the same contact had in the previous call.
+    void fill(const Simulation& sim, msgs::ConstraintSet& out);
+    // The hand was placed (no continuity with the previous step): forget the last normals.
+    void reset();
+
+    // A finger rolls over an edge in tens of ms; at 60-200 Hz this lets the normal turn by
+    // 90 degrees within 6 frames, while a face taken for another for one frame (the pressed
+    // skin briefly on the side face, or not pressed at all) is not followed.
+    static constexpr double kMaxNormalTurnRad = 0.26;
 
   private:
     HandKinematics kinematics_;
@@ -54,6 +65,8 @@ class KinestheticOutput {
     std::array<RigidSkin, 3> skin_;
     // [first, end) node ids of each phalanx, for the reference torques of its contacts
     std::array<std::pair<int, int>, 3> nodes_{};
+    // The normal of each (object, phalanx) row sent in the last call; empty: no row.
+    std::vector<std::array<std::optional<Vec3>, 3>> last_normal_;
 };
 
 struct TactileOutputSettings {

@@ -64,7 +64,7 @@ class SceneSimulation {
     StepReport step(double dt_s);
 
     // Outputs for devices[index] (header left to the caller).
-    void fill(std::size_t device, msgs::ConstraintSet& out) const;
+    void fill(std::size_t device, msgs::ConstraintSet& out);
     void fill(std::size_t device, msgs::ContactSurface& out) const;
 
     [[nodiscard]] const HandModel& model() const { return model_; }
