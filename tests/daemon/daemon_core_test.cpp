@@ -19,19 +19,20 @@ using ::testing::Gt;
 
 constexpr std::int64_t kMs = 1'000'000;
 
-// Each message is newer than the last, as handsim's are (seq +1, later stamp).
-msgs::MessageHeader nextHeader(std::string_view device) {
+// Each message is newer than the last, as handsim's are (seq +1), stamped when it was sent:
+// hapticd judges its age by the stamp (a test that offers a message at t passes t).
+msgs::MessageHeader nextHeader(std::string_view device, std::int64_t sent_ns) {
     static std::uint64_t seq = 0;
     msgs::MessageHeader header;
     header.seq = ++seq;
-    header.stamp_ns = static_cast<std::int64_t>(seq) * kMs;
+    header.stamp_ns = sent_ns;
     header.source_id.assign(device);
     return header;
 }
 
-msgs::ConstraintSet validConstraintSet(std::string_view device) {
+msgs::ConstraintSet validConstraintSet(std::string_view device, std::int64_t sent_ns = 0) {
     msgs::ConstraintSet message;
-    message.header = nextHeader(device);
+    message.header = nextHeader(device, sent_ns);
     message.dof = 3;
     message.q_sim_rad = {0.1, 0.2, 0.3};
     msgs::LinearConstraint constraint;
@@ -41,9 +42,9 @@ msgs::ConstraintSet validConstraintSet(std::string_view device) {
     return message;
 }
 
-msgs::ContactSurface validContactSurface(std::string_view device) {
+msgs::ContactSurface validContactSurface(std::string_view device, std::int64_t sent_ns = 0) {
     msgs::ContactSurface message;
-    message.header = nextHeader(device);
+    message.header = nextHeader(device, sent_ns);
     msgs::ContactSample sample;
     sample.normal_device = {0.0, 0.0, -1.0};
     sample.weight = 1.0;
@@ -89,7 +90,7 @@ TEST_F(DaemonCoreTest, FreshInputRampsForceUpWithoutAStep) {
     std::int64_t t = 0;
     double previous = sut.simFade(0);
     for (int i = 0; i < 200; ++i) {
-        ASSERT_THAT(sut.offerConstraintSet(0, validConstraintSet("exo_index"), t),
+        ASSERT_THAT(sut.offerConstraintSet(0, validConstraintSet("exo_index", t), t),
                     Eq(InputRejection::kNone));
         t = runTicks(t, 1);
         const double fade = sut.simFade(0);
@@ -102,7 +103,7 @@ TEST_F(DaemonCoreTest, FreshInputRampsForceUpWithoutAStep) {
 TEST_F(DaemonCoreTest, StaleInputFadesToZeroWithinTheTimeoutAndNeverRises) {
     std::int64_t t = 0;
     for (int i = 0; i < 200; ++i) {
-        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), t);
+        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index", t), t);
         t = runTicks(t, 1);
     }
     const std::int64_t last_input = t - kMs;
@@ -117,10 +118,10 @@ TEST_F(DaemonCoreTest, StaleInputFadesToZeroWithinTheTimeoutAndNeverRises) {
     }
 }
 
-// Fresh by content, not by arrival: a replayed or delayed message (neither seq nor stamp
-// newer) is refused and does not hold the input alive; a restarted sim (seq from 1 again,
-// later stamp) is taken at once.
-TEST_F(DaemonCoreTest, AReplayedOrDelayedMessageIsRefusedAndDoesNotRenewTheInput) {
+// Fresh by content, not by arrival: a replayed or duplicated message (seq not advancing) is
+// refused and does not hold the input alive; a restarted sim (seq from 1 again, later stamp)
+// is taken at once.
+TEST_F(DaemonCoreTest, AReplayedOrDuplicatedMessageIsRefusedAndDoesNotRenewTheInput) {
     std::int64_t t = 0;
     const msgs::ConstraintSet first = validConstraintSet("exo_index");
     const msgs::ConstraintSet second = validConstraintSet("exo_index");
@@ -128,12 +129,64 @@ TEST_F(DaemonCoreTest, AReplayedOrDelayedMessageIsRefusedAndDoesNotRenewTheInput
     EXPECT_EQ(sut.offerConstraintSet(0, second, t), InputRejection::kNone);
     t = runTicks(t, 100);
     EXPECT_EQ(sut.offerConstraintSet(0, second, t), InputRejection::kNotNewer) << "a duplicate";
-    EXPECT_EQ(sut.offerConstraintSet(0, first, t), InputRejection::kNotNewer) << "delayed";
-    EXPECT_EQ(sut.rejectedCount(0, InputRejection::kNotNewer), 2U);
+    EXPECT_EQ(sut.offerConstraintSet(0, first, t), InputRejection::kNotNewer) << "a replay";
+    msgs::ConstraintSet restamped = second;
+    restamped.header.stamp_ns += 100 * kMs;
+    EXPECT_EQ(sut.offerConstraintSet(0, restamped, t), InputRejection::kNotNewer)
+        << "the same content, stamped again";
+    EXPECT_EQ(sut.rejectedCount(0, InputRejection::kNotNewer), 3U);
     EXPECT_EQ(sut.simFade(0), 0.0) << "the replays kept a stale input alive";
-    msgs::ConstraintSet restarted = validConstraintSet("exo_index");
+    msgs::ConstraintSet restarted = validConstraintSet("exo_index", t);
     restarted.header.seq = 1;
     EXPECT_EQ(sut.offerConstraintSet(0, restarted, t), InputRejection::kNone);
+}
+
+// A sim on another host stamps with its own clock: what counts is the delay relative to the
+// quickest message. A message that took longer than sim_timeout_ms (20 ms) beyond that is
+// refused however new its seq; the clocks' offset itself, and a slow drift of it, are not.
+TEST_F(DaemonCoreTest, AMessageDelayedBeyondTheSimTimeoutIsRefusedWhateverTheClocksOffset) {
+    constexpr std::int64_t kOtherClock = 5'000'000 * kMs;  // the sim host booted long before
+    std::uint64_t seq = 0;
+    const auto sent = [&](std::int64_t stamp_ns) {
+        msgs::ConstraintSet message = validConstraintSet("exo_index");
+        message.header.seq = ++seq;
+        message.header.stamp_ns = kOtherClock + stamp_ns;
+        return message;
+    };
+    std::int64_t t = 0;
+    // 100 Hz, each message 2-4 ms on its way.
+    for (int i = 0; i < 50; ++i) {
+        EXPECT_EQ(sut.offerConstraintSet(0, sent(t - (2 + i % 3) * kMs), t), InputRejection::kNone)
+            << i;
+        t = runTicks(t, 10);
+    }
+    EXPECT_EQ(sut.offerConstraintSet(0, sent(t - 21 * kMs), t), InputRejection::kNone)
+        << "19 ms slower than the quickest: within the timeout";
+    EXPECT_EQ(sut.offerConstraintSet(0, sent(t - 25 * kMs), t), InputRejection::kDelayed)
+        << "23 ms slower than the quickest";
+    EXPECT_EQ(sut.rejectedCount(0, InputRejection::kDelayed), 1U);
+    // Only delayed messages for 30 ms: the input goes stale and the force fades.
+    for (int i = 0; i < 3; ++i) {
+        t = runTicks(t, 10);
+        EXPECT_EQ(sut.offerConstraintSet(0, sent(t - 40 * kMs), t), InputRejection::kDelayed);
+    }
+    t = runTicks(t, 1);
+    EXPECT_EQ(sut.simFade(0), 0.0) << "delayed messages kept the input alive";
+    // The sim host's clock running 100 ppm slow for 10 minutes (60 ms): never refused.
+    for (int i = 0; i < 60'000; ++i) {
+        t += 10 * kMs;
+        const std::int64_t stamp = t - 3 * kMs - static_cast<std::int64_t>(1e-4 * t);
+        ASSERT_EQ(sut.offerConstraintSet(0, sent(stamp), t), InputRejection::kNone) << i;
+    }
+    // A restarted sim (seq from 1 again, a later stamp) a second later, its messages now 1 s
+    // on their way (a sim host whose clock was stepped): its clock offset starts afresh.
+    const std::int64_t last_stamp = t - 3 * kMs - static_cast<std::int64_t>(1e-4 * t);
+    seq = 0;
+    t += 1000 * kMs;
+    EXPECT_EQ(sut.offerConstraintSet(0, sent(last_stamp + kMs), t), InputRejection::kNone);
+    t += 10 * kMs;
+    EXPECT_EQ(sut.offerConstraintSet(0, sent(last_stamp + 11 * kMs), t), InputRejection::kNone);
+    EXPECT_EQ(sut.rejectedCount(0, InputRejection::kDelayed), 4U);
 }
 
 // A stall longer than the devices' command timeout is hapticd's own fault, but only when a
@@ -285,7 +338,7 @@ TEST(DaemonCoreHardwareEstop, PressedOrSilentStopsAtOnceAndOnlyAReleasedRelayLet
     core.setHardwareEstop(HardwareEstop::kReleased, "0x0e0 on exo's bus");
     ASSERT_TRUE(command(msgs::CommandKind::kEnable).accepted);
     for (std::int64_t t = 1; t <= 200; ++t) {
-        (void)core.offerConstraintSet(0, validConstraintSet("exo"), t * kMs);
+        (void)core.offerConstraintSet(0, validConstraintSet("exo", t * kMs), t * kMs);
         core.update(t * kMs, TickTiming{});
     }
     ASSERT_GT(core.outputGain(0), 0.0);
@@ -332,7 +385,7 @@ TEST(DaemonCoreRearm, ALongSimOutageWhileRenderingNeedsANewEnable) {
     auto run = [&](int ticks, bool feed) {
         for (int i = 0; i < ticks; ++i) {
             if (feed) {
-                (void)core.offerConstraintSet(0, validConstraintSet("exo"), t);
+                (void)core.offerConstraintSet(0, validConstraintSet("exo", t), t);
             }
             t += kMs;
             core.update(t, TickTiming{});
@@ -380,7 +433,7 @@ TEST_F(DaemonCoreTest, AStalledTickDoesNotStepForceUp) {
     sut.update(kMs, TickTiming{});
     const double before = sut.simFade(0);
     // The thread stalls for 150 ms and wakes to fresh input.
-    (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), 151 * kMs);
+    (void)sut.offerConstraintSet(0, validConstraintSet("exo_index", 151 * kMs), 151 * kMs);
     sut.update(151 * kMs, TickTiming{});
     EXPECT_LE(sut.simFade(0) - before, 1.0 / 100.0 + 1e-12);
 }
@@ -388,11 +441,11 @@ TEST_F(DaemonCoreTest, AStalledTickDoesNotStepForceUp) {
 TEST_F(DaemonCoreTest, ASimAt100HzWithJitterKeepsFullForce) {
     std::int64_t t = 0;
     for (int frame = 0; frame < 100; ++frame) {
-        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), t);
+        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index", t), t);
         t = runTicks(t, frame % 2 == 0 ? 8 : 12);  // 10 ms on average, +-2 ms jitter
     }
     for (int frame = 0; frame < 20; ++frame) {
-        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), t);
+        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index", t), t);
         for (int tick = 0; tick < 12; ++tick) {
             t = runTicks(t, 1);
             EXPECT_THAT(sut.simFade(0), Eq(1.0)) << "force modulated by normal sim jitter";
@@ -448,7 +501,7 @@ TEST_F(DaemonCoreTest, StatusReportsDevicesLinkRateAndLoopWindow) {
     std::int64_t t = 0;
     for (int i = 0; i < 1000; ++i) {
         if (i % 10 == 0) {
-            (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), t);
+            (void)sut.offerConstraintSet(0, validConstraintSet("exo_index", t), t);
         }
         t = runTicks(t, 1);
     }
@@ -474,8 +527,8 @@ TEST_F(DaemonCoreTest, StatusCountsTicksOnWhichASlowSimLetTheInputAgePastTheFade
         std::int64_t t = from;
         for (int i = 0; i < ticks; ++i) {
             if (i % interval_ms == 0) {
-                (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), t);
-                (void)sut.offerContactSurface(1, validContactSurface("thimble_index"), t);
+                (void)sut.offerConstraintSet(0, validConstraintSet("exo_index", t), t);
+                (void)sut.offerContactSurface(1, validContactSurface("thimble_index", t), t);
             }
             t = runTicks(t, 1);
         }
@@ -497,7 +550,7 @@ TEST_F(DaemonCoreTest, StatusCountsTicksOnWhichASlowSimLetTheInputAgePastTheFade
 TEST_F(DaemonCoreTest, ForceGainFollowsTheFadeOnlyWhileRendering) {
     std::int64_t t = 0;
     for (int i = 0; i < 200; ++i) {
-        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index"), t);
+        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index", t), t);
         t = runTicks(t, 1);
     }
     ASSERT_THAT(sut.simFade(0), Eq(1.0));

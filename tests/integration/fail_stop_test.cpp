@@ -5,11 +5,20 @@
 //   restart  a new hapticd on the same RouDi comes up IDLE and renders after `enable`.
 //   SIGTERM  hapticd's fail-stop writes the safe commands within two ticks and exits 0.
 //   SIGSTOP  the devices time out on their own; hapticd wakes up, blames its own stall.
+//   a stall of the RT thread alone (ptrace-stopped for 100 ms while hapticd's other threads
+//            and the devices run on): the same, and the devices' frames sent meanwhile, read
+//            when the loop wakes, keep every device blameless.
 //   --duration ending while rendering: the same fail-stop as SIGTERM.
 //   E-stop   the relay on the exoskeleton's bus reports pressed, or falls silent: E-STOP
 //            within a tick of hapticd reading it, and only release + clear + enable re-arm.
 
+#include <sys/ptrace.h>
+#include <sys/wait.h>
+
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <fstream>
 #include <optional>
 
 #include "bus_watching_test.hpp"
@@ -26,6 +35,44 @@ namespace {
 // under the sanitizers, whose processes stall for tens of ms. The measured figure is printed.
 constexpr std::int64_t kSlackNs = HAPTIC_SANITIZED != 0 ? 40'000'000 : 6'000'000;
 constexpr std::int64_t kTickNs = 1'000'000;
+
+// The id of `pid`'s thread called `name`, or -1.
+pid_t threadNamed(pid_t pid, const std::string& name) {
+    const fs::path tasks = fs::path("/proc") / std::to_string(pid) / "task";
+    for (const auto& task : fs::directory_iterator(tasks)) {
+        std::ifstream comm(task.path() / "comm");
+        std::string line;
+        if (std::getline(comm, line) && line == name) {
+            return static_cast<pid_t>(std::stoi(task.path().filename().string()));
+        }
+    }
+    return -1;
+}
+
+// Stops one thread of another process and leaves the others running, as a long page fault, a
+// priority inversion or an SMI would stop hapticd's loop alone: ptrace stops are per thread,
+// where SIGSTOP stops the whole process. Detaching resumes it.
+class FrozenThread {
+  public:
+    explicit FrozenThread(pid_t tid) : tid_(tid) {
+        int status = 0;
+        frozen_ = ::ptrace(PTRACE_SEIZE, tid_, nullptr, nullptr) == 0 &&
+                  ::ptrace(PTRACE_INTERRUPT, tid_, nullptr, nullptr) == 0 &&
+                  ::waitpid(tid_, &status, __WALL) == tid_ && WIFSTOPPED(status);
+        error_ = frozen_ ? 0 : errno;
+    }
+    ~FrozenThread() { (void)::ptrace(PTRACE_DETACH, tid_, nullptr, nullptr); }
+    FrozenThread(const FrozenThread&) = delete;
+    FrozenThread& operator=(const FrozenThread&) = delete;
+
+    [[nodiscard]] bool frozen() const noexcept { return frozen_; }
+    [[nodiscard]] int error() const noexcept { return error_; }
+
+  private:
+    pid_t tid_;
+    bool frozen_{false};
+    int error_{0};
+};
 
 class FailStopTest : public BusWatchingTest {
   protected:
@@ -161,6 +208,66 @@ TEST_F(FailStopTest, SigstopMakesTheDevicesSafeByTimeoutAndHapticdBlamesItsOwnSt
     EXPECT_EQ(status.faults[0].code, daemon::kFaultLoopStalled);
     EXPECT_EQ(status.faults[0].device_id.view(), "hapticd");
     EXPECT_THAT(std::string(status.faults[0].message.view()), ::testing::HasSubstr("loop stalled"));
+    ASSERT_TRUE(command("clear"));
+    waitForStatus("IDLE after clear, both devices READY", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kIdle && s.faults.empty() &&
+               s.devices[kExo].state == msgs::DeviceRunState::kReady &&
+               s.devices[kThimble].state == msgs::DeviceRunState::kReady;
+    });
+}
+
+TEST_F(FailStopTest, AStallOfTheLoopAloneIsHapticdsOwnFaultAndBlamesNoHealthyDevice) {
+    renderUntilTheExoskeletonPushes();
+    const pid_t loop_thread = threadNamed(daemon_->pid(), "hapticd-rt");
+    ASSERT_GT(loop_thread, 0) << "hapticd has no thread called hapticd-rt";
+    // 100 ms, ten times the devices' command timeout; under the sanitizers, whose command
+    // timeout here is 100 ms, twice that.
+    const auto stall =
+        std::chrono::milliseconds(std::max(100, 2 * exo_device_.can.command_timeout_ms));
+    const std::int64_t stop_ns = monotonicNs();
+    std::vector<Heard<protocol::ExoskeletonMessage>> stalled;
+    {
+        const FrozenThread frozen(loop_thread);
+        ASSERT_TRUE(frozen.frozen()) << "ptrace: " << std::strerror(frozen.error());
+        stalled = exo_bus_.listen(stall);
+    }
+    // The device, healthy, went on reporting while the loop stood still, and made itself safe
+    // by its own command timeout.
+    const auto first_limp = std::find_if(stalled.begin(), stalled.end(), [&](const auto& h) {
+        return h.at_ns > stop_ns && limp(h.message);
+    });
+    ASSERT_NE(first_limp, stalled.end()) << "the exoskeleton never went limp during the stall";
+    std::printf("loop stalled: exoskeleton limp after %.2f ms\n",
+                static_cast<double>(first_limp->at_ns - stop_ns) * 1e-6);
+    const std::int64_t timeout_ns =
+        static_cast<std::int64_t>(exo_device_.can.command_timeout_ms) * 1'000'000;
+    EXPECT_LE(first_limp->at_ns - stop_ns, timeout_ns + 2 * kTickNs + kSlackNs);
+    EXPECT_GT(std::count_if(stalled.begin(), stalled.end(),
+                            [](const auto& h) { return h.message.type == ExoType::kHeartbeat; }),
+              0)
+        << "the exoskeleton sent no heartbeat during the stall";
+
+    // The loop runs again: its own stall is the one fault, no device is blamed (their frames
+    // from the stall were waiting on the bus), and no force comes back without an operator.
+    const auto woken = exo_bus_.listen(300ms);
+    EXPECT_FALSE(std::any_of(woken.begin(), woken.end(), [](const auto& h) {
+        return enabledWithForce(h.message, 0.0);
+    })) << "force came back without an operator";
+    const auto status = waitForStatus("FAULT after the stall", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kFault && !s.faults.empty();
+    });
+    ASSERT_EQ(status.faults.size(), 1U) << faultsOf(status);
+    EXPECT_EQ(status.faults[0].code, daemon::kFaultLoopStalled);
+    EXPECT_EQ(status.faults[0].device_id.view(), "hapticd");
+    std::printf("hapticd: %s\n", std::string(status.faults[0].message.view()).c_str());
+    EXPECT_THAT(std::string(status.faults[0].message.view()), ::testing::HasSubstr("loop stalled"));
+    // The thimble too is back at its retract pose.
+    const auto thimble = thimble_bus_.listen(500ms);
+    const auto last_state = std::find_if(thimble.rbegin(), thimble.rend(), [](const auto& h) {
+        return h.message.type == ThimbleType::kState;
+    });
+    ASSERT_NE(last_state, thimble.rend());
+    EXPECT_LT(fromRetract(last_state->message.state.servo_angle_rad), 2e-3);
     ASSERT_TRUE(command("clear"));
     waitForStatus("IDLE after clear, both devices READY", [](const msgs::HapticStatus& s) {
         return s.state == msgs::DaemonState::kIdle && s.faults.empty() &&

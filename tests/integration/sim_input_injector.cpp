@@ -2,7 +2,10 @@
 // messages on request. The exoskeleton gets a wall it is always inside, the thimble a flat
 // object 0.5 mm into its pad. stdin: "bad on" adds, 5 ms after every good pair, one bad
 // ConstraintSet and one bad ContactSurface (each way a message can be bad, in turn);
-// "bad off" stops them and prints "sent <count>". Prints "ready" once hapticd subscribed.
+// "bad off" stops them and prints "sent <count>". Old content, sent on as usual every 10 ms:
+// "replay" publishes the last good pair again, header and all; "delay <ms>" stamps each new
+// pair <ms> before it is sent (as if it had been that long on its way); "fresh" ends either.
+// Prints "ready" once hapticd subscribed.
 // A separate process because RouDi signals every registered process when it stops.
 
 #include <poll.h>
@@ -155,16 +158,26 @@ int main() {
     std::uint64_t bad_sent = 0;
     int kind = 0;
     bool bad = false;
+    bool replay = false;
+    std::int64_t delay_ns = 0;
+    msgs::ConstraintSet last_constraints = wallConstraintSet(0);
+    msgs::ContactSurface last_contact = flatContact(0);
     std::string pending;
     std::string line;
     while (!process::shutdownRequested()) {
-        ++seq;
+        if (!replay) {
+            ++seq;
+            last_constraints = wallConstraintSet(seq);
+            last_contact = flatContact(seq);
+            last_constraints.header.stamp_ns -= delay_ns;
+            last_contact.header.stamp_ns -= delay_ns;
+        }
         constraints.loan().and_then([&](auto& sample) {
-            *sample = wallConstraintSet(seq);
+            *sample = last_constraints;
             sample.publish();
         });
         contacts.loan().and_then([&](auto& sample) {
-            *sample = flatContact(seq);
+            *sample = last_contact;
             sample.publish();
         });
         // hapticd takes one message per tick from a queue of one: 5 ms apart, none is lost.
@@ -187,6 +200,13 @@ int main() {
             if (line == "bad on") {
                 bad = true;
                 bad_sent = 0;
+            } else if (line == "replay") {
+                replay = true;
+            } else if (line.rfind("delay ", 0) == 0) {
+                delay_ns = std::stoll(line.substr(6)) * 1'000'000;
+            } else if (line == "fresh") {
+                replay = false;
+                delay_ns = 0;
             } else if (line == "bad off") {
                 bad = false;
                 std::printf("sent %llu\n", static_cast<unsigned long long>(bad_sent));

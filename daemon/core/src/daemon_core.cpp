@@ -91,26 +91,53 @@ CommandOutcome DaemonCore::applyCommand(const msgs::HapticCommand& command, std:
     return outcome;
 }
 
-// A message renews the sim input only when it is newer than the last accepted one: a higher
-// seq, or a later stamp. A replayed or delayed message has both older and is refused. A
-// restarted handsim starts its seq at 1 again but stamps later (CLOCK_MONOTONIC of its host
-// does not go back), so it is accepted at once. No absolute age check on the stamp: over DDS
-// the sim may run on another host, whose monotonic clock is not ours.
-bool DaemonCore::newer(const DeviceSlot& slot, const msgs::MessageHeader& header) noexcept {
-    return !slot.has_header || header.seq > slot.last_seq || header.stamp_ns > slot.last_stamp_ns;
+// A message renews the sim input only when its content is new:
+// - its seq advances. The same seq again is a duplicate or a replay, whatever its stamp. A seq
+//   that goes back is a restarted sim (handsim counts from 1 again) only when its stamp is
+//   later than the last accepted one (the sim host's CLOCK_MONOTONIC does not go back); else
+//   it is an old message replayed.
+// - it is not older than the sim timeout. The sim may run on another host (DDS), whose
+//   monotonic clock is not ours, so its age is judged by the one-way delay relative to the
+//   quickest message seen from this sim: arrival minus stamp, less the smallest arrival minus
+//   stamp so far. That smallest value may creep up by kClockDriftAllowance of the elapsed time
+//   (two hosts' clocks drift apart by tens of ppm); a restart starts it afresh.
+InputRejection DaemonCore::freshness(const DeviceSlot& slot, const msgs::MessageHeader& header,
+                                     std::int64_t now_ns,
+                                     std::int64_t& clock_offset_ns) const noexcept {
+    const std::int64_t offset_ns = now_ns - header.stamp_ns;
+    if (!slot.has_header) {
+        clock_offset_ns = offset_ns;
+        return InputRejection::kNone;
+    }
+    if (header.seq == slot.last_seq ||
+        (header.seq < slot.last_seq && header.stamp_ns <= slot.last_stamp_ns)) {
+        return InputRejection::kNotNewer;
+    }
+    if (header.seq < slot.last_seq) {
+        clock_offset_ns = offset_ns;  // a restarted sim: its clock may be another host's
+        return InputRejection::kNone;
+    }
+    const auto drift_ns =
+        static_cast<std::int64_t>(kClockDriftAllowance * static_cast<double>(std::max<std::int64_t>(
+                                                             0, now_ns - slot.last_accepted_ns)));
+    clock_offset_ns = std::min(offset_ns, slot.clock_offset_ns + drift_ns);
+    return offset_ns - clock_offset_ns > settings_.sim_timeout_ns ? InputRejection::kDelayed
+                                                                  : InputRejection::kNone;
 }
 
 InputRejection DaemonCore::account(DeviceSlot& slot, InputRejection reason,
                                    const msgs::MessageHeader& header,
                                    std::int64_t now_ns) noexcept {
-    if (reason == InputRejection::kNone && !newer(slot, header)) {
-        reason = InputRejection::kNotNewer;
+    std::int64_t clock_offset_ns = slot.clock_offset_ns;
+    if (reason == InputRejection::kNone) {
+        reason = freshness(slot, header, now_ns, clock_offset_ns);
     }
     if (reason == InputRejection::kNone) {
         ++slot.received;
         slot.last_accepted_ns = now_ns;
         slot.last_seq = header.seq;
         slot.last_stamp_ns = header.stamp_ns;
+        slot.clock_offset_ns = clock_offset_ns;
         slot.has_header = true;
     } else {
         ++slot.rejected;

@@ -38,7 +38,9 @@ std::string_view describe(InputRejection reason) noexcept {
         case InputRejection::kBadNormal:
             return "contact normal is not unit length";
         case InputRejection::kNotNewer:
-            return "neither seq nor stamp newer than the last accepted (replayed or delayed)";
+            return "seq does not advance and is no restart (a replay or a duplicate)";
+        case InputRejection::kDelayed:
+            return "older than sim_timeout_ms by its stamp (delayed)";
         case InputRejection::kNegativeWeight:
             return "negative sample weight";
         case InputRejection::kCount_:

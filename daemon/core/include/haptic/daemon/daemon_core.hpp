@@ -186,9 +186,11 @@ class DaemonCore {
         DeviceDescriptor descriptor;
         std::int64_t last_accepted_ns{-1};
         // Header of the last accepted message: a message is fresh by its content, not by
-        // when it arrived (see DaemonCore::newer()).
+        // when it arrived (see DaemonCore::freshness()).
         std::uint64_t last_seq{0};
         std::int64_t last_stamp_ns{0};
+        // The smallest arrival minus stamp seen from this sim (its clock against ours).
+        std::int64_t clock_offset_ns{0};
         bool has_header{false};
         std::uint64_t received{0};
         std::uint64_t rejected{0};
@@ -217,8 +219,12 @@ class DaemonCore {
         }
         return reason;
     }
-    [[nodiscard]] static bool newer(const DeviceSlot& slot,
-                                    const msgs::MessageHeader& header) noexcept;
+    // kNone, kNotNewer or kDelayed; the sim's clock offset to keep when it is accepted.
+    [[nodiscard]] InputRejection freshness(const DeviceSlot& slot,
+                                           const msgs::MessageHeader& header, std::int64_t now_ns,
+                                           std::int64_t& clock_offset_ns) const noexcept;
+    // How fast the sim host's clock may drift from ours (200 ppm; quartz is within 100).
+    static constexpr double kClockDriftAllowance = 200e-6;
     [[nodiscard]] double ageMs(const DeviceSlot& slot, std::int64_t now_ns) const noexcept;
 
     CoreSettings settings_;

@@ -18,7 +18,8 @@ enum class InputRejection : std::uint8_t {
     kDegenerateConstraint,  // a constraint normal of zero length
     kBadNormal,             // a contact normal that is not unit length
     kNegativeWeight,
-    kNotNewer,  // neither its header.seq nor its stamp_ns advances: a replay or a duplicate
+    kNotNewer,  // its header.seq does not advance (and it is no restart): a replay or duplicate
+    kDelayed,   // older than sim_timeout_ns by its stamp (see DaemonCore::freshness())
     kCount_,
 };
 
