@@ -144,15 +144,9 @@ class DeviceSafetyTest : public ::testing::Test {
     void SetUp() override {
         ASSERT_FALSE(ipc::probeRoudi().reachable)
             << "an iox-roudi is already running on this host; stop it (and the demo) first";
-        roudi_ = std::make_unique<ChildProcess>(
-            std::vector<std::string>{IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l",
-                                     "warning"},
-            "roudi");
-        const auto deadline = std::chrono::steady_clock::now() + 10s;
-        while (!ipc::probeRoudi().reachable) {
-            ASSERT_TRUE(roudi_->running()) << roudi_->stderrText();
-            ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
-            std::this_thread::sleep_for(20ms);
+        startRoudi();
+        if (HasFatalFailure()) {
+            return;
         }
         exo_emu_ = startEmulator("devices/exoskeleton.yaml", exo_emulator_args_);
         thimble_emu_ = startEmulator("devices/thimble.yaml");
@@ -188,6 +182,20 @@ class DeviceSafetyTest : public ::testing::Test {
         }
         if (roudi_) {
             roudi_->terminate();
+        }
+    }
+
+    // The real iox-roudi with the shipped configuration (also a restart after it was lost).
+    void startRoudi() {
+        roudi_ = std::make_unique<ChildProcess>(
+            std::vector<std::string>{IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l",
+                                     "warning"},
+            "roudi");
+        const auto deadline = std::chrono::steady_clock::now() + 10s;
+        while (!ipc::probeRoudi().reachable) {
+            ASSERT_TRUE(roudi_->running()) << roudi_->stderrText();
+            ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
+            std::this_thread::sleep_for(20ms);
         }
     }
 

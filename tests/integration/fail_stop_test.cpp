@@ -9,6 +9,8 @@
 //            and the devices run on): the same, and the devices' frames sent meanwhile, read
 //            when the loop wakes, keep every device blameless.
 //   --duration ending while rendering: the same fail-stop as SIGTERM.
+//   RouDi lost while rendering: the same fail-stop, then exit 75; a hapticd started again
+//            with a new RouDi comes up IDLE.
 //   E-stop   the relay on the exoskeleton's bus reports pressed, or falls silent: E-STOP
 //            within a tick of hapticd reading it, and only release + clear + enable re-arm.
 
@@ -274,6 +276,57 @@ TEST_F(FailStopTest, AStallOfTheLoopAloneIsHapticdsOwnFaultAndBlamesNoHealthyDev
                s.devices[kExo].state == msgs::DeviceRunState::kReady &&
                s.devices[kThimble].state == msgs::DeviceRunState::kReady;
     });
+}
+
+TEST_F(FailStopTest, RoudiLostWhileRenderingWritesTheSafeCommandsBeforeExitingForARestart) {
+    renderUntilTheExoskeletonPushes();
+    const std::int64_t kill_ns = monotonicNs();
+    ASSERT_EQ(::kill(roudi_->pid(), SIGKILL), 0);
+    ASSERT_TRUE(roudi_->waitFor(5s).has_value());
+    // hapticd notices at its next RouDi check (every 200 ms) and leaves through the fail-stop.
+    std::vector<Heard<protocol::ExoskeletonMessage>> exo;
+    std::optional<int> exit_code;
+    while (!exit_code && monotonicNs() - kill_ns < 10'000'000'000) {
+        const auto window = exo_bus_.listen(50ms);
+        exo.insert(exo.end(), window.begin(), window.end());
+        exit_code = daemon_->waitFor(0ms);
+    }
+    ASSERT_TRUE(exit_code.has_value()) << "hapticd still runs 10 s after RouDi died";
+    const std::int64_t exited_ns = monotonicNs();
+    EXPECT_EQ(*exit_code, ipc::kRoudiLostExitCode) << daemon_->stderrText();
+    EXPECT_THAT(daemon_->stderrText(), ::testing::HasSubstr("RouDi went away"));
+    const auto more = exo_bus_.listen(100ms);
+    exo.insert(exo.end(), more.begin(), more.end());
+    // Limp by hapticd's own safe command, before any command timeout of the device's.
+    const auto first_limp = std::find_if(exo.begin(), exo.end(), [&](const auto& h) {
+        return h.at_ns > kill_ns && limp(h.message);
+    });
+    ASSERT_NE(first_limp, exo.end()) << "the exoskeleton never went limp";
+    const auto first_timeout = std::find_if(exo.begin(), exo.end(), [&](const auto& h) {
+        return h.at_ns > kill_ns && h.message.type == ExoType::kFault && h.message.fault.active &&
+               h.message.fault.code == protocol::DeviceFaultCode::kCommandTimeout;
+    });
+    EXPECT_TRUE(first_timeout == exo.end() || first_timeout->at_ns > first_limp->at_ns)
+        << "the device had to time out: hapticd left without its safe command";
+    std::printf("RouDi killed: exoskeleton limp after %.1f ms, hapticd exited after %.1f ms\n",
+                static_cast<double>(first_limp->at_ns - kill_ns) * 1e-6,
+                static_cast<double>(exited_ns - kill_ns) * 1e-6);
+    // RouDi is checked every 200 ms (docs/hapticd.md); the safe command follows within ticks.
+    EXPECT_LE(first_limp->at_ns - kill_ns, 200'000'000 + 2 * kTickNs + kSlackNs);
+
+    // What systemd does next: a new RouDi, then hapticd again: IDLE, no force before `enable`.
+    sim_.reset();
+    startRoudi();
+    startDaemon();
+    waitForStatus("IDLE with both devices READY and no fault", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kIdle && s.faults.empty() && s.devices.size() == 2 &&
+               s.devices[kExo].state == msgs::DeviceRunState::kReady &&
+               s.devices[kThimble].state == msgs::DeviceRunState::kReady;
+    });
+    const auto idle = exo_bus_.listen(200ms);
+    EXPECT_FALSE(std::any_of(idle.begin(), idle.end(), [](const auto& h) {
+        return enabledWithForce(h.message, 0.0);
+    })) << "enabled without an operator";
 }
 
 TEST_F(FailStopTest, SigtermWritesTheSafeCommandsWithinTwoTicksAndExitsCleanly) {
