@@ -154,5 +154,62 @@ TEST_F(PlausibilityProcessTest, AnExoskeletonObeyingAnotherHostLatchesItsOwnFaul
     expectLimpFromNowOn();
 }
 
+// A device that reports a fault of its own in its status (here the exoskeleton's drive
+// overheating, `fault 2`): hapticd latches 102 naming the device and the code, the device's own
+// frames show it limp; `clear` while the device still reports the fault raises it again, and
+// only the device's recovery, `clear` and `enable` bring the force back.
+TEST_F(PlausibilityProcessTest,
+       ADeviceReportingItsOwnFaultLatchesUntilItRecoversAndAnOperatorReArms) {
+    renderAtTheClamp();
+    ASSERT_TRUE(exo_emu_->sendCommand("fault 2"));
+    const auto isDeviceFault = [](const msgs::Fault& f) {
+        return f.code == 102U && f.device_id.view() == "exo";
+    };
+    const auto faulted = [&](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kFault &&
+               std::any_of(s.faults.begin(), s.faults.end(), isDeviceFault);
+    };
+    const auto status = waitForStatus("FAULT 102 exo", faulted);
+    const auto fault = std::find_if(status.faults.begin(), status.faults.end(), isDeviceFault);
+    ASSERT_NE(fault, status.faults.end()) << faultsOf(status);
+    EXPECT_THAT(std::string(fault->message.view()), HasSubstr("device reports fault 2 ("))
+        << faultsOf(status);
+    for (const msgs::Fault& other : status.faults) {
+        EXPECT_TRUE(isDeviceFault(other) || (HAPTIC_SANITIZED != 0 && other.code == 110U))
+            << "blamed: " << faultsOf(status);
+    }
+    expectLimpFromNowOn();
+
+    // Still overheating: clearing does not hide it.
+    ASSERT_TRUE(command("clear"));
+    waitForStatus("FAULT 102 exo again after clear", faulted);
+    const auto still = exo_bus_.listen(200ms);
+    EXPECT_FALSE(std::any_of(still.begin(), still.end(), [](const auto& h) {
+        return enabledWithForce(h.message, 0.0);
+    })) << "enabled while the device reports its fault";
+
+    // Recovered: the operator clears and enables, and the force returns.
+    ASSERT_TRUE(exo_emu_->sendCommand("clear"));
+    std::this_thread::sleep_for(100ms);  // the next heartbeat reports no fault
+    ASSERT_TRUE(command("clear"));
+    waitForStatus("IDLE, both devices READY", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kIdle && s.faults.empty() &&
+               s.devices[kExo].state == msgs::DeviceRunState::kReady;
+    });
+    const auto idle = exo_bus_.listen(200ms);
+    EXPECT_FALSE(std::any_of(idle.begin(), idle.end(), [](const auto& h) {
+        return enabledWithForce(h.message, 0.0);
+    })) << "enabled without an operator";
+    ASSERT_TRUE(command("enable"));
+    bool pushing = false;
+    for (auto deadline = std::chrono::steady_clock::now() + 5s;
+         !pushing && std::chrono::steady_clock::now() < deadline;) {
+        const auto window = exo_bus_.listen(30ms);
+        pushing = std::any_of(window.begin(), window.end(),
+                              [](const auto& h) { return enabledWithForce(h.message, 1.0); });
+    }
+    EXPECT_TRUE(pushing) << "no force after the device recovered and the operator re-armed";
+}
+
 }  // namespace
 }  // namespace haptic::testing
