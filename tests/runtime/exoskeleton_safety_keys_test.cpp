@@ -1,6 +1,8 @@
 // The exoskeleton's safety keys that act in hapticd's channel, each changed from the shipped
 // value and its effect read off the channel and the emulated device: the stiffness clamp
-// (safety.max_stiffness_n_per_m) and the velocity fade (safety.max_velocity_m_per_s). The
+// (safety.max_stiffness_n_per_m), the velocity fade (safety.max_velocity_m_per_s), the force
+// cap, its rate limit and the fade on a stale device state (max_force_n,
+// max_force_rate_n_per_s, fade_out_ms). The
 // clamp's value is also what the configuration's passivity margin is checked for
 // (config_test's ConfigPassivityMargin).
 
@@ -119,6 +121,110 @@ TEST(ExoskeletonSafetyKeys, AForceDrivingTheRodFasterThanMaxVelocityFades) {
     EXPECT_GT(slow_pushing, 50) << "the force returns when the rod slows down";
     std::printf("fast ticks: %d driving (faded), %d resisting (kept)\n", driving_fast,
                 resisting_fast);
+}
+
+struct ForceRun {
+    double peak_n{0.0};          // the largest force while rendering
+    double largest_rise_n{0.0};  // the largest rise of |force| from one tick to the next
+    double stale_low_n{0.0};     // the smallest force while the device's state is stale
+    int stale_ticks{0};
+};
+
+// Renders the rig's saturating contact for 400 ticks, then the exoskeleton's next 40 frames
+// are lost (its state goes stale for some tens of ms while its heartbeat timeout is far), then
+// the object is taken away.
+ForceRun renderThenLoseTheState(RuntimeRig& rig) {
+    ForceRun run;
+    rig.offerContact();
+    rig.ticks(20);
+    EXPECT_TRUE(rig.command(msgs::CommandKind::kEnable));
+    double previous = rig.exoForce();
+    const auto follow = [&] {
+        rig.tick();
+        run.largest_rise_n =
+            std::max(run.largest_rise_n, std::abs(rig.exoForce()) - std::abs(previous));
+        previous = rig.exoForce();
+    };
+    for (int i = 0; i < 400; ++i) {
+        if (i % 10 == 0) {
+            rig.offerContact();
+        }
+        follow();
+        run.peak_n = std::max(run.peak_n, std::abs(rig.exoForce()));
+    }
+    rig.emulatorFault(kExo, "drop 40");
+    run.stale_low_n = run.peak_n;
+    for (int i = 0; i < 100; ++i) {
+        if (i % 10 == 0) {
+            rig.offerContact();
+        }
+        follow();
+        if ((exoChannel(rig).portFlags() & kinesthetic::kPortStale) != 0) {
+            ++run.stale_ticks;
+            run.stale_low_n = std::min(run.stale_low_n, std::abs(rig.exoForce()));
+        }
+    }
+    EXPECT_EQ(rig.core.state(), msgs::DaemonState::kRendering) << "a short loss is no fault";
+    // Back at the cap, then the object is gone at once.
+    for (int i = 0; i < 300; ++i) {
+        if (i % 10 == 0) {
+            rig.offerContact();
+        }
+        follow();
+    }
+    EXPECT_NEAR(std::abs(rig.exoForce()), run.peak_n, 1e-9);
+    const msgs::ConstraintSet contact = rig.constraint_set;
+    for (int i = 0; i < 100; ++i) {
+        if (i % 10 == 0) {
+            placeWall(rig, -1.0);
+        }
+        follow();
+    }
+    EXPECT_EQ(rig.exoForce(), 0.0) << "falling is never slowed";
+    // The object back at once: the force rises at the rate limit.
+    rig.constraint_set = contact;
+    for (int i = 0; i < 100; ++i) {
+        if (i % 10 == 0) {
+            rig.offerContact();
+        }
+        follow();
+    }
+    EXPECT_GT(std::abs(rig.exoForce()), 0.3 * run.peak_n) << "the force came back";
+    return run;
+}
+
+// safety.max_force_n, max_force_rate_n_per_s and fade_out_ms, each changed from the shipped
+// value (10 N, 500 N/s, 100 ms to 4 N, 200 N/s, 40 ms): the force saturates at the cap, never
+// rises faster than the rate (it may fall at once, the safe direction), and a stale device
+// state fades it over fade_out_ms.
+TEST(ExoskeletonSafetyKeys, TheForceCapItsRateAndTheStaleStateFadeFollowTheirKeys) {
+    const auto rigWith = [](double max_force_n, double rate_n_per_s, int fade_out_ms) {
+        return std::make_unique<RuntimeRig>([=](std::vector<config::DeviceConfig>& devices) {
+            devices[kExo].safety.max_force_n = max_force_n;
+            devices[kExo].safety.max_force_rate_n_per_s = rate_n_per_s;
+            devices[kExo].safety.fade_out_ms = fade_out_ms;
+        });
+    };
+    auto shipped_rig = rigWith(10.0, 500.0, 100);
+    auto changed_rig = rigWith(4.0, 200.0, 40);
+    const ForceRun shipped = renderThenLoseTheState(*shipped_rig);
+    const ForceRun changed = renderThenLoseTheState(*changed_rig);
+    std::printf(
+        "peak %.3f / %.3f N, largest rise %.3f / %.3f N, stale %d / %d ticks, lowest "
+        "%.3f / %.3f N\n",
+        shipped.peak_n, changed.peak_n, shipped.largest_rise_n, changed.largest_rise_n,
+        shipped.stale_ticks, changed.stale_ticks, shipped.stale_low_n, changed.stale_low_n);
+    EXPECT_NEAR(shipped.peak_n, 10.0, 1e-9);
+    EXPECT_NEAR(changed.peak_n, 4.0, 1e-9);
+    EXPECT_NEAR(shipped.largest_rise_n, 0.5, 1e-9) << "the rise runs at the rate limit";
+    EXPECT_NEAR(changed.largest_rise_n, 0.2, 1e-9) << "the rise runs at the rate limit";
+    // The same stale time takes 100/40 = 2.5 times the share of the force away.
+    ASSERT_GT(shipped.stale_ticks, 5);
+    EXPECT_EQ(changed.stale_ticks, shipped.stale_ticks);
+    const double shipped_share = 1.0 - shipped.stale_low_n / shipped.peak_n;
+    const double changed_share = 1.0 - changed.stale_low_n / changed.peak_n;
+    EXPECT_GT(shipped_share, 0.02);
+    EXPECT_NEAR(changed_share / shipped_share, 2.5, 0.25);
 }
 
 }  // namespace
