@@ -88,6 +88,29 @@ std::map<int, DeviceColumns> readTelemetryCsv(std::string_view csv) {
     return devices;
 }
 
+TrackingLatency trackingLatency(const DeviceColumns& device) {
+    std::vector<double> from_receipt;
+    std::vector<double> from_sample;
+    const auto found = device.values.find("tracking_sampled_s");
+    if (found != device.values.end()) {
+        const auto& sampled = found->second;
+        const auto& received = device.column("tracking_received_s");
+        const auto& time = device.column("time_s");
+        const auto& tick = device.column("tick");
+        for (std::size_t i = 1; i < sampled.size(); ++i) {
+            // A new sample, seen on the tick right after the last one (a lost telemetry
+            // sample in between would make the latency look longer than it was).
+            if (std::isnan(sampled[i]) || sampled[i] == sampled[i - 1] ||
+                tick[i] != tick[i - 1] + 1.0) {
+                continue;
+            }
+            from_receipt.push_back(1e3 * (time[i] - received[i]));
+            from_sample.push_back(1e3 * (time[i] - sampled[i]));
+        }
+    }
+    return {common::summarize(from_receipt), common::summarize(from_sample)};
+}
+
 ExoskeletonReport exoskeletonReport(const DeviceColumns& device,
                                     const ContactQualitySettings& settings) {
     ExoskeletonReport report;
@@ -165,6 +188,17 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
 std::string formatReport(const std::map<int, DeviceColumns>& devices,
                          const ContactQualitySettings& settings) {
     std::string out;
+    const auto latencyLine = [](const DeviceColumns& device) {
+        const TrackingLatency latency = trackingLatency(device);
+        if (latency.from_receipt_ms.count == 0) {
+            return std::string("  tracker to command: no tracker samples (scripted hand)\n");
+        }
+        return fmt::format(
+            "  tracker to command, {} samples: from handsim's receipt p50 {:.1f} ms, p99 {:.1f} "
+            "ms, max {:.1f} ms; from the sample's stamp p50 {:.1f} ms, p99 {:.1f} ms\n",
+            latency.from_receipt_ms.count, latency.from_receipt_ms.p50, latency.from_receipt_ms.p99,
+            latency.from_receipt_ms.max, latency.from_sample_ms.p50, latency.from_sample_ms.p99);
+    };
     for (const auto& [index, device] : devices) {
         if (device.kind == "exoskeleton") {
             const ExoskeletonReport r = exoskeletonReport(device, settings);
@@ -185,6 +219,7 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
                 100.0 * q.clampFraction(), 100.0 * r.clampBelowReferenceFraction(), q.chatter_rms_n,
                 100.0 * q.chatterFraction(), q.mean_contact_force_n, r.largest_step_n,
                 r.steps_over_rate_limit, settings.max_step_n);
+            out += latencyLine(device);
         } else if (device.kind == "thimble") {
             const ThimbleReport r = thimbleReport(device, settings);
             out += fmt::format(
@@ -192,6 +227,7 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
                 "{:.3f} N, peak {:.3f} N (the felt pad force is not measured yet)\n",
                 index, r.ticks, settings.contact_threshold_n, r.contact_ticks,
                 r.mean_reference_force_n, r.peak_reference_force_n);
+            out += latencyLine(device);
         }
     }
     return out;

@@ -21,6 +21,11 @@
 //              faster than that; a rise never).
 // Thimble: the reference pad force (|F| and its mean in contact); the felt pad force needs a
 // pad model of the user's and is not measured yet.
+// Both: the tracker-to-command latency. On the first tick whose sim input follows a new
+// tracker sample (tracking_sampled_s changes), the time from when handsim's reader received
+// that sample, and from the sample's own stamp (which adds the tracker's own latency), to
+// that tick: the first command computed from the sample. Recorded runs on one host only (the
+// stamps are the sim host's monotonic clock).
 
 #include <map>
 #include <string>
@@ -28,6 +33,7 @@
 #include <vector>
 
 #include "contact_quality.hpp"
+#include "haptic/common/statistics.hpp"
 
 namespace haptic::ctl {
 
@@ -40,6 +46,13 @@ struct DeviceColumns {
 
 // Rows per device index. Throws std::runtime_error when the header lacks a column.
 [[nodiscard]] std::map<int, DeviceColumns> readTelemetryCsv(std::string_view csv);
+
+// Milliseconds, one value per tracker sample that reached a command.
+struct TrackingLatency {
+    common::PercentileSummary from_receipt_ms;
+    common::PercentileSummary from_sample_ms;
+};
+[[nodiscard]] TrackingLatency trackingLatency(const DeviceColumns& device);
 
 struct ExoskeletonReport {
     ContactQuality quality;        // of the commanded force

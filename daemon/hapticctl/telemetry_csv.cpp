@@ -53,6 +53,8 @@ std::string telemetryCsvHeader() {
         ",thimble_reference_moment_x_nm,thimble_reference_moment_y_nm,"
         "thimble_reference_moment_z_nm";
     header += ",thimble_pad_force_model_n,thimble_pad_limit_flags";
+    // The tracker sample behind this tick's sim input, on the time_s axis (empty: scripted).
+    header += ",tracking_sampled_s,tracking_received_s";
     return header + "\n";
 }
 
@@ -93,6 +95,13 @@ std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t or
     }
     row += fmt::format(",{:.4f},{}", sample.thimble.pad_force_model_n,
                        static_cast<unsigned>(sample.thimble.pad_limit_flags));
+    if (sample.tracking.sampled_ns != 0) {
+        row += fmt::format(",{:.6f},{:.6f}",
+                           static_cast<double>(sample.tracking.sampled_ns - origin_ns) * 1e-9,
+                           static_cast<double>(sample.tracking.received_ns - origin_ns) * 1e-9);
+    } else {
+        row += ",,";
+    }
     return row + "\n";
 }
 

@@ -202,6 +202,7 @@ int runSim(const SimOptions& options) {
         zeroed_steps += report.zeroed_steps > 0 ? 1 : 0;
         substepped_steps += report.substepped ? 1 : 0;
         const std::int64_t stamp = common::monotonicNowNs();
+        const msgs::TrackingOrigin origin = tracking->origin();
 
         for (std::size_t index = 0; index < links.size(); ++index) {
             auto& link = links[index];
@@ -220,12 +221,14 @@ int runSim(const SimOptions& options) {
                 if (link.device->isExoskeleton()) {
                     dds_constraints = msgs::ConstraintSet{};
                     physics.fill(index, dds_constraints);
+                    dds_constraints.tracking = origin;
                     dds_constraints.header = {++link.seq, stamp, {}};
                     dds_constraints.header.source_id.assign(name);
                     link.published += dds_link->publish(index, dds_constraints) ? 1 : 0;
                 } else {
                     dds_surface = msgs::ContactSurface{};
                     physics.fill(index, dds_surface);
+                    dds_surface.tracking = origin;
                     dds_surface.header = {++link.seq, stamp, {}};
                     dds_surface.header.source_id.assign(name);
                     link.published += dds_link->publish(index, dds_surface) ? 1 : 0;
@@ -237,6 +240,7 @@ int runSim(const SimOptions& options) {
                 link.constraint_sets->loan().and_then([&](auto& sample) {
                     *sample = msgs::ConstraintSet{};
                     physics.fill(index, *sample);
+                    sample->tracking = origin;
                     sample->header = {++link.seq, stamp, {}};
                     sample->header.source_id.assign(name);
                     sample.publish();
@@ -246,6 +250,7 @@ int runSim(const SimOptions& options) {
                 link.contact_surfaces->loan().and_then([&](auto& sample) {
                     *sample = msgs::ContactSurface{};
                     physics.fill(index, *sample);
+                    sample->tracking = origin;
                     sample->header = {++link.seq, stamp, {}};
                     sample->header.source_id.assign(name);
                     sample.publish();

@@ -113,7 +113,8 @@ class TopicSource final : public TrackingSource {
     std::optional<softhand::HandPoseInput> poll(double, std::string& rejection) override {
         std::optional<softhand::HandPoseInput> latest;
         idl::HandPose sample;
-        while (reader_.take(sample)) {
+        std::int64_t received_ns = 0;
+        while (reader_.take(sample, received_ns)) {
             msgs::HandPose message;
             softhand::HandPoseInput input;
             const auto converted = msgs::fromIdl(sample, message);
@@ -131,9 +132,11 @@ class TopicSource final : public TrackingSource {
                          ? filter_->filter(
                                input, 1e-9 * static_cast<double>(message.header.stamp_ns), gap_s_)
                          : input;
+            origin_ = {message.header.stamp_ns, received_ns};
         }
         return latest;
     }
+    [[nodiscard]] msgs::TrackingOrigin origin() const override { return origin_; }
     [[nodiscard]] std::string describe() const override {
         return "HandPose topic '" + topic_ + "'" + (filter_ ? " through the One Euro filter" : "");
     }
@@ -144,6 +147,7 @@ class TopicSource final : public TrackingSource {
     std::string topic_;
     double gap_s_;
     std::optional<softhand::HandPoseFilter> filter_;
+    msgs::TrackingOrigin origin_{};
 };
 
 }  // namespace

@@ -23,6 +23,9 @@ class TrackingSource {
     // `rejection` receives the reason when an input was refused (NaN, bad quaternion, ...).
     virtual std::optional<softhand::HandPoseInput> poll(double t_s, std::string& rejection) = 0;
     [[nodiscard]] virtual std::string describe() const = 0;
+    // The newest tracker sample taken so far (zero for scripts and replays): the sim's outputs
+    // carry it so the tracker-to-force latency can be measured downstream.
+    [[nodiscard]] virtual msgs::TrackingOrigin origin() const { return {}; }
 };
 
 // Throws std::runtime_error (replay file errors carry file:line) or std::invalid_argument.

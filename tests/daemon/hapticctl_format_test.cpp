@@ -154,13 +154,59 @@ TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
               "thimble_reference_force_x_n,thimble_reference_force_y_n,"
               "thimble_reference_force_z_n,thimble_reference_moment_x_nm,"
               "thimble_reference_moment_y_nm,thimble_reference_moment_z_nm,"
-              "thimble_pad_force_model_n,thimble_pad_limit_flags\n");
-    EXPECT_EQ(telemetryCsvRow(sample, 1'000'000'000),
-              "1234,2.500000,1,thimble,2.0000,1.5000,-0.2500,0.0000,7.30,55.50,3.25,2.50,"
-              "0.000000,0.000000,0.000000,0.000000,0.000000,0.000000,0.0000,"
-              "0.000000,0.000000,0.000000,0.0000,0.000000,0.000000,0.000000,0.000000,"
-              "0.000000,0.0000,0.0000,0.0000,0.2500,0.0000,-1.0000,0.000000,0.001000,0.000000,"
-              "0.7500,3\n");
+              "thimble_pad_force_model_n,thimble_pad_limit_flags,"
+              "tracking_sampled_s,tracking_received_s\n");
+    const std::string row =
+        "1234,2.500000,1,thimble,2.0000,1.5000,-0.2500,0.0000,7.30,55.50,3.25,2.50,"
+        "0.000000,0.000000,0.000000,0.000000,0.000000,0.000000,0.0000,"
+        "0.000000,0.000000,0.000000,0.0000,0.000000,0.000000,0.000000,0.000000,"
+        "0.000000,0.0000,0.0000,0.0000,0.2500,0.0000,-1.0000,0.000000,0.001000,0.000000,"
+        "0.7500,3";
+    EXPECT_EQ(telemetryCsvRow(sample, 1'000'000'000), row + ",,\n") << "a scripted hand";
+    sample.tracking = {3'460'000'000, 3'481'500'000};
+    EXPECT_EQ(telemetryCsvRow(sample, 1'000'000'000), row + ",2.460000,2.481500\n");
+}
+
+// The first tick that renders a new tracker sample gives its latency: 90 Hz samples received
+// 20 ms after their stamp (the tracker's own latency) and rendered 15 ms after that, except
+// one received 10 ms after its stamp (so rendered 25 ms after receipt); a telemetry sample
+// lost where a new tracker sample starts hides that one.
+TEST(ClosedLoopReport, TrackerToCommandLatencyIsTakenWhereTheSampleChanges) {
+    constexpr std::int64_t kOrigin = 5'000'000'000;  // monotonic time of the recording's start
+    std::string csv = telemetryCsvHeader();
+    msgs::TelemetrySample sample;
+    sample.device_kind = msgs::DeviceKind::kExoskeleton;
+    int samples = 0;
+    for (int tick = 0; tick < 1000; ++tick) {
+        sample.tick = static_cast<std::uint64_t>(tick);
+        sample.stamp_ns = kOrigin + 1'000'000LL * tick;
+        // Sample k (stamp 11 k ms) is rendered from tick 11 k + 35 on.
+        if (tick >= 35 && (tick - 35) % 11 == 0) {
+            const int k = (tick - 35) / 11;
+            const std::int64_t stamp = kOrigin + 11'000'000LL * k;
+            sample.tracking = {stamp, stamp + (k == 40 ? 10'000'000 : 20'000'000)};
+            ++samples;
+            if (k == 60) {
+                continue;  // this telemetry sample was lost
+            }
+        }
+        csv += telemetryCsvRow(sample, kOrigin);
+    }
+    const auto devices = readTelemetryCsv(csv);
+    const TrackingLatency latency = trackingLatency(devices.at(0));
+    EXPECT_EQ(latency.from_receipt_ms.count, static_cast<std::uint64_t>(samples - 1))
+        << "the one at the lost telemetry sample is skipped";
+    EXPECT_NEAR(latency.from_receipt_ms.p50, 15.0, 1e-6);
+    EXPECT_NEAR(latency.from_receipt_ms.max, 25.0, 1e-6);
+    EXPECT_NEAR(latency.from_sample_ms.p50, 35.0, 1e-6);
+    EXPECT_NEAR(latency.from_sample_ms.max, 35.0, 1e-6);
+    const std::string text = formatReport(devices, {});
+    EXPECT_NE(text.find("from handsim's receipt p50 15.0 ms"), std::string::npos) << text;
+
+    std::string scripted = telemetryCsvHeader();
+    sample.tracking = {};
+    scripted += telemetryCsvRow(sample, 0);
+    EXPECT_EQ(trackingLatency(readTelemetryCsv(scripted).at(0)).from_receipt_ms.count, 0U);
 }
 
 // Every 10th tick sent: per device, a step of 30 is two samples missing.

@@ -115,6 +115,10 @@ class Filler {
         fill(h.stamp_ns);
         fill(h.source_id);
     }
+    void fill(TrackingOrigin& o) {
+        fill(o.sampled_ns);
+        fill(o.received_ns);
+    }
     void fill(Percentiles& p) {
         fill(p.p50);
         fill(p.p99);
@@ -130,6 +134,7 @@ class Filler {
         fill(m.q_sim_rad);
         fill(m.constraints);
         fill(m.reference_torque_nm);
+        fill(m.tracking);
     }
     void fill(ContactSample& s) {
         fill(s.p_device_m);
@@ -142,6 +147,7 @@ class Filler {
         fill(m.samples);
         fill(m.reference_force_device_n);
         fill(m.reference_moment_device_nm);
+        fill(m.tracking);
     }
     void fill(DeviceState& m) {
         fill(m.header);
@@ -234,6 +240,7 @@ class Filler {
         fill(s.read_us);
         fill(s.write_us);
         fill(s.wakeup_latency_us);
+        fill(s.tracking);
     }
     void fill(HapticTelemetry& m) {
         fill(m.header);

@@ -315,6 +315,13 @@ void DaemonCore::fillTelemetry(std::size_t device, std::uint64_t tick, std::int6
     out.read_us = timing.read_us;
     out.write_us = timing.write_us;
     out.wakeup_latency_us = timing.wakeup_latency_us;
+    // The tracker sample behind the input this tick rendered (for the tracker-to-force latency).
+    const DeviceSlot& slot = devices_[device];
+    if (slot.has_constraint_set) {
+        out.tracking = slot.constraint_set.tracking;
+    } else if (slot.has_contact_surface) {
+        out.tracking = slot.contact_surface.tracking;
+    }
 }
 
 bool DaemonCore::snapshotDue(std::int64_t now_ns) const noexcept {

@@ -122,6 +122,17 @@ void fromIdl(const idl::MessageHeader& in, MessageHeader& out) {
     copyString(in.source_id(), out.source_id);
 }
 
+idl::TrackingOrigin toIdl(const TrackingOrigin& in) {
+    idl::TrackingOrigin out;
+    out.sampled_ns(in.sampled_ns);
+    out.received_ns(in.received_ns);
+    return out;
+}
+
+TrackingOrigin fromIdl(const idl::TrackingOrigin& in) {
+    return TrackingOrigin{in.sampled_ns(), in.received_ns()};
+}
+
 idl::Percentiles toIdl(const Percentiles& in) {
     idl::Percentiles out;
     out.p50(in.p50);
@@ -153,6 +164,7 @@ idl::ConstraintSet toIdl(const ConstraintSet& in) {
         out.constraints().push_back(item);
     }
     out.reference_torque_nm(in.reference_torque_nm);
+    out.tracking(toIdl(in.tracking));
     return out;
 }
 
@@ -170,6 +182,7 @@ ConversionResult fromIdl(const idl::ConstraintSet& in, ConstraintSet& out) {
         out.constraints.push_back(LinearConstraint{c.a(), c.b()});
     }
     out.reference_torque_nm = in.reference_torque_nm();
+    out.tracking = fromIdl(in.tracking());
     return result;
 }
 
@@ -189,6 +202,7 @@ idl::ContactSurface toIdl(const ContactSurface& in) {
     }
     out.reference_force_device_n(in.reference_force_device_n);
     out.reference_moment_device_nm(in.reference_moment_device_nm);
+    out.tracking(toIdl(in.tracking));
     return out;
 }
 
@@ -205,6 +219,7 @@ ConversionResult fromIdl(const idl::ContactSurface& in, ContactSurface& out) {
     }
     out.reference_force_device_n = in.reference_force_device_n();
     out.reference_moment_device_nm = in.reference_moment_device_nm();
+    out.tracking = fromIdl(in.tracking());
     return result;
 }
 
@@ -429,6 +444,7 @@ idl::HapticTelemetry toIdl(const HapticTelemetry& in) {
         item.read_us(s.read_us);
         item.write_us(s.write_us);
         item.wakeup_latency_us(s.wakeup_latency_us);
+        item.tracking(toIdl(s.tracking));
         out.samples().push_back(item);
     }
     return out;
@@ -472,6 +488,7 @@ ConversionResult fromIdl(const idl::HapticTelemetry& in, HapticTelemetry& out) {
         item.read_us = s.read_us();
         item.write_us = s.write_us();
         item.wakeup_latency_us = s.wakeup_latency_us();
+        item.tracking = fromIdl(s.tracking());
         out.samples.push_back(item);
     }
     return result;

@@ -4,8 +4,10 @@
 // from the XML profile in config/, and typed writers/readers for the generated types.
 // Non-RT threads only (DDS allocates and locks).
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <ctime>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
@@ -54,6 +56,33 @@ class DdsReader {
         eprosima::fastdds::dds::SampleInfo info;
         while (reader_ != nullptr && reader_->take_next_sample(&sample, &info) == ReturnOk()) {
             if (info.valid_data) {
+                return true;
+            }
+        }
+        return false;
+    }
+    // The same, with when this reader received it, on CLOCK_MONOTONIC (for latencies).
+    // Fast DDS stamps the reception with the system clock; it is carried over to the monotonic
+    // clock through both clocks' readings now, so a wall-clock step between reception and
+    // take would show in it (never negative: clamped to now).
+    bool take(T& sample, std::int64_t& received_monotonic_ns) {
+        eprosima::fastdds::dds::SampleInfo info;
+        while (reader_ != nullptr && reader_->take_next_sample(&sample, &info) == ReturnOk()) {
+            if (info.valid_data) {
+                timespec realtime{};
+                timespec monotonic{};
+                ::clock_gettime(CLOCK_REALTIME, &realtime);
+                ::clock_gettime(CLOCK_MONOTONIC, &monotonic);
+                const auto ns = [](const timespec& ts) {
+                    return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+                };
+                const std::int64_t received_ns = info.reception_timestamp.to_ns();
+                // Without a reception stamp (none, or from a clock far off) it counts as now.
+                const std::int64_t waited_ns =
+                    received_ns > 0 && ns(realtime) - received_ns < 10'000'000'000
+                        ? std::max<std::int64_t>(0, ns(realtime) - received_ns)
+                        : 0;
+                received_monotonic_ns = ns(monotonic) - waited_ns;
                 return true;
             }
         }

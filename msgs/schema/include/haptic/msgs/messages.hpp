@@ -27,6 +27,14 @@ struct MessageHeader {
     friend bool operator==(const MessageHeader&, const MessageHeader&) = default;
 };
 
+// The tracker sample a sim output follows, for the tracker-to-force latency: zero when the
+// hand is scripted or replayed. Both CLOCK_MONOTONIC of the sim's host.
+struct TrackingOrigin {
+    std::int64_t sampled_ns{0};   // the sample's own stamp (HandPose header.stamp_ns)
+    std::int64_t received_ns{0};  // when the sim's reader received it
+    friend bool operator==(const TrackingOrigin&, const TrackingOrigin&) = default;
+};
+
 struct Percentiles {
     double p50{0.0};
     double p99{0.0};
@@ -53,6 +61,7 @@ struct ConstraintSet {
     // The fully actuated reference: joint torques the object's contact applies to the
     // simulated finger (sum of J^T f); what the user should feel.
     std::array<double, kMaxJointDofs> reference_torque_nm{};
+    TrackingOrigin tracking{};
     friend bool operator==(const ConstraintSet&, const ConstraintSet&) = default;
 };
 
@@ -73,6 +82,7 @@ struct ContactSurface {
     // to the simulated pad, device frame.
     std::array<double, 3> reference_force_device_n{};
     std::array<double, 3> reference_moment_device_nm{};
+    TrackingOrigin tracking{};
     friend bool operator==(const ContactSurface&, const ContactSurface&) = default;
 };
 
@@ -234,6 +244,8 @@ struct TelemetrySample {
     double read_us{0.0};       // of which CAN read, sim inputs, commands
     double write_us{0.0};      // of which CAN write, DeviceState hand-off
     double wakeup_latency_us{0.0};
+    // The tracker sample behind the sim input this tick's command was computed from.
+    TrackingOrigin tracking{};
     friend bool operator==(const TelemetrySample&, const TelemetrySample&) = default;
 };
 
