@@ -9,7 +9,9 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <numbers>
 
 #include "haptic/daemon/sim_input_validation.hpp"
 
@@ -219,6 +221,46 @@ TEST_F(TactileOutputTest, PitchedFingertipPressingTableReportsPenetrationAndTilt
         deepest = std::min(deepest, s.signed_distance_m);
     }
     EXPECT_LT(deepest, -0.001);  // the undeformed pad reaches 2 mm into the raised table
+}
+
+// The thimble's reference is the contact on its pad, the skin its plate can press: a
+// fingertip that meets a wall tip-first has contact, but none the thimble can render; pressed
+// on a table, the pad's reference carries the contact force.
+TEST_F(TactileOutputTest, TheReferenceCountsTheContactOnThePadOnly) {
+    const auto contactAfterSettling = [&](HandModel& hand, const ColliderDesc& object) {
+        const int collider = hand.simulation.addCollider(object);
+        const int bone = hand.bones.front().body;
+        hand.simulation.setTrackingTarget(bone, hand.simulation.bodyPosition(bone),
+                                          hand.simulation.bodyRotation(bone));
+        for (int i = 0; i < 20; ++i) {
+            (void)hand.simulation.step(0.005);
+        }
+        const TactileOutput output(hand, config::Finger::kIndex, finger_from_device, material);
+        msgs::ContactSurface surface;
+        output.fill(hand.simulation, surface);
+        const auto& f = surface.reference_force_device_n;
+        return std::pair{hand.simulation.forceOnCollider(collider).norm(),
+                         std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])};
+    };
+    // A wall across the tip, 1 mm into it (its normal -x: HalfSpace's +z turned about y).
+    HandModel tip_first = buildHand(handConfig(config::HandModel::kFingertip), SolverSettings{});
+    double tip_x = -1.0;
+    for (int node : tip_first.simulation.skinNodes()) {
+        tip_x = std::max(tip_x, tip_first.simulation.nodePosition(node).x());
+    }
+    const Mat3 facing_back = Eigen::AngleAxisd(-0.5 * std::numbers::pi, Vec3::UnitY()).matrix();
+    const auto [wall_n, wall_pad_n] = contactAfterSettling(
+        tip_first, {HalfSpace{}, Vec3(tip_x - 0.001, 0.0, 0.0), facing_back, 0.5});
+    // The pad 1 mm into a table below it.
+    const auto [table_n, table_pad_n] = contactAfterSettling(
+        model, {HalfSpace{}, Vec3(0, 0, table_z + 0.002), Mat3::Identity(), 0.5});
+    std::printf("tip-first: object %.3f N, pad reference %.3f N; pad on a table: %.3f N, %.3f N\n",
+                wall_n, wall_pad_n, table_n, table_pad_n);
+    ASSERT_GT(wall_n, 0.05) << "the tip does not touch the wall";
+    // The lower quarter of the tip sphere is pad (its lowest samples touch the wall too).
+    EXPECT_LT(wall_pad_n, 0.3 * wall_n) << "a tip-first contact counted as the pad's";
+    ASSERT_GT(table_n, 0.05) << "the pad does not touch the table";
+    EXPECT_NEAR(table_pad_n, table_n, 0.2 * table_n) << "the pad's contact left out";
 }
 
 }  // namespace

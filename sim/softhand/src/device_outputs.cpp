@@ -213,12 +213,17 @@ TactileOutput::TactileOutput(const HandModel& model, config::Finger finger,
         const Vec3 p_bone = rotation.transpose() * (sim.nodePosition(node) - centre);
         radius = std::max(radius, std::hypot(p_bone.y(), p_bone.z()));
     }
-    std::vector<std::pair<double, Vec3>> candidates;  // (distance to D origin, rest point)
+    struct Candidate {
+        double distance_m;  // to the device origin
+        Vec3 p_bone_m;      // rest point
+        int node;
+    };
+    std::vector<Candidate> candidates;
     for (int node : skin) {
         const Vec3 p_bone = rotation.transpose() * (sim.nodePosition(node) - centre);
         // The pad: skin facing the palm side, clear of the flanks at the axis height.
         if ((boneFromFinger().transpose() * p_bone).z() > 0.25 * radius) {
-            candidates.emplace_back((p_bone - bone_from_device_translation_m_).norm(), p_bone);
+            candidates.push_back({(p_bone - bone_from_device_translation_m_).norm(), p_bone, node});
         }
     }
     if (candidates.empty() || !(radius > 0.0)) {
@@ -230,13 +235,15 @@ TactileOutput::TactileOutput(const HandModel& model, config::Finger finger,
         std::numbers::pi * radius * 2.0 * half_length * 0.5 + std::numbers::pi * radius * radius;
     const double area = pad_area / static_cast<double>(candidates.size());
     std::sort(candidates.begin(), candidates.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
+              [](const auto& a, const auto& b) { return a.distance_m < b.distance_m; });
     const auto count = std::min<std::size_t>(
         candidates.size(),
         std::min<std::size_t>(static_cast<std::size_t>(std::max(settings.max_samples, 1)),
                               msgs::kMaxContactSamples));
+    on_pad_.assign(static_cast<std::size_t>(nodes_.second - nodes_.first), 0);
     for (std::size_t i = 0; i < count; ++i) {
-        samples_.push_back({candidates[i].second, area});
+        samples_.push_back({candidates[i].p_bone_m, area});
+        on_pad_[static_cast<std::size_t>(candidates[i].node - nodes_.first)] = 1;
     }
     // The bone radius is 0.35 r (hand_builder); the pad tissue is the rest.
     pad_stiffness_pa_per_m_ = settings.pad_stiffness_pa_per_m > 0.0
@@ -277,11 +284,13 @@ void TactileOutput::fill(const Simulation& sim, msgs::ContactSurface& out) const
         out_sample.weight = sample.area_m2 * pad_stiffness_pa_per_m_;
         out.samples.push_back(out_sample);
     }
-    // The reference: net force and moment of the contacts on the distal phalanx.
+    // The reference: net force and moment of the contacts on the sampled pad, the part of the
+    // fingertip the plate can render (a tip-first touch is not the thimble's to render).
     Vec3 force = Vec3::Zero();
     Vec3 moment = Vec3::Zero();
     for (const Simulation::ContactForce& contact : sim.contactForces()) {
-        if (contact.node >= nodes_.first && contact.node < nodes_.second) {
+        if (contact.node >= nodes_.first && contact.node < nodes_.second &&
+            on_pad_[static_cast<std::size_t>(contact.node - nodes_.first)] != 0) {
             force += contact.force_n;
             moment += (sim.nodePosition(contact.node) - device.position_m).cross(contact.force_n);
         }

@@ -38,8 +38,10 @@ class KinestheticOutput {
                       config::Finger finger, KinestheticOutputSettings settings = {});
 
     [[nodiscard]] std::array<double, 3> jointAngles(const Simulation& sim) const;
-    // Fills everything but the header. Once per simulation step: each row's normal turns by
-    // at most kMaxNormalTurnRad from the one the same contact had in the previous call.
+    // Fills everything but the header. The reference is the net contact force and moment on
+    // the sampled pad nodes: a contact on the tip or the flanks is out of the plate's reach. Once
+    // per simulation step: each row's normal turns by at most kMaxNormalTurnRad from the one the
+    // same contact had in the previous call.
     void fill(const Simulation& sim, msgs::ConstraintSet& out);
     // The hand was placed (no continuity with the previous step): forget the last normals.
     void reset();
@@ -99,6 +101,9 @@ class TactileOutput {
     };
     int body_{-1};
     std::pair<int, int> nodes_{};  // [first, end) node ids of the distal phalanx
+    // Per node of the distal phalanx (from nodes_.first): 1 for a sampled pad node, the skin
+    // the thimble's plate can press on; the reference counts the contacts there only.
+    std::vector<char> on_pad_;
     Mat3 bone_from_device_rotation_;
     Vec3 bone_from_device_translation_m_;
     double pad_stiffness_pa_per_m_{0.0};
