@@ -36,6 +36,7 @@
 #include "haptic/process/main_skeleton.hpp"
 #include "haptic/process/shutdown.hpp"
 #include "status_format.hpp"
+#include "status_json.hpp"
 #include "telemetry_csv.hpp"
 
 namespace {
@@ -57,8 +58,9 @@ std::chrono::milliseconds toMs(double seconds) {
     return std::chrono::milliseconds(static_cast<long>(seconds * 1000.0));
 }
 
-// The status screen for one sample; returns false (after printing why) if it is malformed.
-bool renderStatus(const haptic::idl::HapticStatus& sample, std::string& screen) {
+// The status screen (or its JSON, docs/hapticctl.md) for one sample; returns false (after
+// printing why) if it is malformed.
+bool renderStatus(const haptic::idl::HapticStatus& sample, std::string& screen, bool json = false) {
     haptic::msgs::HapticStatus status;
     if (const auto result = haptic::msgs::fromIdl(sample, status); !result.ok()) {
         std::fprintf(stderr, "hapticctl: malformed status sample: %s\n", result.error.c_str());
@@ -68,7 +70,9 @@ bool renderStatus(const haptic::idl::HapticStatus& sample, std::string& screen) 
     // meaningless, so it is shown only when it is plausible.
     const double age_s =
         static_cast<double>(haptic::common::monotonicNowNs() - status.header.stamp_ns) * 1e-9;
-    screen = haptic::ctl::formatStatus(status, age_s >= 0.0 && age_s < 3600.0 ? age_s : -1.0);
+    const double shown_age_s = age_s >= 0.0 && age_s < 3600.0 ? age_s : -1.0;
+    screen = json ? haptic::ctl::statusJson(status, shown_age_s) + "\n"
+                  : haptic::ctl::formatStatus(status, shown_age_s);
     return true;
 }
 
@@ -79,7 +83,7 @@ void reportNoDaemon(const haptic::config::DaemonConfig& cfg, double timeout_s) {
                  haptic::ipc::kStatusTopic, cfg.dds.domain_id, timeout_s);
 }
 
-int printStatus(const haptic::config::DaemonConfig& cfg, double timeout_s) {
+int printStatus(const haptic::config::DaemonConfig& cfg, double timeout_s, bool json) {
     haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
     auto reader = participant.createReader<haptic::idl::HapticStatusPubSubType>(
         haptic::ipc::kStatusTopic, haptic::ipc::TopicKind::kLatestState);
@@ -89,7 +93,7 @@ int printStatus(const haptic::config::DaemonConfig& cfg, double timeout_s) {
         return kExitNoDaemon;
     }
     std::string screen;
-    if (!renderStatus(sample, screen)) {
+    if (!renderStatus(sample, screen, json)) {
         return kExitError;
     }
     std::cout << screen << std::flush;
@@ -97,7 +101,7 @@ int printStatus(const haptic::config::DaemonConfig& cfg, double timeout_s) {
 }
 
 // handsim's status (sim/status, which handsim publishes over DDS whichever sim link it uses).
-int printSimStatus(const haptic::config::DaemonConfig& cfg, double timeout_s) {
+int printSimStatus(const haptic::config::DaemonConfig& cfg, double timeout_s, bool json) {
     haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
     auto reader = participant.createReader<haptic::idl::SimStatusPubSubType>(
         haptic::ipc::kSimStatusTopic, haptic::ipc::TopicKind::kLatestState);
@@ -116,7 +120,9 @@ int printSimStatus(const haptic::config::DaemonConfig& cfg, double timeout_s) {
     }
     const double age_s =
         static_cast<double>(haptic::common::monotonicNowNs() - status.header.stamp_ns) * 1e-9;
-    std::cout << haptic::ctl::formatSimStatus(status, age_s >= 0.0 && age_s < 3600.0 ? age_s : -1.0)
+    const double shown_age_s = age_s >= 0.0 && age_s < 3600.0 ? age_s : -1.0;
+    std::cout << (json ? haptic::ctl::simStatusJson(status, shown_age_s) + "\n"
+                       : haptic::ctl::formatSimStatus(status, shown_age_s))
               << std::flush;
     return EXIT_SUCCESS;
 }
@@ -381,6 +387,12 @@ int main(int argc, char** argv) {
     auto* status = app.add_subcommand("status", "print the daemon's state and loop statistics");
     auto* sim = app.add_subcommand(
         "sim", "print handsim's status: step rate and time, zeroed steps, rejected inputs");
+    bool json = false;
+    status->add_flag("--json", json,
+                     "one JSON object instead of the screen (schema haptic.status/1, "
+                     "docs/hapticctl.md)");
+    sim->add_flag("--json", json,
+                  "one JSON object instead of the screen (schema haptic.sim_status/1)");
     double interval_s = 1.0;
     int count = 0;
     auto* watch = app.add_subcommand("watch", "redraw the status screen live (Ctrl-C stops)");
@@ -464,10 +476,10 @@ int main(int argc, char** argv) {
             timeout_s = is_command || sim->parsed() ? 5.0 : 2.0;
         }
         if (status->parsed()) {
-            return printStatus(cfg, timeout_s);
+            return printStatus(cfg, timeout_s, json);
         }
         if (sim->parsed()) {
-            return printSimStatus(cfg, timeout_s);
+            return printSimStatus(cfg, timeout_s, json);
         }
         if (watch->parsed()) {
             return watchStatus(cfg, interval_s, count);

@@ -3,13 +3,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
 #include <vector>
 
 #include "closed_loop_report.hpp"
 #include "contact_quality.hpp"
+#include "haptic/msgs/names.hpp"
 #include "status_format.hpp"
+#include "status_json.hpp"
 #include "telemetry_csv.hpp"
 
 namespace haptic::ctl {
@@ -85,6 +88,85 @@ TEST(StatusFormat, ShowsStateLoopSimLinkDevicesAndFaults) {
     EXPECT_THAT(text, HasSubstr("bus-off"));
     EXPECT_THAT(text, HasSubstr("last frame never"));
     EXPECT_THAT(text, HasSubstr("[7] exo_index: heartbeat missing for 50 ms"));
+}
+
+// `hapticctl status --json`: the same snapshot, every field of the screen, with the schema's
+// names; unknown ages are null, not -1.
+TEST(StatusJson, CarriesEveryFieldOfTheScreenUnderTheDocumentedNames) {
+    msgs::HapticStatus status;
+    status.header.seq = 42;
+    status.state = msgs::DaemonState::kFault;
+    status.rendering_method.assign("anisotropic");
+    status.uptime_s = 12.5;
+    status.loop.rate_hz = 1000;
+    status.loop.ticks = 12500;
+    status.loop.overruns = 3;
+    status.loop.overruns_compute = 2;
+    status.loop.wakeup_latency_us = {11.0, 52.0, 700.0};
+    status.sim_link.transport = msgs::SimTransport::kDds;
+    status.sim_link.age_ms = -1.0;
+    status.sim_link.received = 7;
+    status.sim_link.rejected = 2;
+    msgs::DeviceStatus device;
+    device.device_id.assign("exo");
+    device.kind = msgs::DeviceKind::kExoskeleton;
+    device.state = msgs::DeviceRunState::kFault;
+    device.awaiting_enable = true;
+    device.can.bus_state = msgs::BusState::kBusOff;
+    device.can.rx_frames = 123;
+    device.last_frame_age_ms = 0.5;
+    status.devices.push_back(device);
+    msgs::Fault fault;
+    fault.code = 102;
+    fault.device_id.assign("exo");
+    fault.message.assign("device reports fault 2 (overtemperature); \"held\" safe");
+    status.faults.push_back(fault);
+
+    const auto json = nlohmann::json::parse(statusJson(status, -1.0));
+    EXPECT_EQ(json["schema"], "haptic.status/1");
+    EXPECT_EQ(json["hapticctl_version"], HAPTIC_VERSION);
+    EXPECT_EQ(json["seq"], 42);
+    EXPECT_TRUE(json["age_s"].is_null());
+    EXPECT_EQ(json["state"], "FAULT");
+    EXPECT_EQ(json["rendering_method"], "anisotropic");
+    EXPECT_EQ(json["uptime_s"], 12.5);
+    EXPECT_EQ(json["loop"]["ticks"], 12500);
+    EXPECT_EQ(json["loop"]["overruns_compute"], 2);
+    EXPECT_EQ(json["loop"]["wakeup_latency_us"]["p99"], 52.0);
+    EXPECT_EQ(json["sim_link"]["transport"], msgs::toString(msgs::SimTransport::kDds));
+    EXPECT_TRUE(json["sim_link"]["age_ms"].is_null());
+    EXPECT_EQ(json["sim_link"]["rejected"], 2);
+    ASSERT_EQ(json["devices"].size(), 1U);
+    EXPECT_EQ(json["devices"][0]["id"], "exo");
+    EXPECT_EQ(json["devices"][0]["kind"], "exoskeleton");
+    EXPECT_EQ(json["devices"][0]["state"], msgs::toString(msgs::DeviceRunState::kFault));
+    EXPECT_EQ(json["devices"][0]["awaiting_enable"], true);
+    EXPECT_EQ(json["devices"][0]["last_frame_age_ms"], 0.5);
+    EXPECT_EQ(json["devices"][0]["can"]["bus_state"], "bus-off");
+    EXPECT_EQ(json["devices"][0]["can"]["rx_frames"], 123);
+    ASSERT_EQ(json["faults"].size(), 1U);
+    EXPECT_EQ(json["faults"][0]["code"], 102);
+    EXPECT_EQ(json["faults"][0]["device"], "exo");
+    EXPECT_EQ(json["faults"][0]["message"], std::string(fault.message.view()));
+    EXPECT_EQ(nlohmann::json::parse(statusJson(status, 0.25))["age_s"], 0.25);
+}
+
+TEST(StatusJson, HandsimsStatusToo) {
+    msgs::SimStatus status;
+    status.header.source_id.assign("default");
+    status.model.assign("softhand_finger_index_res1");
+    status.steps = 900;
+    status.steps_zeroed = 12;
+    status.step_time_us = {4000.0, 9000.0, 12000.0};
+    status.last_rejection.assign("HandPose on 'tracking/hand': wrist_position_m is not finite");
+    const auto json = nlohmann::json::parse(simStatusJson(status, 0.1));
+    EXPECT_EQ(json["schema"], "haptic.sim_status/1");
+    EXPECT_EQ(json["scene"], "default");
+    EXPECT_EQ(json["model"], "softhand_finger_index_res1");
+    EXPECT_EQ(json["steps"], 900);
+    EXPECT_EQ(json["steps_zeroed"], 12);
+    EXPECT_EQ(json["step_time_us"]["p99"], 9000.0);
+    EXPECT_EQ(json["last_rejection"], std::string(status.last_rejection.view()));
 }
 
 TEST(StatusFormat, ADeviceAwaitingEnableSaysWhyAndHowToReArm) {

@@ -17,6 +17,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <thread>
 
@@ -157,6 +158,24 @@ TEST_F(RoudiTest, DaemonAndSimExchangeMessagesAndStatusIsLive) {
     EXPECT_THAT(sim_status.out, HasSubstr("softhand_finger_index_res1 (602 nodes"));
     EXPECT_THAT(sim_status.out, HasSubstr("steps zeroed by the energy check"));
     EXPECT_THAT(sim_status.out, HasSubstr("Tracking: no input rejected"));
+
+    // The same two snapshots for scripts (docs/hapticctl.md, "Machine-readable status").
+    const CommandResult status_json = runCommand(
+        {HAPTICCTL_PATH, "--dds-domain", domainArgument(), "status", "--json", "--timeout", "8"},
+        15s);
+    ASSERT_EQ(status_json.exit_code, 0) << status_json.err;
+    const auto daemon_json = nlohmann::json::parse(status_json.out);
+    EXPECT_EQ(daemon_json["schema"], "haptic.status/1");
+    EXPECT_EQ(daemon_json["state"], "IDLE");
+    EXPECT_EQ(daemon_json["loop"]["rate_hz"], 1000.0);
+    ASSERT_EQ(daemon_json["devices"].size(), 2U) << status_json.out;
+    EXPECT_EQ(daemon_json["devices"][0]["id"], "exo");
+    const CommandResult sim_json =
+        runCommand({HAPTICCTL_PATH, "--dds-domain", domainArgument(), "sim", "--json", "--timeout",
+                    kSanitized ? "10" : "6"},
+                   20s);
+    ASSERT_EQ(sim_json.exit_code, 0) << sim_json.err;
+    EXPECT_EQ(nlohmann::json::parse(sim_json.out)["scene"], "default");
 
     // Let the sim run a little, then kill it without warning: the daemon must notice.
     std::this_thread::sleep_for(1s);
