@@ -147,6 +147,7 @@ int runSim(const SimOptions& options) {
     const auto tracking_timeout = std::chrono::milliseconds(cfg.scene.tracking.timeout_ms);
     std::optional<std::chrono::steady_clock::time_point> last_pose_time;
     bool withholding = false;
+    bool hand_placed = !topic_tracking;  // scripts and replays start where the hand is built
     while (!process::shutdownRequested()) {
         next += period;
         std::this_thread::sleep_until(next);
@@ -156,6 +157,17 @@ int runSim(const SimOptions& options) {
         const double t_s = static_cast<double>(steps + 1) * dt_s;
         std::string rejection;
         const auto pose = tracking->poll(t_s, rejection);
+        // The hand waits 0.3 m above the scene until the first pose (initialPose). When the
+        // tracker already publishes at the first step (the demo's order: hapticemu first),
+        // no silence ends, so nothing placed it: the tracking springs dragged it down through
+        // the scene at their speed clamp, into whatever the tracked hand touches. Place it.
+        const bool first_pose = pose && !hand_placed;
+        if (first_pose) {
+            physics.reset(*pose);
+            hand_placed = true;
+            spdlog::info("tracking: first pose on '{}': hand placed at the tracked pose",
+                         cfg.scene.tracking.topic);
+        }
         if (pose) {
             if (const auto reason = physics.setHandPose(*pose)) {
                 rejection = *reason;
@@ -179,7 +191,7 @@ int runSim(const SimOptions& options) {
                 // whatever lies between, and the devices would render that transient (the
                 // demo's first contact rang at the 10 N clamp in both directions). Nothing was
                 // published meanwhile, so there is no continuity to keep: place it there.
-                if (pose) {  // always: the pose accepted this step ended the silence
+                if (pose && !first_pose) {  // the pose accepted this step ended the silence
                     physics.reset(*pose);
                     (void)physics.setHandPose(*pose);
                 }
