@@ -203,7 +203,14 @@ TEST_F(TactileOutputTest, PitchedFingertipPressingTableReportsPenetrationAndTilt
     const int body = model.bones.front().body;
     const double pitch = 0.3;
     const Mat3 rotation = Eigen::AngleAxisd(pitch, Vec3::UnitY()).toRotationMatrix();
-    model.simulation.setBodyPose(body, model.simulation.bodyPosition(body), rotation);
+    // The whole fingertip pitched, undeformed: the skin turns with the bone (else it would
+    // touch where the rigid pad does not, and the samples would take its depth).
+    const Vec3 centre = model.simulation.bodyPosition(body);
+    model.simulation.setBodyPose(body, centre, rotation);
+    for (int node : model.simulation.skinNodes()) {
+        model.simulation.setNodePosition(
+            node, centre + rotation * (model.simulation.nodePosition(node) - centre));
+    }
     msgs::ContactSurface surface;
     output.fill(model.simulation, surface);
     ASSERT_FALSE(surface.samples.empty());
@@ -221,6 +228,40 @@ TEST_F(TactileOutputTest, PitchedFingertipPressingTableReportsPenetrationAndTilt
         deepest = std::min(deepest, s.signed_distance_m);
     }
     EXPECT_LT(deepest, -0.001);  // the undeformed pad reaches 2 mm into the raised table
+}
+
+// The skin bulging past its rest shape touches before the rigid pad does: a sample whose skin
+// node is inside the object takes the skin's depth (the plate presses), one whose skin is
+// clear keeps the rigid point's distance.
+TEST_F(TactileOutputTest, WhereTheSkinTouchesBeforeTheRigidPadTheSampleTakesTheSkinsDepth) {
+    model.simulation.addCollider({HalfSpace{}, Vec3(0, 0, table_z), Mat3::Identity(), 0.5});
+    const TactileOutput output(model, config::Finger::kIndex, finger_from_device, material);
+    constexpr double kBulge = 0.0015;  // the skin 1.5 mm below its rest place, the bone still
+    for (int node : model.simulation.skinNodes()) {
+        model.simulation.setNodePosition(node,
+                                         model.simulation.nodePosition(node) - Vec3(0, 0, kBulge));
+    }
+    msgs::ContactSurface surface;
+    output.fill(model.simulation, surface);
+    const Vec3 centre = model.simulation.bodyPosition(model.bones.front().body);
+    int touching = 0;
+    int clear = 0;
+    for (const auto& s : surface.samples) {
+        const Vec3 p_world =
+            centre + Vec3(s.p_device_m[0], -s.p_device_m[1], 0.012 - s.p_device_m[2]);
+        const double rigid = p_world.z() - table_z;
+        ASSERT_GT(rigid, 0.0) << "the rigid pad is 1 mm or more above the table";
+        if (rigid - kBulge < 0.0) {
+            ++touching;
+            EXPECT_NEAR(s.signed_distance_m, rigid - kBulge, 1e-12);
+        } else {
+            ++clear;
+            EXPECT_NEAR(s.signed_distance_m, rigid, 1e-12);
+        }
+        EXPECT_NEAR(s.normal_device[2], -1.0, 1e-12);
+    }
+    EXPECT_GT(touching, 0);
+    EXPECT_GT(clear, 0);
 }
 
 // The thimble's reference is the contact on its pad, the skin its plate can press: a

@@ -98,6 +98,7 @@ class TactileOutput {
     struct Sample {
         Vec3 p_bone_m;  // rest position in the distal bone frame
         double area_m2;
+        int node;  // the skin node it was taken from
     };
     int body_{-1};
     std::pair<int, int> nodes_{};  // [first, end) node ids of the distal phalanx
