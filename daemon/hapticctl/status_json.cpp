@@ -19,14 +19,20 @@ Json percentiles(const msgs::Percentiles& p) {
     return Json{{"p50", p.p50}, {"p99", p.p99}, {"max", p.max}};
 }
 
+// What every object starts with: which schema, who printed it, which snapshot and how old.
+Json opening(const char* schema, const msgs::MessageHeader& header, double sample_age_s) {
+    Json out;
+    out["schema"] = schema;
+    out["hapticctl_version"] = HAPTIC_VERSION;
+    out["seq"] = header.seq;
+    out["age_s"] = orNull(sample_age_s);
+    return out;
+}
+
 }  // namespace
 
 std::string statusJson(const msgs::HapticStatus& status, double sample_age_s) {
-    Json out;
-    out["schema"] = kStatusJsonSchema;
-    out["hapticctl_version"] = HAPTIC_VERSION;
-    out["seq"] = status.header.seq;
-    out["age_s"] = orNull(sample_age_s);
+    Json out = opening(kStatusJsonSchema, status.header, sample_age_s);
     out["state"] = msgs::toString(status.state);
     out["rendering_method"] = status.rendering_method.view();
     out["uptime_s"] = status.uptime_s;
@@ -75,11 +81,7 @@ std::string statusJson(const msgs::HapticStatus& status, double sample_age_s) {
 }
 
 std::string simStatusJson(const msgs::SimStatus& status, double sample_age_s) {
-    Json out;
-    out["schema"] = kSimStatusJsonSchema;
-    out["hapticctl_version"] = HAPTIC_VERSION;
-    out["seq"] = status.header.seq;
-    out["age_s"] = orNull(sample_age_s);
+    Json out = opening(kSimStatusJsonSchema, status.header, sample_age_s);
     out["scene"] = status.header.source_id.view();
     out["model"] = status.model.view();
     out["node_count"] = status.node_count;

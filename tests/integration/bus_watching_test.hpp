@@ -24,6 +24,24 @@ class BusWatchingTest : public DeviceSafetyTest {
         retract_rad_ = kinematics.inverse(kinematics.retractPose()).servo_rad;
     }
 
+    // The sim input injector (a wall the exoskeleton's finger is always inside, a flat object
+    // in the thimble's pad) feeding hapticd, then `enable` and RENDERING.
+    void injectAndEnable() {
+        injector_ =
+            std::make_unique<EmulatorProcess>(std::vector<std::string>{SIM_INPUT_INJECTOR_PATH});
+        waitForOutput(*injector_, "ready");
+        ASSERT_TRUE(command("enable"));
+        waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
+            return s.state == msgs::DaemonState::kRendering;
+        });
+    }
+    void TearDown() override {
+        if (injector_) {
+            injector_->stop();
+        }
+        DeviceSafetyTest::TearDown();
+    }
+
     // The largest servo angle off the thimble's retract pose (rad).
     double fromRetract(const std::array<double, 3>& angles) const {
         double largest = 0.0;
@@ -38,6 +56,7 @@ class BusWatchingTest : public DeviceSafetyTest {
     ExoListener exo_bus_;
     ThimbleListener thimble_bus_;
     std::array<double, 3> retract_rad_{};
+    std::unique_ptr<EmulatorProcess> injector_;  // see injectAndEnable()
 };
 
 }  // namespace haptic::testing

@@ -31,6 +31,7 @@
 #include "haptic/ipc/iceoryx_runtime.hpp"
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
+#include "roudi_process.hpp"
 
 namespace haptic::testing {
 
@@ -186,18 +187,7 @@ class DeviceSafetyTest : public ::testing::Test {
     }
 
     // The real iox-roudi with the shipped configuration (also a restart after it was lost).
-    void startRoudi() {
-        roudi_ = std::make_unique<ChildProcess>(
-            std::vector<std::string>{IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l",
-                                     "warning"},
-            "roudi");
-        const auto deadline = std::chrono::steady_clock::now() + 10s;
-        while (!ipc::probeRoudi().reachable) {
-            ASSERT_TRUE(roudi_->running()) << roudi_->stderrText();
-            ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
-            std::this_thread::sleep_for(20ms);
-        }
-    }
+    void startRoudi() { testing::startRoudi(roudi_, kConfigDir + "/roudi.toml"); }
 
     // hapticd on the copied configuration (also a restart, as systemd's Restart= would do it).
     void startDaemon(const std::vector<std::string>& extra = {}) {

@@ -23,6 +23,7 @@
 
 #include "child_process.hpp"
 #include "haptic/ipc/iceoryx_runtime.hpp"
+#include "roudi_process.hpp"
 
 namespace haptic::testing {
 namespace {
@@ -68,18 +69,7 @@ class RoudiTest : public ::testing::Test {
                "integration tests";
     }
 
-    void startRoudi() {
-        roudi_ = std::make_unique<ChildProcess>(
-            std::vector<std::string>{IOX_ROUDI_EXECUTABLE, "-c", kConfigDir + "/roudi.toml", "-l",
-                                     "warning"},
-            "roudi");
-        const auto deadline = std::chrono::steady_clock::now() + 10s;
-        while (!ipc::probeRoudi().reachable) {
-            ASSERT_TRUE(roudi_->running()) << "iox-roudi exited: " << roudi_->stderrText();
-            ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "iox-roudi did not come up";
-            std::this_thread::sleep_for(20ms);
-        }
-    }
+    void startRoudi() { testing::startRoudi(roudi_, kConfigDir + "/roudi.toml"); }
 
     // hapticctl waits 2 s for a status sample by default. With ctest running two suites at
     // once on two cores, DDS discovery of the new participant alone has taken longer (CI

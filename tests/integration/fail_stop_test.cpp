@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <optional>
 
 #include "bus_watching_test.hpp"
@@ -104,6 +105,35 @@ class FailStopTest : public BusWatchingTest {
             }
         }
         ASSERT_TRUE(enabled) << "the exoskeleton never reported itself enabled";
+    }
+
+    // After a stall of hapticd's loop: no force comes back without an operator, hapticd's own
+    // stall is the one fault (no device is blamed), `while_faulted` runs, and `clear` brings
+    // both devices back READY.
+    void expectItsOwnStallFaultAndNoForceUntilCleared(
+        const std::function<void()>& while_faulted = {}) {
+        const auto woken = exo_bus_.listen(300ms);
+        EXPECT_FALSE(std::any_of(woken.begin(), woken.end(), [](const auto& h) {
+            return enabledWithForce(h.message, 0.0);
+        })) << "force came back without an operator";
+        const auto status = waitForStatus("FAULT after the stall", [](const msgs::HapticStatus& s) {
+            return s.state == msgs::DaemonState::kFault && !s.faults.empty();
+        });
+        ASSERT_EQ(status.faults.size(), 1U) << faultsOf(status);
+        EXPECT_EQ(status.faults[0].code, daemon::kFaultLoopStalled);
+        EXPECT_EQ(status.faults[0].device_id.view(), "hapticd");
+        std::printf("hapticd: %s\n", std::string(status.faults[0].message.view()).c_str());
+        EXPECT_THAT(std::string(status.faults[0].message.view()),
+                    ::testing::HasSubstr("loop stalled"));
+        if (while_faulted) {
+            while_faulted();
+        }
+        ASSERT_TRUE(command("clear"));
+        waitForStatus("IDLE after clear, both devices READY", [](const msgs::HapticStatus& s) {
+            return s.state == msgs::DaemonState::kIdle && s.faults.empty() &&
+                   s.devices[kExo].state == msgs::DeviceRunState::kReady &&
+                   s.devices[kThimble].state == msgs::DeviceRunState::kReady;
+        });
     }
 };
 
@@ -199,23 +229,7 @@ TEST_F(FailStopTest, SigstopMakesTheDevicesSafeByTimeoutAndHapticdBlamesItsOwnSt
 
     // Awake again: its own stall is the one fault, no device is blamed, and the devices stay
     // safe (the resumed force is refused by them, then FAULT commands them safe).
-    const auto woken = exo_bus_.listen(300ms);
-    EXPECT_FALSE(std::any_of(woken.begin(), woken.end(), [](const auto& h) {
-        return enabledWithForce(h.message, 0.0);
-    })) << "force came back without an operator";
-    const auto status = waitForStatus("FAULT after the stall", [](const msgs::HapticStatus& s) {
-        return s.state == msgs::DaemonState::kFault && !s.faults.empty();
-    });
-    ASSERT_EQ(status.faults.size(), 1U) << status.faults[1].message.view();
-    EXPECT_EQ(status.faults[0].code, daemon::kFaultLoopStalled);
-    EXPECT_EQ(status.faults[0].device_id.view(), "hapticd");
-    EXPECT_THAT(std::string(status.faults[0].message.view()), ::testing::HasSubstr("loop stalled"));
-    ASSERT_TRUE(command("clear"));
-    waitForStatus("IDLE after clear, both devices READY", [](const msgs::HapticStatus& s) {
-        return s.state == msgs::DaemonState::kIdle && s.faults.empty() &&
-               s.devices[kExo].state == msgs::DeviceRunState::kReady &&
-               s.devices[kThimble].state == msgs::DeviceRunState::kReady;
-    });
+    expectItsOwnStallFaultAndNoForceUntilCleared();
 }
 
 TEST_F(FailStopTest, AStallOfTheLoopAloneIsHapticdsOwnFaultAndBlamesNoHealthyDevice) {
@@ -251,30 +265,14 @@ TEST_F(FailStopTest, AStallOfTheLoopAloneIsHapticdsOwnFaultAndBlamesNoHealthyDev
 
     // The loop runs again: its own stall is the one fault, no device is blamed (their frames
     // from the stall were waiting on the bus), and no force comes back without an operator.
-    const auto woken = exo_bus_.listen(300ms);
-    EXPECT_FALSE(std::any_of(woken.begin(), woken.end(), [](const auto& h) {
-        return enabledWithForce(h.message, 0.0);
-    })) << "force came back without an operator";
-    const auto status = waitForStatus("FAULT after the stall", [](const msgs::HapticStatus& s) {
-        return s.state == msgs::DaemonState::kFault && !s.faults.empty();
-    });
-    ASSERT_EQ(status.faults.size(), 1U) << faultsOf(status);
-    EXPECT_EQ(status.faults[0].code, daemon::kFaultLoopStalled);
-    EXPECT_EQ(status.faults[0].device_id.view(), "hapticd");
-    std::printf("hapticd: %s\n", std::string(status.faults[0].message.view()).c_str());
-    EXPECT_THAT(std::string(status.faults[0].message.view()), ::testing::HasSubstr("loop stalled"));
-    // The thimble too is back at its retract pose.
-    const auto thimble = thimble_bus_.listen(500ms);
-    const auto last_state = std::find_if(thimble.rbegin(), thimble.rend(), [](const auto& h) {
-        return h.message.type == ThimbleType::kState;
-    });
-    ASSERT_NE(last_state, thimble.rend());
-    EXPECT_LT(fromRetract(last_state->message.state.servo_angle_rad), 2e-3);
-    ASSERT_TRUE(command("clear"));
-    waitForStatus("IDLE after clear, both devices READY", [](const msgs::HapticStatus& s) {
-        return s.state == msgs::DaemonState::kIdle && s.faults.empty() &&
-               s.devices[kExo].state == msgs::DeviceRunState::kReady &&
-               s.devices[kThimble].state == msgs::DeviceRunState::kReady;
+    // Meanwhile the thimble is back at its retract pose.
+    expectItsOwnStallFaultAndNoForceUntilCleared([&] {
+        const auto thimble = thimble_bus_.listen(500ms);
+        const auto last_state = std::find_if(thimble.rbegin(), thimble.rend(), [](const auto& h) {
+            return h.message.type == ThimbleType::kState;
+        });
+        ASSERT_NE(last_state, thimble.rend());
+        EXPECT_LT(fromRetract(last_state->message.state.servo_angle_rad), 2e-3);
     });
 }
 

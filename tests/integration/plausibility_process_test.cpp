@@ -18,13 +18,10 @@ class PlausibilityProcessTest : public BusWatchingTest {
     // Enables rendering on the injector's input until the exoskeleton reports itself at
     // more than half its clamp.
     void renderAtTheClamp() {
-        injector_ =
-            std::make_unique<EmulatorProcess>(std::vector<std::string>{SIM_INPUT_INJECTOR_PATH});
-        waitForOutput(*injector_, "ready");
-        ASSERT_TRUE(command("enable"));
-        waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
-            return s.state == msgs::DaemonState::kRendering;
-        });
+        injectAndEnable();
+        if (HasFatalFailure()) {
+            return;
+        }
         const auto deadline = std::chrono::steady_clock::now() + 10s;
         while (std::chrono::steady_clock::now() < deadline) {
             const auto window = exo_bus_.listen(30ms);
@@ -82,15 +79,6 @@ class PlausibilityProcessTest : public BusWatchingTest {
         }
         EXPECT_GT(states, 10);
     }
-
-    void TearDown() override {
-        if (injector_) {
-            injector_->stop();
-        }
-        DeviceSafetyTest::TearDown();
-    }
-
-    std::unique_ptr<EmulatorProcess> injector_;
 };
 
 // The drive delivers a fifth of what it is told (a broken current loop or a slipping screw):

@@ -28,20 +28,11 @@ class StaleSimInputTest : public BusWatchingTest {
         if (HasFatalFailure()) {
             return;
         }
-        injector_ =
-            std::make_unique<EmulatorProcess>(std::vector<std::string>{SIM_INPUT_INJECTOR_PATH});
-        waitForOutput(*injector_, "ready");
-        ASSERT_TRUE(command("enable"));
-        waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
-            return s.state == msgs::DaemonState::kRendering;
-        });
-        ASSERT_TRUE(pushesWithin(5s)) << "the exoskeleton never pushed on the injector's wall";
-    }
-    void TearDown() override {
-        if (injector_) {
-            injector_->stop();
+        injectAndEnable();
+        if (HasFatalFailure()) {
+            return;
         }
-        BusWatchingTest::TearDown();
+        ASSERT_TRUE(pushesWithin(5s)) << "the exoskeleton never pushed on the injector's wall";
     }
 
     bool pushesWithin(std::chrono::milliseconds limit) {
@@ -99,7 +90,6 @@ class StaleSimInputTest : public BusWatchingTest {
     }
 
     int sim_timeout_ms_{20};  // config/daemon.yaml, as shipped
-    std::unique_ptr<EmulatorProcess> injector_;
 };
 
 TEST_F(StaleSimInputTest, AReplayedOrDelayedMessageIsRefusedSoTheForceFadesAsIfTheSimWereSilent) {
