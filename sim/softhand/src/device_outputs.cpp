@@ -276,10 +276,10 @@ void TactileOutput::fill(const Simulation& sim, msgs::ContactSurface& out) const
     for (const Sample& sample : samples_) {
         const Vec3 p_world = bone_position + bone_rotation * sample.p_bone_m;
         SurfaceQuery nearest = nearestSurface(p_world);
-        // Where the simulated skin touches although the rigid pad point does not (the tissue
-        // bulges past its rest shape around a light press: measured up to 1.4 mm in the
-        // demo's onsets, with 0.2-0.65 N on the pad), the sample touches as deep as the skin:
-        // the plate must not stay retracted while the pad is in contact.
+        // Where the simulated skin is inside an object deeper than the rigid pad point (the
+        // tissue bulges past its rest shape around a light press: measured up to 1.4 mm in
+        // the demo's onsets, with 0.2-0.65 N on the pad, the rigid point clear), the sample
+        // takes the skin's depth: the plate must not stay retracted while the pad touches.
         const SurfaceQuery skin = nearestSurface(sim.nodePosition(sample.node));
         if (skin.phi_m < 0.0 && skin.phi_m < nearest.phi_m) {
             nearest = skin;
