@@ -8,10 +8,12 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <numbers>
+#include <vector>
 
 #include "haptic/daemon/sim_input_validation.hpp"
 
@@ -230,38 +232,79 @@ TEST_F(TactileOutputTest, PitchedFingertipPressingTableReportsPenetrationAndTilt
     EXPECT_LT(deepest, -0.001);  // the undeformed pad reaches 2 mm into the raised table
 }
 
-// The skin bulging past its rest shape touches before the rigid pad does: a sample whose skin
-// node is inside the object takes the skin's depth (the plate presses), one whose skin is
-// clear keeps the rigid point's distance.
-TEST_F(TactileOutputTest, WhereTheSkinTouchesBeforeTheRigidPadTheSampleTakesTheSkinsDepth) {
-    model.simulation.addCollider({HalfSpace{}, Vec3(0, 0, table_z), Mat3::Identity(), 0.5});
+// The skin bulging past its rest shape presses before the rigid pad does: a sample whose skin
+// node is inside the object and pushed on by the contact takes the skin's depth (the plate
+// presses), one whose skin is clear keeps the rigid point's distance. Skin inside the object
+// that no contact pushes on (the reference says 0 N) does not bring the plate up.
+TEST_F(TactileOutputTest, WhereTheSkinPressesBeforeTheRigidPadTheSampleTakesTheSkinsDepth) {
+    const int table =
+        model.simulation.addCollider({HalfSpace{}, Vec3(0, 0, table_z), Mat3::Identity(), 0.5});
     const TactileOutput output(model, config::Finger::kIndex, finger_from_device, material);
     constexpr double kBulge = 0.0015;  // the skin 1.5 mm below its rest place, the bone still
     for (int node : model.simulation.skinNodes()) {
         model.simulation.setNodePosition(node,
                                          model.simulation.nodePosition(node) - Vec3(0, 0, kBulge));
     }
+    const auto rigidDistance = [&](const msgs::ContactSample& s) {
+        const BonePose device = output.deviceFrame(model.simulation);
+        const Vec3 p_world =
+            device.position_m +
+            device.rotation * Vec3(s.p_device_m[0], s.p_device_m[1], s.p_device_m[2]);
+        return p_world.z() - table_z;
+    };
+    // No step yet: no contact force anywhere, although the bulged skin is inside the table.
+    ASSERT_TRUE(model.simulation.contactForces().empty());
     msgs::ContactSurface surface;
     output.fill(model.simulation, surface);
-    const Vec3 centre = model.simulation.bodyPosition(model.bones.front().body);
+    for (const auto& s : surface.samples) {
+        ASSERT_GT(rigidDistance(s), 0.0) << "the rigid pad is 1 mm or more above the table";
+        EXPECT_NEAR(s.signed_distance_m, rigidDistance(s), 1e-12);
+    }
+    EXPECT_EQ(surface.reference_force_device_n[2], 0.0);
+
+    // One step with the bone held: the contact pushes the bulged skin back out.
+    const int bone = model.bones.front().body;
+    model.simulation.setTrackingTarget(bone, model.simulation.bodyPosition(bone),
+                                       model.simulation.bodyRotation(bone));
+    (void)model.simulation.step(0.001);
+    std::vector<double> pressed_depths;
+    for (const auto& contact : model.simulation.contactForces()) {
+        const double depth = model.simulation.nodePosition(contact.node).z() - table_z;
+        if (contact.collider == table && contact.force_n.norm() > 1e-6 && depth < 0.0) {
+            pressed_depths.push_back(depth);
+        }
+    }
+    ASSERT_FALSE(pressed_depths.empty()) << "one step leaves pressed skin inside the table";
+    output.fill(model.simulation, surface);
     int touching = 0;
     int clear = 0;
     for (const auto& s : surface.samples) {
-        const Vec3 p_world =
-            centre + Vec3(s.p_device_m[0], -s.p_device_m[1], 0.012 - s.p_device_m[2]);
-        const double rigid = p_world.z() - table_z;
-        ASSERT_GT(rigid, 0.0) << "the rigid pad is 1 mm or more above the table";
-        if (rigid - kBulge < 0.0) {
-            ++touching;
-            EXPECT_NEAR(s.signed_distance_m, rigid - kBulge, 1e-12);
-        } else {
+        const double rigid = rigidDistance(s);
+        ASSERT_GT(rigid, 0.0);
+        if (std::abs(s.signed_distance_m - rigid) < 1e-12) {
             ++clear;
-            EXPECT_NEAR(s.signed_distance_m, rigid, 1e-12);
+            continue;
         }
-        EXPECT_NEAR(s.normal_device[2], -1.0, 1e-12);
+        ++touching;
+        EXPECT_TRUE(
+            std::any_of(pressed_depths.begin(), pressed_depths.end(),
+                        [&](double d) { return std::abs(d - s.signed_distance_m) < 1e-12; }))
+            << s.signed_distance_m << " is neither the rigid point's nor a pressed skin node's";
+        // The table's normal, world +z, seen in the device frame (the step tilted the bone a
+        // little).
+        const Vec3 up = output.deviceFrame(model.simulation).rotation.transpose() * Vec3::UnitZ();
+        for (int i = 0; i < 3; ++i) {
+            EXPECT_NEAR(s.normal_device[static_cast<std::size_t>(i)], up[i], 1e-12);
+        }
     }
+    std::printf(
+        "after one step: %d samples at a pressed skin node's depth, %d at the rigid pad's\n",
+        touching, clear);
     EXPECT_GT(touching, 0);
     EXPECT_GT(clear, 0);
+    EXPECT_GT(std::hypot(surface.reference_force_device_n[0], surface.reference_force_device_n[1],
+                         surface.reference_force_device_n[2]),
+              0.0);
 }
 
 // The thimble's reference is the contact on its pad, the skin its plate can press: a

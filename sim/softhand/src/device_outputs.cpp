@@ -241,6 +241,7 @@ TactileOutput::TactileOutput(const HandModel& model, config::Finger finger,
         std::min<std::size_t>(static_cast<std::size_t>(std::max(settings.max_samples, 1)),
                               msgs::kMaxContactSamples));
     on_pad_.assign(static_cast<std::size_t>(nodes_.second - nodes_.first), 0);
+    pressed_.assign(on_pad_.size(), 0);
     for (std::size_t i = 0; i < count; ++i) {
         samples_.push_back({candidates[i].p_bone_m, area, candidates[i].node});
         on_pad_[static_cast<std::size_t>(candidates[i].node - nodes_.first)] = 1;
@@ -273,16 +274,35 @@ void TactileOutput::fill(const Simulation& sim, msgs::ContactSurface& out) const
         }
         return nearest;
     };
+    // The reference: net force and moment of the contacts on the sampled pad, the part of the
+    // fingertip the plate can render (a tip-first touch is not the thimble's to render).
+    std::fill(pressed_.begin(), pressed_.end(), 0);
+    Vec3 force = Vec3::Zero();
+    Vec3 moment = Vec3::Zero();
+    for (const Simulation::ContactForce& contact : sim.contactForces()) {
+        if (contact.node >= nodes_.first && contact.node < nodes_.second &&
+            on_pad_[static_cast<std::size_t>(contact.node - nodes_.first)] != 0) {
+            force += contact.force_n;
+            if (contact.force_n.norm() > kMinPressForceN) {
+                pressed_[static_cast<std::size_t>(contact.node - nodes_.first)] = 1;
+            }
+            moment += (sim.nodePosition(contact.node) - device.position_m).cross(contact.force_n);
+        }
+    }
     for (const Sample& sample : samples_) {
         const Vec3 p_world = bone_position + bone_rotation * sample.p_bone_m;
         SurfaceQuery nearest = nearestSurface(p_world);
-        // Where the simulated skin is inside an object deeper than the rigid pad point (the
+        // Where the simulated skin presses on an object deeper than the rigid pad point (the
         // tissue bulges past its rest shape around a light press: measured up to 1.4 mm in
         // the demo's onsets, with 0.2-0.65 N on the pad, the rigid point clear), the sample
         // takes the skin's depth: the plate must not stay retracted while the pad touches.
-        const SurfaceQuery skin = nearestSurface(sim.nodePosition(sample.node));
-        if (skin.phi_m < 0.0 && skin.phi_m < nearest.phi_m) {
-            nearest = skin;
+        // Only where the contact pushes on that node: skin resting inside an object without
+        // force (the contact let go, the reference is 0 N) must not bring the plate up.
+        if (pressed_[static_cast<std::size_t>(sample.node - nodes_.first)] != 0) {
+            const SurfaceQuery skin = nearestSurface(sim.nodePosition(sample.node));
+            if (skin.phi_m < 0.0 && skin.phi_m < nearest.phi_m) {
+                nearest = skin;
+            }
         }
         msgs::ContactSample out_sample;
         const Vec3 p_device = device.rotation.transpose() * (p_world - device.position_m);
@@ -295,17 +315,6 @@ void TactileOutput::fill(const Simulation& sim, msgs::ContactSurface& out) const
         out_sample.signed_distance_m = std::isfinite(nearest.phi_m) ? nearest.phi_m : 1.0;
         out_sample.weight = sample.area_m2 * pad_stiffness_pa_per_m_;
         out.samples.push_back(out_sample);
-    }
-    // The reference: net force and moment of the contacts on the sampled pad, the part of the
-    // fingertip the plate can render (a tip-first touch is not the thimble's to render).
-    Vec3 force = Vec3::Zero();
-    Vec3 moment = Vec3::Zero();
-    for (const Simulation::ContactForce& contact : sim.contactForces()) {
-        if (contact.node >= nodes_.first && contact.node < nodes_.second &&
-            on_pad_[static_cast<std::size_t>(contact.node - nodes_.first)] != 0) {
-            force += contact.force_n;
-            moment += (sim.nodePosition(contact.node) - device.position_m).cross(contact.force_n);
-        }
     }
     const Vec3 force_device = device.rotation.transpose() * force;
     const Vec3 moment_device = device.rotation.transpose() * moment;

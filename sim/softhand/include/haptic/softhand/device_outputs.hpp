@@ -105,6 +105,8 @@ class TactileOutput {
     // Per node of the distal phalanx (from nodes_.first): 1 for a sampled pad node, the skin
     // the thimble's plate can press on; the reference counts the contacts there only.
     std::vector<char> on_pad_;
+    // Per node as on_pad_, refilled by every fill(): 1 where the sim's contact pushes on it.
+    mutable std::vector<char> pressed_;
     Mat3 bone_from_device_rotation_;
     Vec3 bone_from_device_translation_m_;
     double pad_stiffness_pa_per_m_{0.0};
