@@ -110,6 +110,14 @@ TEST(UdpEmulator, StreamsStateAndAppliesFaultCommandsFromStdin) {
     EXPECT_TRUE(loopUntil(bus, driver, [](std::uint32_t faults) {
         return (faults & devices::kBusOff) != 0 && (faults & devices::kStateStale) != 0;
     }));
+    // The state goes stale (can.state_timeout_ms) about when the device's watchdog
+    // (can.command_timeout_ms, as long) fires: hold the bus off for three of those more, well
+    // inside the driver's 100 ms before it retries writes, so the device has surely timed out
+    // (a clear right away raced its watchdog and, under load, sometimes won).
+    const std::int64_t watchdog_passed =
+        common::monotonicNowNs() + 3 * std::int64_t{device.can.command_timeout_ms} * 1'000'000;
+    ASSERT_TRUE(loopUntil(
+        bus, driver, [&](std::uint32_t) { return common::monotonicNowNs() >= watchdog_passed; }));
     ASSERT_TRUE(emulator.sendCommand("clear"));
     // Bus-off kept our commands off the bus for longer than can.command_timeout_ms, so the
     // device went safe on its own (fault 4) and ignores force until a disable acknowledges it.
