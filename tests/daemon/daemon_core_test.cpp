@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -19,13 +20,16 @@ using ::testing::Gt;
 
 constexpr std::int64_t kMs = 1'000'000;
 
+// The sim's CLOCK_MONOTONIC when the test's time is 0: a booted host's, never 0 or less.
+constexpr std::int64_t kSimClockAtZero = 1000 * 1000 * kMs;
+
 // Each message is newer than the last, as handsim's are (seq +1), stamped when it was sent:
 // hapticd judges its age by the stamp (a test that offers a message at t passes t).
 msgs::MessageHeader nextHeader(std::string_view device, std::int64_t sent_ns) {
     static std::uint64_t seq = 0;
     msgs::MessageHeader header;
     header.seq = ++seq;
-    header.stamp_ns = sent_ns;
+    header.stamp_ns = kSimClockAtZero + sent_ns;
     header.source_id.assign(device);
     return header;
 }
@@ -187,6 +191,36 @@ TEST_F(DaemonCoreTest, AMessageDelayedBeyondTheSimTimeoutIsRefusedWhateverTheClo
     t += 10 * kMs;
     EXPECT_EQ(sut.offerConstraintSet(0, sent(last_stamp + 11 * kMs), t), InputRejection::kNone);
     EXPECT_EQ(sut.rejectedCount(0, InputRejection::kDelayed), 4U);
+}
+
+// One corrupt stamp must not lock the input out: a stamp of 0 or less, or one far ahead of the
+// sim's learnt clock (which, taken as the quickest message, would make every later one read
+// as delayed), is refused and leaves the learnt clock as it was. Stamps at the int64 limits
+// do not overflow the arithmetic (UBSan).
+TEST_F(DaemonCoreTest, ACorruptStampIsRefusedAndTheMessagesAfterItAreTaken) {
+    std::int64_t t = 0;
+    for (int i = 0; i < 20; ++i) {
+        ASSERT_EQ(sut.offerConstraintSet(0, validConstraintSet("exo_index", t - 3 * kMs), t),
+                  InputRejection::kNone);
+        t = runTicks(t, 10);
+    }
+    msgs::ConstraintSet zero = validConstraintSet("exo_index", t);
+    zero.header.stamp_ns = 0;
+    EXPECT_EQ(sut.offerConstraintSet(0, zero, t), InputRejection::kBadStamp);
+    zero.header.stamp_ns = std::numeric_limits<std::int64_t>::min();
+    EXPECT_EQ(sut.offerConstraintSet(0, zero, t), InputRejection::kBadStamp);
+    msgs::ConstraintSet ahead = validConstraintSet("exo_index", t + 1000 * kMs);
+    EXPECT_EQ(sut.offerConstraintSet(0, ahead, t), InputRejection::kStampAhead);
+    ahead = validConstraintSet("exo_index");
+    ahead.header.stamp_ns = std::numeric_limits<std::int64_t>::max();
+    EXPECT_EQ(sut.offerConstraintSet(0, ahead, t), InputRejection::kStampAhead);
+    EXPECT_EQ(sut.offerConstraintSet(0, validConstraintSet("exo_index", t - 20 * kMs), t),
+              InputRejection::kNone)
+        << "17 ms slower than the quickest, and the corrupt stamps did not count as quickest";
+    EXPECT_EQ(sut.offerConstraintSet(0, validConstraintSet("exo_index", t - 3 * kMs), t),
+              InputRejection::kNone);
+    EXPECT_EQ(sut.rejectedCount(0, InputRejection::kBadStamp), 2U);
+    EXPECT_EQ(sut.rejectedCount(0, InputRejection::kStampAhead), 2U);
 }
 
 // A stall longer than the devices' command timeout is hapticd's own fault, but only when a
@@ -426,6 +460,86 @@ TEST(DaemonCoreRearm, ALongSimOutageWhileRenderingNeedsANewEnable) {
     ASSERT_TRUE(core.applyCommand(disable, t, reply).accepted);
     run(1, false);
     EXPECT_FALSE(core.awaitingEnable(0));
+}
+
+// The sim's clock changes for good while hapticd runs: its host rebooted (seq and stamp both
+// go back), its clock was stepped ahead, or it was suspended (its CLOCK_MONOTONIC stood still).
+// Refused at first, so the force fades; once that content has formed a stream of its own for
+// twice loop.sim_rearm_after_ms (at least 1 s), or after a silence that long, its clock is
+// learnt afresh and the force returns only after an operator's enable. A path that is slower
+// for good serves old content and is never taken.
+TEST(DaemonCoreFreshness, ASimWhoseClockChangedForGoodIsTakenAfterTheReArmAndAnEnable) {
+    CoreSettings settings = oneMethodSettings();
+    settings.sim_rearm_after_ns = 250 * kMs;  // re-learnt after 2 x 250 ms, at least 1 s
+    DaemonCore core(settings, kOneExoskeleton);
+    core.markStarted(0);
+    msgs::HapticCommand enable;
+    enable.kind = msgs::CommandKind::kEnable;
+    msgs::HapticCommandReply reply;
+    std::int64_t t = 0;
+    std::uint64_t seq = 1'000'000;  // the sim has been running for hours
+    std::int64_t sim_clock = 0;     // the sim host's clock minus ours
+    // 100 Hz for `ms`, each message 3 ms on its way plus `late`; the verdicts.
+    auto run = [&](int ms, std::int64_t late = 0) {
+        std::vector<InputRejection> verdicts;
+        for (int i = 0; i < ms; ++i) {
+            if (i % 10 == 0) {
+                msgs::ConstraintSet message = validConstraintSet("exo");
+                message.header.seq = ++seq;
+                message.header.stamp_ns = kSimClockAtZero + sim_clock + t - 3 * kMs - late;
+                verdicts.push_back(core.offerConstraintSet(0, message, t));
+            }
+            t += kMs;
+            core.update(t, TickTiming{});
+        }
+        return verdicts;
+    };
+    const auto all = [](const std::vector<InputRejection>& verdicts, InputRejection reason) {
+        return std::all_of(verdicts.begin(), verdicts.end(),
+                           [&](InputRejection v) { return v == reason; });
+    };
+    const auto reArm = [&] {
+        ASSERT_TRUE(all(run(300), InputRejection::kNone));
+        EXPECT_TRUE(core.awaitingEnable(0));
+        EXPECT_EQ(core.outputGain(0), 0.0) << "no force before the operator's enable";
+        ASSERT_TRUE(core.applyCommand(enable, t, reply).accepted);
+        EXPECT_TRUE(all(run(200), InputRejection::kNone));
+        EXPECT_DOUBLE_EQ(core.outputGain(0), 1.0);
+    };
+    ASSERT_TRUE(core.applyCommand(enable, t, reply).accepted);
+    ASSERT_TRUE(all(run(200), InputRejection::kNone));
+    ASSERT_DOUBLE_EQ(core.outputGain(0), 1.0);
+
+    // The sim host rebooted (its clock 10 minutes behind) and handsim counts from 1 again:
+    // not newer, for 1 s, then taken.
+    sim_clock -= 600'000 * kMs;
+    seq = 0;
+    std::vector<InputRejection> verdicts = run(990);
+    EXPECT_TRUE(all(verdicts, InputRejection::kNotNewer));
+    EXPECT_EQ(core.outputGain(0), 0.0);
+    verdicts = run(20);
+    EXPECT_EQ(verdicts.back(), InputRejection::kNone) << "taken 1 s into the new stream";
+    reArm();
+
+    // Its clock stepped 5 s ahead.
+    sim_clock += 5000 * kMs;
+    verdicts = run(990);
+    EXPECT_TRUE(all(verdicts, InputRejection::kStampAhead));
+    EXPECT_EQ(core.outputGain(0), 0.0);
+    verdicts = run(20);
+    EXPECT_EQ(verdicts.back(), InputRejection::kNone);
+    reArm();
+
+    // A path slower by 50 ms for good: old content, never taken.
+    verdicts = run(3000, 50 * kMs);
+    EXPECT_TRUE(all(verdicts, InputRejection::kDelayed));
+    EXPECT_EQ(core.outputGain(0), 0.0);
+    ASSERT_TRUE(core.awaitingEnable(0));
+    // The sim host suspended for 3 s: silent for 3 s, then its clock 3 s behind.
+    t += 3000 * kMs;
+    sim_clock -= 3000 * kMs;
+    core.update(t, TickTiming{});
+    reArm();
 }
 
 TEST_F(DaemonCoreTest, AStalledTickDoesNotStepForceUp) {

@@ -91,7 +91,26 @@ CommandOutcome DaemonCore::applyCommand(const msgs::HapticCommand& command, std:
     return outcome;
 }
 
+namespace {
+
+// a - b, saturated: stamps come from another process and may be anything positive.
+std::int64_t saturatingDifference(std::int64_t a, std::int64_t b) noexcept {
+    std::int64_t difference = 0;
+    if (__builtin_sub_overflow(a, b, &difference)) {
+        return a > b ? std::numeric_limits<std::int64_t>::max()
+                     : std::numeric_limits<std::int64_t>::min();
+    }
+    return difference;
+}
+
+}  // namespace
+
+std::int64_t DaemonCore::relearnAfterNs() const noexcept {
+    return std::max<std::int64_t>(2 * settings_.sim_rearm_after_ns, kMinRelearnAfterNs);
+}
+
 // A message renews the sim input only when its content is new:
+// - its stamp is positive (a sim that stamps 0 or less has no clock to judge it by).
 // - its seq advances. The same seq again is a duplicate or a replay, whatever its stamp. A seq
 //   that goes back is a restarted sim (handsim counts from 1 again) only when its stamp is
 //   later than the last accepted one (the sim host's CLOCK_MONOTONIC does not go back); else
@@ -99,45 +118,84 @@ CommandOutcome DaemonCore::applyCommand(const msgs::HapticCommand& command, std:
 // - it is not older than the sim timeout. The sim may run on another host (DDS), whose
 //   monotonic clock is not ours, so its age is judged by the one-way delay relative to the
 //   quickest message seen from this sim: arrival minus stamp, less the smallest arrival minus
-//   stamp so far. That smallest value may creep up by kClockDriftAllowance of the elapsed time
-//   (two hosts' clocks drift apart by tens of ppm); a restart starts it afresh.
+//   stamp so far. That smallest value may creep up by kClockDriftAllowance of the elapsed time;
+//   a restart starts it afresh.
+// - it is not stamped ahead of that learnt clock by more than the sim timeout: one corrupt or
+//   stepped stamp must not become the quickest message, which would make every later one
+//   read as delayed.
+// Content refused as not newer or stamped ahead that forms a stream of its own (seq advancing
+// from message to message) for relearnAfterNs() is a sim whose clock really changed (its host
+// rebooted, its clock was stepped): it is then taken, and its clock learnt afresh. By then the
+// input has been lost for longer than sim_rearm_after_ns, so the force returns only after an
+// operator's `enable`. After a silence that long the clock is learnt afresh too, rather than
+// allowing it that much drift.
 InputRejection DaemonCore::freshness(const DeviceSlot& slot, const msgs::MessageHeader& header,
-                                     std::int64_t now_ns,
-                                     std::int64_t& clock_offset_ns) const noexcept {
-    const std::int64_t offset_ns = now_ns - header.stamp_ns;
-    if (!slot.has_header) {
-        clock_offset_ns = offset_ns;
+                                     std::int64_t now_ns, Freshness& out) const noexcept {
+    out = Freshness{slot.clock_offset_ns, slot.other_stream_since_ns, slot.other_stream_seq};
+    if (header.stamp_ns <= 0) {
+        return InputRejection::kBadStamp;
+    }
+    const std::int64_t offset_ns = saturatingDifference(now_ns, header.stamp_ns);
+    // Silence: no valid message at all, refused ones included (a path slower for good must not
+    // pass as a silence after its refusals).
+    if (!slot.has_header || saturatingDifference(now_ns, slot.last_heard_ns) > relearnAfterNs()) {
+        out = Freshness{offset_ns, -1, 0};
         return InputRejection::kNone;
     }
+    InputRejection verdict = InputRejection::kNone;
     if (header.seq == slot.last_seq ||
         (header.seq < slot.last_seq && header.stamp_ns <= slot.last_stamp_ns)) {
-        return InputRejection::kNotNewer;
+        verdict = InputRejection::kNotNewer;
+    } else if (header.seq < slot.last_seq) {
+        out = Freshness{offset_ns, -1, 0};  // a restarted sim: its clock may be another host's
+        return InputRejection::kNone;
+    } else {
+        const auto drift_ns = static_cast<std::int64_t>(
+            kClockDriftAllowance * static_cast<double>(std::max<std::int64_t>(
+                                       0, saturatingDifference(now_ns, slot.last_accepted_ns))));
+        const std::int64_t allowed_offset_ns = slot.clock_offset_ns + drift_ns;
+        const std::int64_t delay_ns = saturatingDifference(offset_ns, allowed_offset_ns);
+        if (delay_ns > settings_.sim_timeout_ns) {
+            verdict = InputRejection::kDelayed;
+        } else if (delay_ns < -settings_.sim_timeout_ns) {
+            verdict = InputRejection::kStampAhead;
+        } else {
+            out = Freshness{std::min(offset_ns, allowed_offset_ns), -1, 0};
+            return InputRejection::kNone;
+        }
     }
-    if (header.seq < slot.last_seq) {
-        clock_offset_ns = offset_ns;  // a restarted sim: its clock may be another host's
+    // Refused. Content that only looks old (delayed) never forms a stream to adopt: a slower
+    // path serves old content; a restarted sim re-learns its clock anyway.
+    if (verdict == InputRejection::kDelayed) {
+        out.other_stream_since_ns = -1;
+        return verdict;
+    }
+    const bool continues = slot.other_stream_since_ns >= 0 && header.seq > slot.other_stream_seq;
+    out.other_stream_since_ns = continues ? slot.other_stream_since_ns : now_ns;
+    out.other_stream_seq = header.seq;
+    if (continues && saturatingDifference(now_ns, slot.other_stream_since_ns) >= relearnAfterNs()) {
+        out = Freshness{offset_ns, -1, 0};
         return InputRejection::kNone;
     }
-    const auto drift_ns =
-        static_cast<std::int64_t>(kClockDriftAllowance * static_cast<double>(std::max<std::int64_t>(
-                                                             0, now_ns - slot.last_accepted_ns)));
-    clock_offset_ns = std::min(offset_ns, slot.clock_offset_ns + drift_ns);
-    return offset_ns - clock_offset_ns > settings_.sim_timeout_ns ? InputRejection::kDelayed
-                                                                  : InputRejection::kNone;
+    return verdict;
 }
 
 InputRejection DaemonCore::account(DeviceSlot& slot, InputRejection reason,
                                    const msgs::MessageHeader& header,
                                    std::int64_t now_ns) noexcept {
-    std::int64_t clock_offset_ns = slot.clock_offset_ns;
+    Freshness judged{slot.clock_offset_ns, slot.other_stream_since_ns, slot.other_stream_seq};
     if (reason == InputRejection::kNone) {
-        reason = freshness(slot, header, now_ns, clock_offset_ns);
+        reason = freshness(slot, header, now_ns, judged);
+        slot.last_heard_ns = now_ns;
     }
+    slot.other_stream_since_ns = judged.other_stream_since_ns;
+    slot.other_stream_seq = judged.other_stream_seq;
     if (reason == InputRejection::kNone) {
         ++slot.received;
         slot.last_accepted_ns = now_ns;
         slot.last_seq = header.seq;
         slot.last_stamp_ns = header.stamp_ns;
-        slot.clock_offset_ns = clock_offset_ns;
+        slot.clock_offset_ns = judged.clock_offset_ns;
         slot.has_header = true;
     } else {
         ++slot.rejected;

@@ -41,6 +41,11 @@ std::string_view describe(InputRejection reason) noexcept {
             return "seq does not advance and is no restart (a replay or a duplicate)";
         case InputRejection::kDelayed:
             return "older than sim_timeout_ms by its stamp (delayed)";
+        case InputRejection::kBadStamp:
+            return "stamp_ns is not positive";
+        case InputRejection::kStampAhead:
+            return "stamped ahead of the sim's clock by more than sim_timeout_ms (a stepped "
+                   "clock or a corrupt stamp)";
         case InputRejection::kNegativeWeight:
             return "negative sample weight";
         case InputRejection::kCount_:

@@ -192,6 +192,11 @@ class DaemonCore {
         // The smallest arrival minus stamp seen from this sim (its clock against ours).
         std::int64_t clock_offset_ns{0};
         bool has_header{false};
+        // Refused content forming a stream of its own since then (-1: none), and its last
+        // seq (see DaemonCore::freshness()).
+        std::int64_t other_stream_since_ns{-1};
+        std::int64_t last_heard_ns{-1};  // the last valid message, whatever its freshness
+        std::uint64_t other_stream_seq{0};
         std::uint64_t received{0};
         std::uint64_t rejected{0};
         std::array<std::uint64_t, static_cast<std::size_t>(InputRejection::kCount_)> rejected_by{};
@@ -219,12 +224,23 @@ class DaemonCore {
         }
         return reason;
     }
-    // kNone, kNotNewer or kDelayed; the sim's clock offset to keep when it is accepted.
+    // What freshness() learnt, for account() to keep.
+    struct Freshness {
+        std::int64_t clock_offset_ns;
+        std::int64_t other_stream_since_ns;
+        std::uint64_t other_stream_seq;
+    };
+    // kNone, kBadStamp, kNotNewer, kDelayed or kStampAhead.
     [[nodiscard]] InputRejection freshness(const DeviceSlot& slot,
                                            const msgs::MessageHeader& header, std::int64_t now_ns,
-                                           std::int64_t& clock_offset_ns) const noexcept;
-    // How fast the sim host's clock may drift from ours (200 ppm; quartz is within 100).
-    static constexpr double kClockDriftAllowance = 200e-6;
+                                           Freshness& out) const noexcept;
+    // How fast the sim host's clock may run against ours: 500 ppm, the most the kernel slews
+    // a clock by (adjtimex) while NTP corrects it; quartz itself is within 100.
+    static constexpr double kClockDriftAllowance = 500e-6;
+    // A silence, or refused content of a stream of its own, this long re-learns the sim's
+    // clock: twice sim_rearm_after_ns (so the operator's `enable` is due), at least 1 s.
+    static constexpr std::int64_t kMinRelearnAfterNs = 1'000'000'000;
+    [[nodiscard]] std::int64_t relearnAfterNs() const noexcept;
     [[nodiscard]] double ageMs(const DeviceSlot& slot, std::int64_t now_ns) const noexcept;
 
     CoreSettings settings_;

@@ -18,8 +18,10 @@ enum class InputRejection : std::uint8_t {
     kDegenerateConstraint,  // a constraint normal of zero length
     kBadNormal,             // a contact normal that is not unit length
     kNegativeWeight,
-    kNotNewer,  // its header.seq does not advance (and it is no restart): a replay or duplicate
-    kDelayed,   // older than sim_timeout_ns by its stamp (see DaemonCore::freshness())
+    kNotNewer,    // its header.seq does not advance (and it is no restart): a replay or duplicate
+    kDelayed,     // older than sim_timeout_ns by its stamp (see DaemonCore::freshness())
+    kBadStamp,    // header.stamp_ns is 0 or negative
+    kStampAhead,  // stamped ahead of the sim's learnt clock by more than sim_timeout_ns
     kCount_,
 };
 
