@@ -56,6 +56,8 @@ msgs::ContactSurface validContactSurface(std::string_view device, std::int64_t s
     return message;
 }
 
+// The sim over DDS, as if on another host: its clock is learnt (over iceoryx, the rule of
+// DaemonCoreFreshness.OverIceoryx...).
 class DaemonCoreTest : public ::testing::Test {
   protected:
     DaemonCoreTest()
@@ -64,7 +66,7 @@ class DaemonCoreTest : public ::testing::Test {
                            100 * kMs,
                            50 * kMs,
                            "subspace",
-                           msgs::SimTransport::kIceoryx,
+                           msgs::SimTransport::kDds,
                            {"subspace"}},
               {DeviceDescriptor{"exo_index", msgs::DeviceKind::kExoskeleton, 3, 1},
                DeviceDescriptor{"thimble_index", msgs::DeviceKind::kThimble, 3, 3}}) {
@@ -229,6 +231,7 @@ TEST_F(DaemonCoreTest, ACorruptStampIsRefusedAndTheMessagesAfterItAreTaken) {
 CoreSettings oneMethodSettings() {
     CoreSettings settings;
     settings.known_methods = {"subspace"};
+    settings.sim_transport = msgs::SimTransport::kDds;  // the sim's clock is learnt
     settings.rendering_method = "subspace";
     return settings;
 }
@@ -540,6 +543,35 @@ TEST(DaemonCoreFreshness, ASimWhoseClockChangedForGoodIsTakenAfterTheReArmAndAnE
     sim_clock -= 3000 * kMs;
     core.update(t, TickTiming{});
     reArm();
+}
+
+// Over iceoryx the sim is on this host and stamps with our CLOCK_MONOTONIC: a message's age is
+// now minus its stamp, from the first message on, with nothing learnt.
+TEST(DaemonCoreFreshness, OverIceoryxTheSimSharesOurClockAndItsAgeIsAbsolute) {
+    CoreSettings settings = oneMethodSettings();
+    settings.sim_transport = msgs::SimTransport::kIceoryx;
+    DaemonCore core(settings, kOneExoskeleton);
+    core.markStarted(0);
+    std::int64_t t = 1000 * kMs;
+    std::uint64_t seq = 0;
+    const auto offer = [&](std::int64_t stamp_ns) {
+        msgs::ConstraintSet message = validConstraintSet("exo");
+        message.header.seq = ++seq;
+        message.header.stamp_ns = stamp_ns;
+        return core.offerConstraintSet(0, message, t);
+    };
+    EXPECT_EQ(offer(t - 25 * kMs), InputRejection::kDelayed) << "the first message is judged too";
+    EXPECT_EQ(offer(t - 5 * kMs), InputRejection::kNone);
+    EXPECT_EQ(offer(t + kMs), InputRejection::kNone) << "stamped after our tick began";
+    const std::uint64_t accepted_seq = seq;
+    EXPECT_EQ(offer(t + 30 * kMs), InputRejection::kStampAhead);
+    EXPECT_EQ(offer(t - 21 * kMs), InputRejection::kDelayed) << "not judged by the quickest";
+    seq = accepted_seq - 1;
+    EXPECT_EQ(offer(t), InputRejection::kNotNewer) << "the last accepted seq again";
+    for (int i = 0; i < 60'000; ++i) {  // 10 minutes at 100 Hz, each message 3 ms old
+        t += 10 * kMs;
+        ASSERT_EQ(offer(t - 3 * kMs), InputRejection::kNone) << i;
+    }
 }
 
 TEST_F(DaemonCoreTest, AStalledTickDoesNotStepForceUp) {

