@@ -276,7 +276,18 @@ TEST_F(FailStopTest, AStallOfTheLoopAloneIsHapticdsOwnFaultAndBlamesNoHealthyDev
     });
 }
 
-TEST_F(FailStopTest, RoudiLostWhileRenderingWritesTheSafeCommandsBeforeExitingForARestart) {
+// With the shipped sim_timeout_ms (20) the sim input, which dies with RouDi, fades the force
+// and hapticd's fading command already leaves the drive limp long before the RouDi check: the
+// fail-stop would go unseen. 500 ms here, so only hapticd's safe command can limp the drive
+// before its command timeout.
+class RoudiLostTest : public FailStopTest {
+  protected:
+    RoudiLostTest() {
+        replaceLine(config_.dir / "daemon.yaml", "sim_timeout_ms: 20", "sim_timeout_ms: 500");
+    }
+};
+
+TEST_F(RoudiLostTest, WhileRenderingHapticdWritesTheSafeCommandsBeforeExitingForARestart) {
     renderUntilTheExoskeletonPushes();
     const std::int64_t kill_ns = monotonicNs();
     ASSERT_EQ(::kill(roudi_->pid(), SIGKILL), 0);
@@ -311,6 +322,21 @@ TEST_F(FailStopTest, RoudiLostWhileRenderingWritesTheSafeCommandsBeforeExitingFo
                 static_cast<double>(exited_ns - kill_ns) * 1e-6);
     // RouDi is checked every 200 ms (docs/hapticd.md); the safe command follows within ticks.
     EXPECT_LE(first_limp->at_ns - kill_ns, 200'000'000 + 2 * kTickNs + kSlackNs);
+    // And it was hapticd's safe command (the fade, 500 ms here, cannot have limped it): the
+    // first command disabling the drive after the kill came before the limp, and the drive
+    // was last commanded disabled at 0 N.
+    const auto first_disable = std::find_if(exo.begin(), exo.end(), [&](const auto& h) {
+        return h.at_ns > kill_ns && h.message.type == ExoType::kCommand &&
+               !h.message.command.enable;
+    });
+    ASSERT_NE(first_disable, exo.end()) << "hapticd never commanded the drive disabled";
+    EXPECT_LE(first_disable->at_ns, first_limp->at_ns);
+    const auto last_command = std::find_if(exo.rbegin(), exo.rend(), [](const auto& h) {
+        return h.message.type == ExoType::kCommand;
+    });
+    ASSERT_NE(last_command, exo.rend());
+    EXPECT_FALSE(last_command->message.command.enable);
+    EXPECT_EQ(last_command->message.command.force_n, 0.0);
 
     // What systemd does next: a new RouDi, then hapticd again: IDLE, no force before `enable`.
     sim_.reset();
