@@ -499,9 +499,8 @@ int runDaemon(const DaemonOptions& options) {
                 dropped_reported = dropped;
             }
             if (const auto lost = roudi_watch ? roudi_watch->check() : std::nullopt) {
-                // Stale sim input has already faded the forces to zero; stopping the loop
-                // below holds the devices safe. A fresh hapticd can register with the new
-                // RouDi, this one cannot.
+                // The loop stops below with its fail-stop (every device's safe command). A
+                // fresh hapticd can register with the new RouDi, this one cannot.
                 spdlog::error("{}; stopping so that hapticd restarts with the new RouDi", *lost);
                 exit_code = ipc::kRoudiLostExitCode;
                 break;

@@ -168,9 +168,17 @@ TEST_F(PlausibilityProcessTest,
     }
     expectLimpFromNowOn();
 
-    // Still overheating: clearing does not hide it.
+    // Still overheating: clearing does not hide it. Judged on a status taken after the clear
+    // (one published before it would show the old FAULT), and an operator's enable then is
+    // refused and moves nothing.
+    const std::int64_t cleared_ns = monotonicNs();
     ASSERT_TRUE(command("clear"));
-    waitForStatus("FAULT 102 exo again after clear", faulted);
+    waitForStatus("FAULT 102 exo again after clear", [&](const msgs::HapticStatus& s) {
+        return s.header.stamp_ns > cleared_ns + 50'000'000 && faulted(s);
+    });
+    const CommandResult enable = hapticctl({"enable"});
+    EXPECT_NE(enable.exit_code, 0)
+        << "enable accepted while the device reports its fault: " << enable.out;
     const auto still = exo_bus_.listen(200ms);
     EXPECT_FALSE(std::any_of(still.begin(), still.end(), [](const auto& h) {
         return enabledWithForce(h.message, 0.0);
