@@ -77,7 +77,8 @@ std::string statusJson(const msgs::HapticStatus& status, double sample_age_s) {
                               {"message", fault.message.view()}});
     }
     out["faults"] = faults;
-    return out.dump();
+    // Text from the daemon is not checked UTF-8: a bad byte becomes U+FFFD, not an exception.
+    return out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string simStatusJson(const msgs::SimStatus& status, double sample_age_s) {
@@ -96,7 +97,8 @@ std::string simStatusJson(const msgs::SimStatus& status, double sample_age_s) {
     out["steps_substepped"] = status.steps_substepped;
     out["inputs_rejected"] = status.inputs_rejected;
     out["last_rejection"] = status.last_rejection.view();
-    return out.dump();
+    // Text from the daemon is not checked UTF-8: a bad byte becomes U+FFFD, not an exception.
+    return out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 }  // namespace haptic::ctl

@@ -169,6 +169,25 @@ TEST(StatusJson, HandsimsStatusToo) {
     EXPECT_EQ(json["last_rejection"], std::string(status.last_rejection.view()));
 }
 
+// Text from the daemon or the sim is not checked UTF-8 (a device id from YAML, a message cut
+// at its capacity mid-character): the JSON stays valid, the bad bytes become U+FFFD.
+TEST(StatusJson, TextThatIsNotUtf8StaysValidJson) {
+    msgs::HapticStatus status;
+    msgs::Fault fault;
+    fault.code = 100;
+    fault.device_id.assign("exo\xff");
+    fault.message.assign("heartbeat lost \xc3");  // the first byte of a two-byte character
+    status.faults.push_back(fault);
+    nlohmann::json json;
+    ASSERT_NO_THROW(json = nlohmann::json::parse(statusJson(status, 0.0)));
+    EXPECT_EQ(json["faults"][0]["device"], "exo\xef\xbf\xbd");
+    EXPECT_EQ(json["faults"][0]["message"], "heartbeat lost \xef\xbf\xbd");
+    msgs::SimStatus sim;
+    sim.last_rejection.assign("bad \xfe pose");
+    ASSERT_NO_THROW(json = nlohmann::json::parse(simStatusJson(sim, 0.0)));
+    EXPECT_EQ(json["last_rejection"], "bad \xef\xbf\xbd pose");
+}
+
 TEST(StatusFormat, ADeviceAwaitingEnableSaysWhyAndHowToReArm) {
     msgs::HapticStatus status;
     msgs::DeviceStatus device;
