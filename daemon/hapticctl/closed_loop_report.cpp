@@ -91,6 +91,7 @@ std::map<int, DeviceColumns> readTelemetryCsv(std::string_view csv) {
 TrackingLatency trackingLatency(const DeviceColumns& device) {
     std::vector<double> from_receipt;
     std::vector<double> from_sample;
+    std::size_t tracker_samples = 0;
     const auto found = device.values.find("tracking_sampled_s");
     if (found != device.values.end()) {
         const auto& sampled = found->second;
@@ -100,15 +101,18 @@ TrackingLatency trackingLatency(const DeviceColumns& device) {
         for (std::size_t i = 1; i < sampled.size(); ++i) {
             // A new sample, seen on the tick right after the last one (a lost telemetry
             // sample in between would make the latency look longer than it was).
-            if (std::isnan(sampled[i]) || sampled[i] == sampled[i - 1] ||
-                tick[i] != tick[i - 1] + 1.0) {
+            if (std::isnan(sampled[i]) || sampled[i] == sampled[i - 1]) {
+                continue;
+            }
+            ++tracker_samples;
+            if (tick[i] != tick[i - 1] + 1.0) {
                 continue;
             }
             from_receipt.push_back(1e3 * (time[i] - received[i]));
             from_sample.push_back(1e3 * (time[i] - sampled[i]));
         }
     }
-    return {common::summarize(from_receipt), common::summarize(from_sample)};
+    return {common::summarize(from_receipt), common::summarize(from_sample), tracker_samples};
 }
 
 ExoskeletonReport exoskeletonReport(const DeviceColumns& device,
@@ -190,8 +194,15 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
     std::string out;
     const auto latencyLine = [](const DeviceColumns& device) {
         const TrackingLatency latency = trackingLatency(device);
-        if (latency.from_receipt_ms.count == 0) {
+        if (latency.tracker_samples == 0) {
             return std::string("  tracker to command: no tracker samples (scripted hand)\n");
+        }
+        if (latency.from_receipt_ms.count == 0) {
+            return fmt::format(
+                "  tracker to command: not measured: {} tracker samples, none on consecutive "
+                "ticks (a decimated recording; loop.telemetry_decimation: 1 records every "
+                "tick)\n",
+                latency.tracker_samples);
         }
         return fmt::format(
             "  tracker to command, {} samples: from handsim's receipt p50 {:.1f} ms, p99 {:.1f} "

@@ -51,6 +51,10 @@ struct DeviceColumns {
 struct TrackingLatency {
     common::PercentileSummary from_receipt_ms;
     common::PercentileSummary from_sample_ms;
+    // New tracker samples in the recording, measured or not (0: a scripted hand). Only those
+    // seen on the tick right after the previous one are measured, so a recording of every Nth
+    // tick (loop.telemetry_decimation) has samples but no latency.
+    std::size_t tracker_samples{0};
 };
 [[nodiscard]] TrackingLatency trackingLatency(const DeviceColumns& device);
 

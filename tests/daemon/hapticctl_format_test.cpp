@@ -304,10 +304,35 @@ TEST(ClosedLoopReport, TrackerToCommandLatencyIsTakenWhereTheSampleChanges) {
     const std::string text = formatReport(devices, {});
     EXPECT_NE(text.find("from handsim's receipt p50 15.0 ms"), std::string::npos) << text;
 
+    EXPECT_EQ(latency.tracker_samples, static_cast<std::size_t>(samples))
+        << "the one behind the lost telemetry sample is seen a tick late: counted, not measured";
+
     std::string scripted = telemetryCsvHeader();
     sample.tracking = {};
     scripted += telemetryCsvRow(sample, 0);
-    EXPECT_EQ(trackingLatency(readTelemetryCsv(scripted).at(0)).from_receipt_ms.count, 0U);
+    const auto scripted_devices = readTelemetryCsv(scripted);
+    EXPECT_EQ(trackingLatency(scripted_devices.at(0)).tracker_samples, 0U);
+    EXPECT_NE(formatReport(scripted_devices, {}).find("no tracker samples (scripted hand)"),
+              std::string::npos);
+
+    // Every 10th tick recorded: tracker samples, but none measurable, and the report says why.
+    std::string decimated = telemetryCsvHeader();
+    for (std::size_t row = 1; row < devices.at(0).column("tick").size(); row += 10) {
+        sample.tick = static_cast<std::uint64_t>(devices.at(0).column("tick")[row]);
+        sample.stamp_ns = kOrigin + 1'000'000LL * static_cast<std::int64_t>(sample.tick);
+        const double sampled_s = devices.at(0).column("tracking_sampled_s")[row];
+        sample.tracking = {
+            kOrigin + static_cast<std::int64_t>(std::llround(sampled_s * 1e9)),
+            kOrigin + static_cast<std::int64_t>(std::llround(sampled_s * 1e9)) + 20'000'000};
+        decimated += telemetryCsvRow(sample, kOrigin);
+    }
+    const auto decimated_devices = readTelemetryCsv(decimated);
+    const TrackingLatency none = trackingLatency(decimated_devices.at(0));
+    EXPECT_EQ(none.from_receipt_ms.count, 0U);
+    EXPECT_GT(none.tracker_samples, 50U);
+    const std::string decimated_text = formatReport(decimated_devices, {});
+    EXPECT_NE(decimated_text.find("not measured"), std::string::npos) << decimated_text;
+    EXPECT_EQ(decimated_text.find("scripted"), std::string::npos) << decimated_text;
 }
 
 // Every 10th tick sent: per device, a step of 30 is two samples missing.
