@@ -161,19 +161,23 @@ int runSim(const SimOptions& options) {
         // tracker already publishes at the first step (the demo's order: hapticemu first),
         // no silence ends, so nothing placed it: the tracking springs dragged it down through
         // the scene at their speed clamp, into whatever the tracked hand touches. Place it.
-        const bool first_pose = pose && !hand_placed;
-        if (first_pose) {
-            physics.reset(*pose);
-            hand_placed = true;
-            spdlog::info("tracking: first pose on '{}': hand placed at the tracked pose",
-                         cfg.scene.tracking.topic);
-        }
+        // Only a pose that passed validation places the hand (a NaN first pose must not).
+        bool pose_accepted = false;
         if (pose) {
             if (const auto reason = physics.setHandPose(*pose)) {
                 rejection = *reason;
             } else {
+                pose_accepted = true;
                 last_pose_time = step_start;
             }
+        }
+        const bool first_pose = pose_accepted && !hand_placed;
+        if (first_pose) {
+            physics.reset(*pose);
+            (void)physics.setHandPose(*pose);
+            hand_placed = true;
+            spdlog::info("tracking: first pose on '{}': hand placed at the tracked pose",
+                         cfg.scene.tracking.topic);
         }
         // A silent tracker (topic only; scripts and replays never fall silent) freezes the
         // hand; its targets would go on being rendered with fresh stamps. Withhold them
@@ -191,7 +195,7 @@ int runSim(const SimOptions& options) {
                 // whatever lies between, and the devices would render that transient (the
                 // demo's first contact rang at the 10 N clamp in both directions). Nothing was
                 // published meanwhile, so there is no continuity to keep: place it there.
-                if (pose && !first_pose) {  // the pose accepted this step ended the silence
+                if (pose_accepted && !first_pose) {  // this step's pose ended the silence
                     physics.reset(*pose);
                     (void)physics.setHandPose(*pose);
                 }
