@@ -71,6 +71,21 @@ void DaemonCore::setHardwareEstop(HardwareEstop input, std::string_view relay) n
 CommandOutcome DaemonCore::applyCommand(const msgs::HapticCommand& command, std::int64_t now_ns,
                                         msgs::HapticCommandReply& reply) noexcept {
     const char* blocked = blockedByHardwareEstop(command.kind, hardware_estop_);
+    // Clearing a fault whose cause a device still shows would only bring it back next tick,
+    // after a reply saying the daemon is IDLE: refuse it and say what stands.
+    if (blocked == nullptr && command.kind == msgs::CommandKind::kClearFault) {
+        for (const auto& slot : devices_) {
+            if (slot.report.standing_fault != 0) {
+                std::snprintf(refusal_, sizeof(refusal_),
+                              "device '%s' still shows the cause of fault %u; clear once it "
+                              "has gone (hapticctl status)",
+                              slot.descriptor.name.c_str(),
+                              static_cast<unsigned>(slot.report.standing_fault));
+                blocked = refusal_;
+                break;
+            }
+        }
+    }
     const CommandOutcome outcome = blocked != nullptr
                                        ? CommandOutcome{false, blocked}
                                        : machine_.apply(command.kind, command.argument.view());

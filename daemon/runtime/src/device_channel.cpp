@@ -118,6 +118,28 @@ void DeviceChannel::raise(daemon::DaemonCore& core, std::uint32_t fault_bit) noe
     core.raiseFault(code, name_, message);
 }
 
+namespace {
+
+// The code raise() gives a fault bit.
+std::uint32_t faultCodeOf(std::uint32_t fault_bit) noexcept {
+    switch (fault_bit) {
+        case devices::kHeartbeatLost:
+            return kFaultHeartbeatLost;
+        case devices::kBusOff:
+            return kFaultBusOff;
+        case devices::kDeviceFault:
+            return kFaultDeviceReported;
+        case devices::kDeviceRebooted:
+            return kFaultDeviceRebooted;
+        case kImplausibleFeedback:
+            return kFaultImplausibleFeedback;
+        default:
+            return kFaultTransmitFailed;
+    }
+}
+
+}  // namespace
+
 void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noexcept {
     link_bits_ = driverFaults(now_ns) & ~devices::kTransmitFailed;
     link_bits_ |= plausibilityFaults(now_ns);  // may read this tick's linkFaults()
@@ -147,6 +169,18 @@ void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noe
             static_cast<std::uint8_t>(protocol::DeviceFaultCode::kCommandTimeout) &&
         after_own_silence) {
         active &= ~static_cast<std::uint32_t>(devices::kDeviceFault);
+    }
+    // A cause the device still shows: `clear` is refused while it lasts (a device reboot is
+    // an event, not a standing cause).
+    report_.standing_fault = 0;
+    for (const std::uint32_t fault_bit :
+         {static_cast<std::uint32_t>(devices::kHeartbeatLost),
+          static_cast<std::uint32_t>(devices::kBusOff),
+          static_cast<std::uint32_t>(devices::kDeviceFault),
+          static_cast<std::uint32_t>(devices::kTransmitFailed), kImplausibleFeedback}) {
+        if ((active & fault_bit) != 0 && report_.standing_fault == 0) {
+            report_.standing_fault = faultCodeOf(fault_bit);
+        }
     }
     const std::uint32_t raised = active & ~latched_;
     for (const std::uint32_t fault_bit :

@@ -247,6 +247,7 @@ class DaemonCore {
     std::vector<DeviceSlot> devices_;
     DaemonStateMachine machine_;
     std::uint64_t reply_seq_{0};
+    char refusal_[msgs::kShortTextCapacity]{};  // a command's refusal made up on the RT thread
     std::int64_t started_ns_{0};
     std::int64_t last_tick_ns_{0};
     std::int64_t last_stall_end_ns_{0};

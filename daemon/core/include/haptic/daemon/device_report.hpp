@@ -20,6 +20,9 @@ struct DeviceReport {
     double last_frame_age_ms{-1.0};  // -1: never heard from the device
     // DeviceStatusBit: kOnline, kSafeState, kFault (the core adds kRendering, kStaleSimInput).
     std::uint32_t status_bits{static_cast<std::uint32_t>(msgs::DeviceStatusBit::kSafeState)};
+    // The code of a latched fault whose cause the device still shows (it reports its own
+    // fault, stays silent, ...), 0 when none: `clear` is refused while one stands.
+    std::uint32_t standing_fault{0};
 
     // Measured (DeviceState).
     std::array<double, msgs::kMaxJointDofs> joint_position_rad{};
