@@ -73,7 +73,24 @@ EstopRelayConfig readEstopRelay(MapReader map, const std::vector<DeviceConfig>& 
     return out;
 }
 
+ControlConfig readControl(MapReader map) {
+    ControlConfig out;
+    auto [dir, dir_field] = map.requiredWithField("socket_dir", spec::Text{});
+    if (dir.empty() || dir.front() != '/') {
+        dir_field.fail("an absolute directory path", "'" + dir + "'");
+    }
+    out.socket_dir = dir;
+    out.operator_group = map.required("operator_group", spec::Text{});
+    map.finish();
+    return out;
+}
+
 }  // namespace
+
+std::filesystem::path controlSocketPath(const DaemonConfig& config) {
+    return config.control.socket_dir /
+           ("control-" + std::to_string(config.dds.domain_id) + ".sock");
+}
 
 DaemonConfig loadDaemonConfig(const std::filesystem::path& path) {
     MapReader root = MapReader::openFile(path);
@@ -84,6 +101,9 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& path) {
     out.devices = detail::readDeviceList(detail::requiredDeviceList(root), out.loop.rate_hz);
     if (auto relay = root.optionalMap("estop_relay")) {
         out.estop_relay = readEstopRelay(std::move(*relay), out.devices);
+    }
+    if (auto control = root.optionalMap("control")) {
+        out.control = readControl(std::move(*control));
     }
     detail::readTransports(root, out);
     root.finish();

@@ -1,7 +1,8 @@
-// hapticctl: the operator CLI. It only talks over published DDS topics (haptic/status,
-// haptic/command and its reply) and never calls into the daemon's RT thread: hapticd's
-// non-RT thread forwards commands through a lock-free queue, so no query or command can
-// cause an overrun.
+// hapticctl: the operator CLI. On hapticd's host, status and commands go through hapticd's
+// local control socket (its peer credentials say what the caller may do); elsewhere, or with
+// --over-dds, over DDS (haptic/status, and haptic/command, which takes only estop). It never
+// calls into the daemon's RT thread: hapticd's non-RT thread forwards commands through a
+// lock-free queue, so no query or command can cause an overrun.
 
 #include <spawn.h>
 #include <sys/wait.h>
@@ -17,8 +18,10 @@
 #include <exception>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 #include "HapticCommandPubSubTypes.h"
 #include "HapticStatusPubSubTypes.h"
@@ -29,6 +32,7 @@
 #include "haptic/config/daemon.hpp"
 #include "haptic/config/enums.hpp"
 #include "haptic/config/error.hpp"
+#include "haptic/control/control_socket.hpp"
 #include "haptic/ipc/dds_participant.hpp"
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
@@ -83,7 +87,64 @@ void reportNoDaemon(const haptic::config::DaemonConfig& cfg, double timeout_s) {
                  haptic::ipc::kStatusTopic, cfg.dds.domain_id, timeout_s);
 }
 
-int printStatus(const haptic::config::DaemonConfig& cfg, double timeout_s, bool json) {
+// The status from hapticd's local control socket; nullopt when no hapticd serves one on this
+// host (no socket file, or a stale one), for the caller to try DDS.
+std::optional<int> printStatusLocally(const haptic::config::DaemonConfig& cfg, double timeout_s,
+                                      bool json) {
+    namespace control = haptic::control;
+    control::ControlClient client(haptic::config::controlSocketPath(cfg));
+    switch (client.connect()) {
+        case control::ControlClient::Connect::kConnected:
+            break;
+        case control::ControlClient::Connect::kNoSocket:
+        case control::ControlClient::Connect::kRefused:
+            return std::nullopt;
+        case control::ControlClient::Connect::kError:
+            std::fprintf(stderr, "hapticctl: local control socket %s\n", client.error().c_str());
+            return kExitError;
+    }
+    // A hapticd still starting answers "no status yet": ask again until the timeout.
+    const auto deadline = std::chrono::steady_clock::now() + toMs(timeout_s);
+    std::string last_error;
+    for (;;) {
+        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+            deadline - std::chrono::steady_clock::now());
+        const auto answer =
+            client.request({control::kStatusRequest}, std::max(left, std::chrono::milliseconds(1)));
+        if (!answer) {
+            std::fprintf(stderr, "hapticctl: no status from hapticd on %s: %s\n",
+                         haptic::config::controlSocketPath(cfg).c_str(), client.error().c_str());
+            return kExitNoDaemon;
+        }
+        if (answer->kind == control::kStatusAnswer) {
+            haptic::idl::HapticStatus sample;
+            if (!control::decode(answer->body.data(), answer->body.size(), sample)) {
+                std::fprintf(stderr, "hapticctl: malformed status on the control socket\n");
+                return kExitError;
+            }
+            std::string screen;
+            if (!renderStatus(sample, screen, json)) {
+                return kExitError;
+            }
+            std::cout << screen << std::flush;
+            return EXIT_SUCCESS;
+        }
+        last_error.assign(answer->body.begin(), answer->body.end());
+        if (std::chrono::steady_clock::now() + 20ms >= deadline) {
+            std::fprintf(stderr, "hapticctl: hapticd: %s\n", last_error.c_str());
+            return kExitNoDaemon;
+        }
+        std::this_thread::sleep_for(20ms);
+    }
+}
+
+int printStatus(const haptic::config::DaemonConfig& cfg, double timeout_s, bool json,
+                bool over_dds) {
+    if (!over_dds) {
+        if (const auto local = printStatusLocally(cfg, timeout_s, json)) {
+            return *local;
+        }
+    }
     haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
     auto reader = participant.createReader<haptic::idl::HapticStatusPubSubType>(
         haptic::ipc::kStatusTopic, haptic::ipc::TopicKind::kLatestState);
@@ -299,14 +360,57 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
 // (re)sent once the daemon's reader is matched and again every 500 ms until answered: a
 // first send can reach the daemon before its reply writer has discovered our reader, and
 // the daemon answers a repeated request id from its record instead of running it twice.
-int sendCommand(const haptic::config::DaemonConfig& cfg, haptic::msgs::CommandKind kind,
-                const std::string& argument, double timeout_s) {
-    haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
-    auto writer = participant.createWriter<haptic::idl::HapticCommandPubSubType>(
-        haptic::ipc::kCommandTopic, haptic::ipc::TopicKind::kStream);
-    auto reader = participant.createReader<haptic::idl::HapticCommandReplyPubSubType>(
-        haptic::ipc::kCommandReplyTopic, haptic::ipc::TopicKind::kStream);
+// What a reply means for the caller: its message, and the exit code.
+int reportReply(const haptic::msgs::HapticCommandReply& reply) {
+    const std::string message(reply.message.view());
+    if (!reply.accepted) {
+        std::fprintf(stderr, "hapticctl: refused: %s\n", message.c_str());
+        return kExitRefused;
+    }
+    std::printf("%s\n", message.c_str());
+    return EXIT_SUCCESS;
+}
 
+// The command through hapticd's local control socket; nullopt when no hapticd serves one on
+// this host, for the caller to try DDS.
+std::optional<int> sendCommandLocally(const haptic::config::DaemonConfig& cfg,
+                                      const haptic::idl::HapticCommand& wire, double timeout_s) {
+    namespace control = haptic::control;
+    control::ControlClient client(haptic::config::controlSocketPath(cfg));
+    switch (client.connect()) {
+        case control::ControlClient::Connect::kConnected:
+            break;
+        case control::ControlClient::Connect::kNoSocket:
+        case control::ControlClient::Connect::kRefused:
+            return std::nullopt;
+        case control::ControlClient::Connect::kError:
+            std::fprintf(stderr, "hapticctl: local control socket %s\n", client.error().c_str());
+            return kExitError;
+    }
+    std::vector<char> datagram;
+    if (!control::encode(control::kCommandRequest, wire, datagram)) {
+        std::fprintf(stderr, "hapticctl: the command does not encode\n");
+        return kExitError;
+    }
+    const auto answer = client.request(datagram, toMs(timeout_s));
+    if (!answer) {
+        std::fprintf(stderr, "hapticctl: hapticd did not answer on %s: %s\n",
+                     haptic::config::controlSocketPath(cfg).c_str(), client.error().c_str());
+        return kExitNoDaemon;
+    }
+    haptic::idl::HapticCommandReply sample;
+    haptic::msgs::HapticCommandReply reply;
+    if (answer->kind != control::kReplyAnswer ||
+        !control::decode(answer->body.data(), answer->body.size(), sample) ||
+        !haptic::msgs::fromIdl(sample, reply).ok()) {
+        std::fprintf(stderr, "hapticctl: malformed answer on the control socket\n");
+        return kExitError;
+    }
+    return reportReply(reply);
+}
+
+int sendCommand(const haptic::config::DaemonConfig& cfg, haptic::msgs::CommandKind kind,
+                const std::string& argument, double timeout_s, bool over_dds) {
     haptic::msgs::HapticCommand command;
     command.request_id = (static_cast<std::uint64_t>(::getpid()) << 32) ^
                          static_cast<std::uint64_t>(haptic::common::monotonicNowNs());
@@ -321,6 +425,17 @@ int sendCommand(const haptic::config::DaemonConfig& cfg, haptic::msgs::CommandKi
     }
     command.argument.assign(argument);
     const auto wire = haptic::msgs::toIdl(command);
+    if (!over_dds) {
+        if (const auto local = sendCommandLocally(cfg, wire, timeout_s)) {
+            return *local;
+        }
+    }
+
+    haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
+    auto writer = participant.createWriter<haptic::idl::HapticCommandPubSubType>(
+        haptic::ipc::kCommandTopic, haptic::ipc::TopicKind::kStream);
+    auto reader = participant.createReader<haptic::idl::HapticCommandReplyPubSubType>(
+        haptic::ipc::kCommandReplyTopic, haptic::ipc::TopicKind::kStream);
 
     const auto deadline = std::chrono::steady_clock::now() + toMs(timeout_s);
     auto last_sent = std::chrono::steady_clock::time_point{};
@@ -340,13 +455,7 @@ int sendCommand(const haptic::config::DaemonConfig& cfg, haptic::msgs::CommandKi
             std::fprintf(stderr, "hapticctl: malformed reply: %s\n", result.error.c_str());
             return kExitError;
         }
-        const std::string message(reply.message.view());
-        if (!reply.accepted) {
-            std::fprintf(stderr, "hapticctl: refused: %s\n", message.c_str());
-            return kExitRefused;
-        }
-        std::printf("%s\n", message.c_str());
-        return EXIT_SUCCESS;
+        return reportReply(reply);
     }
     if (sent) {
         std::fprintf(stderr, "hapticctl: hapticd did not answer on '%s' within %.1f s\n",
@@ -379,6 +488,10 @@ int main(int argc, char** argv) {
                    "daemon configuration file (for the DDS domain and profile)")
         ->capture_default_str();
     app.add_option("--dds-domain", dds_domain, "override dds.domain_id")->check(CLI::Range(0, 232));
+    bool over_dds = false;
+    app.add_flag("--over-dds", over_dds,
+                 "skip the local control socket and use DDS, as on another host (status; "
+                 "commands: only estop is taken)");
     app.add_option("--timeout", timeout_s,
                    "seconds to wait for the daemon's status (default 2), handsim's status or a "
                    "reply (default 5)")
@@ -476,7 +589,7 @@ int main(int argc, char** argv) {
             timeout_s = is_command || sim->parsed() ? 5.0 : 2.0;
         }
         if (status->parsed()) {
-            return printStatus(cfg, timeout_s, json);
+            return printStatus(cfg, timeout_s, json, over_dds);
         }
         if (sim->parsed()) {
             return printSimStatus(cfg, timeout_s, json);
@@ -491,11 +604,11 @@ int main(int argc, char** argv) {
             return plotTelemetry(plot_path, plot_output, plot_clamp_n, plot_thimble_max_force_n);
         }
         if (method->parsed()) {
-            return sendCommand(cfg, CommandKind::kSetMethod, method_name, timeout_s);
+            return sendCommand(cfg, CommandKind::kSetMethod, method_name, timeout_s, over_dds);
         }
         for (const auto& entry : simple) {
             if (entry.sub->parsed()) {
-                return sendCommand(cfg, entry.kind, "", timeout_s);
+                return sendCommand(cfg, entry.kind, "", timeout_s, over_dds);
             }
         }
         return kExitError;  // CLI11 requires one subcommand, so this is not reached

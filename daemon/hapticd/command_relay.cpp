@@ -14,8 +14,10 @@ constexpr std::size_t kRecordedReplies = 32;
 
 }  // namespace
 
-CommandRelay::CommandRelay(ipc::DdsParticipant& participant, daemon::CommandChannel& channel)
+CommandRelay::CommandRelay(ipc::DdsParticipant& participant, daemon::CommandChannel& channel,
+                           control::ControlServer& local)
     : channel_(channel),
+      local_(local),
       commands_(participant.createReader<idl::HapticCommandPubSubType>(ipc::kCommandTopic,
                                                                        ipc::TopicKind::kStream)),
       replies_(participant.createWriter<idl::HapticCommandReplyPubSubType>(
@@ -62,6 +64,15 @@ void CommandRelay::poll() {
             in_flight_.end()) {
             continue;  // a resend of a command the RT thread has not answered yet
         }
+        if (command.kind != msgs::CommandKind::kEstop ||
+            (command.request_id & control::ControlServer::kLocalRequestBit) != 0) {
+            spdlog::warn("command {} '{}' over DDS refused: only estop is taken over DDS",
+                         command.request_id, msgs::toString(command.kind));
+            refuse(command.request_id,
+                   "over DDS only estop is taken (DDS carries no identity); operate with "
+                   "hapticctl on hapticd's host, through its local control socket");
+            continue;
+        }
         if (!channel_.submit(command)) {
             refuse(command.request_id, "the RT loop is not taking commands (queue full)");
             continue;
@@ -72,6 +83,9 @@ void CommandRelay::poll() {
     }
     msgs::HapticCommandReply answer;
     while (channel_.takeReply(answer)) {
+        if (local_.deliver(answer)) {
+            continue;  // a local caller's, answered on the socket
+        }
         in_flight_.erase(std::remove(in_flight_.begin(), in_flight_.end(), answer.request_id),
                          in_flight_.end());
         spdlog::info("command {} {}: {}", answer.request_id,

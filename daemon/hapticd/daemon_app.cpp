@@ -18,6 +18,8 @@
 #include "dds_sim_link.hpp"
 #include "device_state_publisher.hpp"
 #include "haptic/common/clock.hpp"
+#include "haptic/config/daemon.hpp"
+#include "haptic/control/control_server.hpp"
 #include "haptic/daemon/command_channel.hpp"
 #include "haptic/daemon/daemon_core.hpp"
 #include "haptic/daemon/seqlock.hpp"
@@ -336,7 +338,16 @@ int runDaemon(const DaemonOptions& options) {
     const auto& cfg = options.config;
     // Over DDS the daemon needs no RouDi: the sim link is its only iceoryx user.
     const bool dds_sim = cfg.sim_link.transport == config::SimTransport::kDds;
+    daemon::CommandChannel commands;
+    // Operators on this host: the local socket, whose peer credentials say who may do what.
+    // First of all, so that a second hapticd on this domain stops here, before it joins
+    // RouDi or opens a device.
+    control::ControlServer control_server(config::controlSocketPath(cfg),
+                                          cfg.control.operator_group, commands);
     const std::optional<ipc::RoudiWatch> roudi_watch = ipc::joinRoudi(!dds_sim, "hapticd");
+    spdlog::info("local control on {} (operators: root and group '{}'{})",
+                 control_server.path().string(), cfg.control.operator_group,
+                 control_server.groupKnown() ? "" : ", which does not exist on this host");
     std::vector<DeviceEndpoints> endpoints(cfg.devices.size());
     for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
         const auto& device = cfg.devices[i];
@@ -369,8 +380,7 @@ int runDaemon(const DaemonOptions& options) {
     auto status_writer = participant.createWriter<idl::HapticStatusPubSubType>(
         ipc::kStatusTopic, ipc::TopicKind::kLatestState);
 
-    daemon::CommandChannel commands;
-    CommandRelay command_relay(participant, commands);
+    CommandRelay command_relay(participant, commands, control_server);
     auto telemetry_writer = participant.createWriter<idl::HapticTelemetryPubSubType>(
         ipc::kTelemetryTopic, ipc::TopicKind::kStream);
     auto telemetry = std::make_unique<TelemetryQueue>();
@@ -477,14 +487,32 @@ int runDaemon(const DaemonOptions& options) {
     if (watchdog) {
         wake_period = std::min(wake_period, std::chrono::nanoseconds(watchdog_usec * 1000 / 4));
     }
-    while (process::sleepUnlessShutdown(wake_period)) {
+    // The control socket's requests wake this thread at once (an E-stop reaches the RT thread
+    // within a tick or two); while a forwarded command awaits its reply, every millisecond.
+    const auto serveUntil = [&](std::chrono::steady_clock::time_point until) {
+        for (auto now = std::chrono::steady_clock::now();
+             now < until && !process::shutdownRequested(); now = std::chrono::steady_clock::now()) {
+            const auto slice =
+                control_server.awaitingReplies()
+                    ? std::chrono::milliseconds(1)
+                    : std::min(std::chrono::duration_cast<std::chrono::milliseconds>(until - now) +
+                                   std::chrono::milliseconds(1),
+                               std::chrono::milliseconds(20));
+            control_server.serve(slice);
+            command_relay.poll();
+        }
+        return !process::shutdownRequested();
+    };
+    while (serveUntil(std::chrono::steady_clock::now() + wake_period)) {
         command_relay.poll();
         publishTelemetry();
         // The RT thread produces a snapshot per status period; publish each one once.
         const auto& snapshots = loop.status();
         if (snapshots.version() != last_version && snapshots.load(status)) {
             last_version = snapshots.version();
-            status_writer.write(msgs::toIdl(status));
+            const idl::HapticStatus wire = msgs::toIdl(status);
+            status_writer.write(wire);
+            control_server.publish(wire);
             journal(journaled ? &*journaled : nullptr, status);
             journaled = status;
         }

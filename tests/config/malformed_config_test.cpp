@@ -116,10 +116,11 @@ TEST(ConfigFileErrors, DuplicateKeyIsRejected) {
 // --- unknown keys ----------------------------------------------------------------------------
 
 TEST(ConfigUnknownKeys, TopLevelTypoListsAllowedKeys) {
-    expectError(daemonError("unknown_key_top_level.yaml"),
-                {data("unknown_key_top_level.yaml"), 1, 1, "log_levle",
-                 "unknown key 'log_levle' (allowed: log_level, loop, devices, estop_relay, "
-                 "sim_link, dds, iceoryx)"});
+    expectError(
+        daemonError("unknown_key_top_level.yaml"),
+        {data("unknown_key_top_level.yaml"), 1, 1, "log_levle",
+         "unknown key 'log_levle' (allowed: log_level, loop, devices, estop_relay, control, "
+         "sim_link, dds, iceoryx)"});
 }
 
 TEST(ConfigUnknownKeys, NestedTypoHasDottedPath) {
@@ -292,6 +293,23 @@ TEST(ConfigEstopRelay, TheBusMustBeADevicesAndTheIdItsOwn) {
     EXPECT_EQ(relay.estop_relay.timeout_ms, 40);
     EXPECT_FALSE(loadDaemonConfig(kDataDir / "daemon_ok.yaml").estop_relay.enabled)
         << "no block: no relay";
+}
+
+// The local control socket: <socket_dir>/control-<domain>.sock, the directory absolute (the
+// daemon's working directory is not the operator's); no block: /run/hapticd and 'haptic'.
+TEST(ConfigControl, TheSocketDirectoryIsAbsoluteAndNamesTheSocketPerDomain) {
+    const auto relative = kDataDir / "control_relative_dir.yaml";
+    expectError(daemonError("control_relative_dir.yaml"),
+                {relative.string(), lineOf(relative, "socket_dir"), 15, "control.socket_dir",
+                 "expected an absolute directory path, got 'run/hapticd'"});
+    DaemonConfig lab = loadDaemonConfig(kDataDir / "control_ok.yaml");
+    EXPECT_EQ(lab.control.operator_group, "labops");
+    EXPECT_EQ(controlSocketPath(lab), "/var/run/haptic-lab/control-0.sock");
+    lab.dds.domain_id = 17;  // hapticctl --dds-domain 17 finds hapticd --dds-domain 17's
+    EXPECT_EQ(controlSocketPath(lab), "/var/run/haptic-lab/control-17.sock");
+    const DaemonConfig plain = loadDaemonConfig(kDataDir / "daemon_ok.yaml");
+    EXPECT_EQ(controlSocketPath(plain), "/run/hapticd/control-0.sock");
+    EXPECT_EQ(plain.control.operator_group, "haptic");
 }
 
 // Negative damping along the actuator would feed energy into the finger.

@@ -55,16 +55,31 @@ struct EstopRelayConfig {
     int timeout_ms{30};
 };
 
+// hapticd's local control socket (docs/hapticctl.md): status and commands for this host's
+// operators, each caller's rights from its peer credentials.
+struct ControlConfig {
+    // The socket is <socket_dir>/control-<dds.domain_id>.sock: hapticctl finds it from the
+    // same file and domain, and daemons on other domains never share one.
+    std::filesystem::path socket_dir{"/run/hapticd"};
+    // Members (and root) may enable, disable, clear and choose the method; any local user
+    // may read the status and send an E-stop.
+    std::string operator_group{"haptic"};
+};
+
 struct DaemonConfig {
     std::filesystem::path source;
     LogLevel log_level{LogLevel::kInfo};
     LoopConfig loop;
     std::vector<DeviceConfig> devices;  // 1..4, names unique, CAN ids disjoint per interface
     EstopRelayConfig estop_relay;
+    ControlConfig control;
     SimLinkConfig sim_link;
     DdsConfig dds;
     std::optional<IceoryxConfig> iceoryx;
 };
+
+// <control.socket_dir>/control-<dds.domain_id>.sock
+[[nodiscard]] std::filesystem::path controlSocketPath(const DaemonConfig& config);
 
 // Loads daemon.yaml and every device file it names. Throws ConfigError.
 [[nodiscard]] DaemonConfig loadDaemonConfig(const std::filesystem::path& path);
