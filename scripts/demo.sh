@@ -52,6 +52,14 @@ if [[ -S /tmp/roudi ]] && pgrep -x iox-roudi >/dev/null; then
   exit 1
 fi
 
+# hapticd serves hapticctl on a socket in /run/hapticd (daemon.yaml control.socket_dir), which
+# it creates as root; another user needs it made once.
+if [[ ! -d /run/hapticd && ! -w /run ]] || [[ -d /run/hapticd && ! -w /run/hapticd ]]; then
+  echo "demo: hapticd's control socket goes in /run/hapticd (daemon.yaml control.socket_dir);" \
+       "make it yours once: sudo install -d -m 0755 -o $USER /run/hapticd" >&2
+  exit 1
+fi
+
 stop() {
   local pid=$1 name=$2
   if kill -0 "$pid" 2>/dev/null; then

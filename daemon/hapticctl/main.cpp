@@ -426,8 +426,16 @@ int sendCommand(const haptic::config::DaemonConfig& cfg, haptic::msgs::CommandKi
     command.argument.assign(argument);
     const auto wire = haptic::msgs::toIdl(command);
     if (!over_dds) {
-        if (const auto local = sendCommandLocally(cfg, wire, timeout_s)) {
+        const auto local = sendCommandLocally(cfg, wire, timeout_s);
+        // A stop must get through: when the socket fails it (permissions, a stalled or
+        // flooded daemon), it goes over DDS as well, which takes estop from anyone.
+        const bool try_dds = kind == haptic::msgs::CommandKind::kEstop && local &&
+                             (*local == kExitError || *local == kExitNoDaemon);
+        if (local && !try_dds) {
             return *local;
+        }
+        if (try_dds) {
+            std::fprintf(stderr, "hapticctl: sending estop over DDS as well\n");
         }
     }
 

@@ -64,8 +64,7 @@ void CommandRelay::poll() {
             in_flight_.end()) {
             continue;  // a resend of a command the RT thread has not answered yet
         }
-        if (command.kind != msgs::CommandKind::kEstop ||
-            (command.request_id & control::ControlServer::kLocalRequestBit) != 0) {
+        if (command.kind != msgs::CommandKind::kEstop) {
             spdlog::warn("command {} '{}' over DDS refused: only estop is taken over DDS",
                          command.request_id, msgs::toString(command.kind));
             refuse(command.request_id,

@@ -465,6 +465,55 @@ TEST(DaemonCoreRearm, ALongSimOutageWhileRenderingNeedsANewEnable) {
     EXPECT_FALSE(core.awaitingEnable(0));
 }
 
+// Over DDS the sim's clock is learnt from its first messages: the median of the first five
+// stands for it, so one corrupt stamp among them (the very first, or a restarted sim's first)
+// costs a message or two, not the link. And a replay after a silence is still a replay.
+TEST_F(DaemonCoreTest, ACorruptStampWhileTheClockIsLearntCostsAMessageNotTheLink) {
+    std::int64_t t = 0;
+    const auto offerAt = [&](std::int64_t stamp_ns) {
+        msgs::ConstraintSet message = validConstraintSet("exo_index");
+        message.header.stamp_ns = stamp_ns;
+        return sut.offerConstraintSet(0, message, t);
+    };
+    // The very first message stamped near the int64 limit (taken: nothing to judge it by).
+    EXPECT_EQ(offerAt(std::numeric_limits<std::int64_t>::max() - 1), InputRejection::kNone);
+    int refused = 0;
+    for (int i = 0; i < 20; ++i) {
+        t = runTicks(t, 10);
+        const InputRejection verdict = offerAt(kSimClockAtZero + t - 3 * kMs);
+        refused += verdict == InputRejection::kNone ? 0 : 1;
+        if (i >= 2) {
+            EXPECT_EQ(verdict, InputRejection::kNone) << i;
+        }
+    }
+    EXPECT_LE(refused, 1);
+    // A restarted sim whose first message is stamped 1 s ahead of its clock.
+    msgs::ConstraintSet restarted = validConstraintSet("exo_index");
+    restarted.header.seq = 1;
+    restarted.header.stamp_ns = kSimClockAtZero + t + 1000 * kMs;
+    t = runTicks(t, 10);
+    EXPECT_EQ(sut.offerConstraintSet(0, restarted, t), InputRejection::kNone) << "a restart";
+    refused = 0;
+    for (std::uint64_t seq = 2; seq < 20; ++seq) {
+        t = runTicks(t, 10);
+        msgs::ConstraintSet message = validConstraintSet("exo_index");
+        message.header.seq = seq;
+        message.header.stamp_ns = kSimClockAtZero + t - 3 * kMs;
+        const InputRejection verdict = sut.offerConstraintSet(0, message, t);
+        refused += verdict == InputRejection::kNone ? 0 : 1;
+        if (seq >= 4) {
+            EXPECT_EQ(verdict, InputRejection::kNone) << seq;
+        }
+    }
+    EXPECT_LE(refused, 1);
+    // The last message again after 3 s of silence: a replay, not a new start.
+    msgs::ConstraintSet last = validConstraintSet("exo_index");
+    last.header.seq = 19;
+    last.header.stamp_ns = kSimClockAtZero + t - 3 * kMs;
+    t = runTicks(t, 3000);
+    EXPECT_EQ(sut.offerConstraintSet(0, last, t), InputRejection::kNotNewer);
+}
+
 // The sim's clock changes for good while hapticd runs: its host rebooted (seq and stamp both
 // go back), its clock was stepped ahead, or it was suspended (its CLOCK_MONOTONIC stood still).
 // Refused at first, so the force fades; once that content has formed a stream of its own for

@@ -80,6 +80,14 @@ TEST_F(ControlAccessTest, OutsidersMayReadTheStatusAndStopButNotOperate) {
     });
     EXPECT_EQ(idle.rendering_method.view(), method) << "the refused method took effect";
 
+    // A member through a supplementary group (the caller process's own, SO_PEERGROUPS):
+    // uid 1 with nogroup added may operate; here it disables nothing, IDLE already.
+    const CommandResult supplementary = runCommand(
+        {"/usr/bin/setpriv", "--reuid=1", "--regid=1", "--groups=65534", HAPTICCTL_PATH, "-c",
+         (config_.dir / "daemon.yaml").string(), "--dds-domain", domain(), "disable"},
+        20s);
+    EXPECT_EQ(supplementary.exit_code, 0) << supplementary.out << supplementary.err;
+
     // A member operates: enable, and the daemon renders.
     const CommandResult enabled = hapticctlAs(kMember, {"enable"});
     ASSERT_EQ(enabled.exit_code, 0) << enabled.out << enabled.err;
@@ -112,6 +120,21 @@ TEST_F(ControlAccessTest, OverDdsOnlyEstopIsTaken) {
     EXPECT_EQ(stopped.exit_code, 0) << stopped.out << stopped.err;
     waitForStatus("E-STOP after the estop over DDS",
                   [](const msgs::HapticStatus& s) { return s.state == msgs::DaemonState::kEstop; });
+}
+
+// A stop must get through: when the socket refuses the caller (here its permissions, as a
+// misconfigured socket_dir would), hapticctl estop goes over DDS as well, and is taken.
+TEST_F(ControlAccessTest, AnEstopTheSocketCannotCarryGoesOverDds) {
+    const fs::path socket = socketDir() / ("control-" + domain() + ".sock");
+    fs::permissions(socket, fs::perms::owner_read | fs::perms::owner_write);
+    const CommandResult stopped = hapticctlAs(kOutsider, {"estop"});
+    EXPECT_EQ(stopped.exit_code, 0) << stopped.out << stopped.err;
+    EXPECT_THAT(stopped.err, HasSubstr("Permission denied"));
+    EXPECT_THAT(stopped.err, HasSubstr("sending estop over DDS as well"));
+    waitForStatus("E-STOP after the estop over DDS",
+                  [](const msgs::HapticStatus& s) { return s.state == msgs::DaemonState::kEstop; });
+    const CommandResult enable = hapticctlAs(kOutsider, {"enable"});
+    EXPECT_NE(enable.exit_code, 0) << "no fallback for anything but estop";
 }
 
 // A second hapticd on the same domain finds the socket served and stops before it opens any

@@ -1,9 +1,10 @@
 #include "haptic/control/control_server.hpp"
 
+#include <fcntl.h>
 #include <grp.h>
 #include <poll.h>
-#include <pwd.h>
 #include <spdlog/spdlog.h>
+#include <sys/file.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
@@ -47,27 +48,25 @@ std::optional<gid_t> groupId(const std::string& name) {
     return found->gr_gid;
 }
 
-// The user's groups from the user database (SO_PEERCRED carries the primary group only).
-bool inGroup(uid_t uid, gid_t primary_gid, gid_t wanted) {
+// The groups of the connecting process itself (SO_PEERGROUPS, Linux 4.13+): its real
+// supplementary groups, with no user-database lookup that could block this thread.
+bool peerInGroup(int fd, gid_t primary_gid, gid_t wanted) {
     if (primary_gid == wanted) {
         return true;
     }
-    std::vector<char> buffer(16 * 1024);
-    passwd entry{};
-    passwd* found = nullptr;
-    if (::getpwuid_r(uid, &entry, buffer.data(), buffer.size(), &found) != 0 || found == nullptr) {
-        return false;
-    }
     std::vector<gid_t> groups(64);
-    int count = static_cast<int>(groups.size());
-    if (::getgrouplist(found->pw_name, found->pw_gid, groups.data(), &count) < 0) {
-        groups.resize(static_cast<std::size_t>(count));
-        if (::getgrouplist(found->pw_name, found->pw_gid, groups.data(), &count) < 0) {
+    for (int attempt = 0; attempt < 2; ++attempt) {
+        socklen_t length = static_cast<socklen_t>(groups.size() * sizeof(gid_t));
+        if (::getsockopt(fd, SOL_SOCKET, SO_PEERGROUPS, groups.data(), &length) == 0) {
+            groups.resize(length / sizeof(gid_t));
+            return std::find(groups.begin(), groups.end(), wanted) != groups.end();
+        }
+        if (errno != ERANGE) {
             return false;
         }
+        groups.resize(length / sizeof(gid_t) + 1);
     }
-    groups.resize(static_cast<std::size_t>(count));
-    return std::find(groups.begin(), groups.end(), wanted) != groups.end();
+    return false;
 }
 
 std::vector<char> errorDatagram(const std::string& text) {
@@ -80,6 +79,15 @@ std::vector<char> errorDatagram(const std::string& text) {
 std::string describe(const PeerCredentials& peer) {
     return "uid " + std::to_string(peer.uid) + " pid " + std::to_string(peer.pid);
 }
+
+constexpr std::size_t kMaxCallersPerUser = 16;
+constexpr std::size_t kMaxCallers = 128;
+// Connections taken per serve(): a flood of connects must not keep this thread from the
+// requests already waiting, nor from publishing the status and pinging the watchdog.
+constexpr int kAcceptsPerServe = 8;
+// A forwarded command whose reply has not come back by then is given up (the RT thread is
+// stalled, or its reply queue overflowed): its caller is told, the slot freed.
+constexpr std::chrono::seconds kReplyTimeout{2};
 
 // Stopping is always allowed.
 bool anyoneMay(msgs::CommandKind kind) {
@@ -97,43 +105,69 @@ ControlServer::ControlServer(std::filesystem::path path, std::string operator_gr
       buffer_(kMaxDatagram) {
     const sockaddr_un address = addressOf(path_);
     const std::filesystem::path dir = path_.parent_path();
-    if (::mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) {
+    if (::mkdir(dir.c_str(), 0755) == 0) {
+        (void)::chmod(dir.c_str(), 0755);  // whatever the umask: others must reach the socket
+    } else if (errno != EEXIST) {
         throw std::runtime_error(failure(path_, "cannot create " + dir.string()));
     }
-    listen_fd_ = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-    if (listen_fd_ < 0) {
-        throw std::runtime_error(failure(path_, "socket"));
+    // Not a directory others may write to (they could put their own socket in our place).
+    struct stat info {};
+    if (::lstat(dir.c_str(), &info) != 0 || !S_ISDIR(info.st_mode) ||
+        (info.st_uid != ::geteuid() && info.st_uid != 0) || (info.st_mode & S_IWOTH) != 0) {
+        throw std::runtime_error("control socket " + path_.string() + ": " + dir.string() +
+                                 " must be a directory owned by hapticd's user or root that "
+                                 "others cannot write to");
     }
-    // A file left by a killed hapticd has nobody listening: replace it. One that answers
-    // belongs to a hapticd that is running: never take its place.
-    const int probe = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
-    const bool served = probe >= 0 && ::connect(probe, reinterpret_cast<const sockaddr*>(&address),
-                                                sizeof(address)) == 0;
-    if (probe >= 0) {
-        ::close(probe);
+    // One daemon per socket: a lock held for hapticd's lifetime (the kernel drops it however
+    // hapticd ends), so two starting at once cannot both take the socket.
+    const std::string lock_path = path_.string() + ".lock";
+    lock_fd_ = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (lock_fd_ < 0) {
+        throw std::runtime_error(failure(path_, "cannot open " + lock_path));
     }
-    if (served) {
-        ::close(listen_fd_);
+    if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+        ::close(lock_fd_);
         throw std::runtime_error("control socket " + path_.string() +
                                  ": another hapticd serves it (one daemon per DDS domain)");
     }
-    (void)::unlink(path_.c_str());
-    if (::bind(listen_fd_, reinterpret_cast<const sockaddr*>(&address), sizeof(address)) != 0 ||
+    // With the lock held, a socket file here is a dead hapticd's: replace it. Anything else
+    // is not ours to delete.
+    if (::lstat(path_.c_str(), &info) == 0) {
+        if (!S_ISSOCK(info.st_mode)) {
+            ::close(lock_fd_);
+            throw std::runtime_error("control socket " + path_.string() +
+                                     ": exists and is not a socket; remove it or change "
+                                     "control.socket_dir");
+        }
+        (void)::unlink(path_.c_str());
+    }
+    listen_fd_ = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (listen_fd_ < 0 ||
+        ::bind(listen_fd_, reinterpret_cast<const sockaddr*>(&address), sizeof(address)) != 0 ||
         ::chmod(path_.c_str(), 0666) != 0 || ::listen(listen_fd_, 16) != 0) {
         const std::string reason = failure(path_, "bind");
-        ::close(listen_fd_);
+        if (listen_fd_ >= 0) {
+            ::close(listen_fd_);
+        }
+        ::close(lock_fd_);
         throw std::runtime_error(reason);
     }
+    // The descriptor accept() gives up when hapticd has none left (EMFILE), to take the
+    // waiting connection and close it rather than spin on a listening socket that stays
+    // readable.
+    spare_fd_ = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
 }
 
 ControlServer::~ControlServer() {
     for (const Caller& caller : callers_) {
         ::close(caller.fd);
     }
-    if (listen_fd_ >= 0) {
-        ::close(listen_fd_);
-        (void)::unlink(path_.c_str());
+    ::close(listen_fd_);
+    (void)::unlink(path_.c_str());
+    if (spare_fd_ >= 0) {
+        ::close(spare_fd_);
     }
+    ::close(lock_fd_);  // last: the next hapticd may take the socket from here on
 }
 
 void ControlServer::publish(const idl::HapticStatus& status) {
@@ -148,14 +182,24 @@ void ControlServer::publish(const idl::HapticStatus& status) {
     awaiting_status_.clear();
 }
 
-bool ControlServer::mayOperate(const PeerCredentials& peer) const {
+bool ControlServer::mayOperate(int fd, const PeerCredentials& peer) const {
     return peer.uid == 0 || peer.uid == ::geteuid() ||
-           (group_gid_ && inGroup(peer.uid, peer.gid, *group_gid_));
+           (group_gid_ && peerInGroup(fd, peer.gid, *group_gid_));
 }
 
 void ControlServer::accept() {
-    for (;;) {
-        const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+    for (int taken = 0; taken < kAcceptsPerServe; ++taken) {
+        int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+        if (fd < 0 && (errno == EMFILE || errno == ENFILE) && spare_fd_ >= 0) {
+            ::close(spare_fd_);
+            fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
+            if (fd >= 0) {
+                ::close(fd);
+            }
+            spare_fd_ = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+            spdlog::warn("local caller refused: hapticd has no file descriptor left");
+            continue;
+        }
         if (fd < 0) {
             return;  // EAGAIN: no one else waiting
         }
@@ -164,7 +208,20 @@ void ControlServer::accept() {
             ::close(fd);
             continue;
         }
-        callers_.push_back({fd, *peer, mayOperate(*peer)});
+        // A user opening connections by the thousand must neither use up hapticd's file
+        // descriptors nor keep anyone else out (an E-stop must always get in): each user
+        // keeps its newest few, and all users together the newest kMaxCallers.
+        const auto mine = [&](const Caller& c) { return c.peer.uid == peer->uid; };
+        if (static_cast<std::size_t>(std::count_if(callers_.begin(), callers_.end(), mine)) >=
+            kMaxCallersPerUser) {
+            const auto oldest = std::find_if(callers_.begin(), callers_.end(), mine);
+            drop(oldest->fd);
+            callers_.erase(oldest);
+        } else if (callers_.size() >= kMaxCallers) {
+            drop(callers_.front().fd);
+            callers_.erase(callers_.begin());
+        }
+        callers_.push_back({fd, *peer, mayOperate(fd, *peer)});
     }
 }
 
@@ -221,8 +278,8 @@ void ControlServer::handleCommand(Caller& caller, const char* body, std::size_t 
     }
     spdlog::info("local command '{}' {} from {}", kind, command.argument.view(),
                  describe(caller.peer));
-    pending_.push_back(
-        {command.request_id, caller_request_id, caller.fd, caller.peer, command.kind});
+    pending_.push_back({command.request_id, caller_request_id, caller.fd, caller.peer, command.kind,
+                        std::chrono::steady_clock::now()});
 }
 
 bool ControlServer::handle(Caller& caller) {
@@ -265,7 +322,27 @@ void ControlServer::drop(int fd) {
     }
 }
 
+void ControlServer::expirePending() {
+    const auto now = std::chrono::steady_clock::now();
+    for (auto it = pending_.begin(); it != pending_.end();) {
+        if (now - it->submitted < kReplyTimeout) {
+            ++it;
+            continue;
+        }
+        spdlog::warn("local command '{}' from {}: no reply from the RT loop within {} s",
+                     msgs::toString(it->kind), describe(it->peer), kReplyTimeout.count());
+        if (it->fd >= 0) {
+            const Caller caller{it->fd, it->peer, false};
+            refuse(caller, it->caller_request_id,
+                   "no reply from the RT loop within 2 s (it may still have taken effect; see "
+                   "hapticctl status)");
+        }
+        it = pending_.erase(it);
+    }
+}
+
 void ControlServer::serve(std::chrono::milliseconds max_wait) {
+    expirePending();
     std::vector<pollfd> fds;
     fds.reserve(callers_.size() + 1);
     fds.push_back({listen_fd_, POLLIN, 0});

@@ -3,6 +3,7 @@
 #include <fastcdr/exceptions/Exception.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/time.h>
 #include <sys/un.h>
 #include <unistd.h>
 
@@ -98,6 +99,10 @@ ControlClient::Connect ControlClient::connect() {
         error_ = std::string("socket: ") + std::strerror(errno);
         return Connect::kError;
     }
+    // A daemon whose backlog is full would hold a blocking connect for ever; on a Unix
+    // socket SO_SNDTIMEO bounds it.
+    const timeval limit{1, 0};
+    (void)::setsockopt(fd_, SOL_SOCKET, SO_SNDTIMEO, &limit, sizeof(limit));
     if (::connect(fd_, reinterpret_cast<const sockaddr*>(&address), sizeof(address)) == 0) {
         return Connect::kConnected;
     }
@@ -108,7 +113,7 @@ ControlClient::Connect ControlClient::connect() {
     if (failure == ENOENT) {
         return Connect::kNoSocket;
     }
-    return failure == ECONNREFUSED ? Connect::kRefused : Connect::kError;
+    return failure == ECONNREFUSED ? Connect::kRefused : Connect::kError;  // EAGAIN: timed out
 }
 
 std::optional<ControlClient::Answer> ControlClient::request(const std::vector<char>& datagram,

@@ -135,9 +135,10 @@ std::int64_t DaemonCore::relearnAfterNs() const noexcept {
 //   stamp. Over DDS it may run on another host, whose monotonic clock is not ours, so its age
 //   is the one-way delay relative to the quickest message seen from this sim: arrival minus
 //   stamp, less the smallest arrival minus stamp so far. That smallest value may creep up by
-//   kClockDriftAllowance of the elapsed time; a restart starts it afresh. A stamp far ahead of
-//   it is refused, so that one corrupt or stepped stamp cannot become the quickest message and
-//   make every later one read as delayed.
+//   kClockDriftAllowance of the elapsed time; a restart starts it afresh. Until
+//   kLearningMessages have come since it was (re)learnt, the median of their offsets stands
+//   for it instead. A stamp far ahead of it is refused, so that one corrupt or stepped stamp
+//   cannot become the quickest message and make every later one read as delayed.
 // Over DDS only: content refused as not newer or stamped ahead that forms a stream of its own (seq
 // advancing from message to message) for relearnAfterNs() is a sim whose clock really changed (its
 // host rebooted, its clock was stepped): it is then taken, and its clock learnt afresh. By then
@@ -146,7 +147,8 @@ std::int64_t DaemonCore::relearnAfterNs() const noexcept {
 // allowing it that much drift.
 InputRejection DaemonCore::freshness(const DeviceSlot& slot, const msgs::MessageHeader& header,
                                      std::int64_t now_ns, Freshness& out) const noexcept {
-    out = Freshness{slot.clock_offset_ns, slot.other_stream_since_ns, slot.other_stream_seq};
+    out = Freshness{slot.clock_offset_ns, slot.other_stream_since_ns, slot.other_stream_seq,
+                    slot.clock_learning};
     if (header.stamp_ns <= 0) {
         return InputRejection::kBadStamp;
     }
@@ -166,18 +168,37 @@ InputRejection DaemonCore::freshness(const DeviceSlot& slot, const msgs::Message
         // its age is absolute (ahead by up to a tick: it may stamp after our tick began).
         return not_newer ? InputRejection::kNotNewer : byDelay(offset_ns);
     }
-    // Silence: no valid message at all, refused ones included (a path slower for good must not
-    // pass as a silence after its refusals).
-    if (!slot.has_header || saturatingDifference(now_ns, slot.last_heard_ns) > relearnAfterNs()) {
-        out = Freshness{offset_ns, -1, 0};
+    const auto learnAfresh = [&] {
+        out = Freshness{offset_ns, -1, 0, ClockLearning{{offset_ns}, 1}};
         return InputRejection::kNone;
+    };
+    if (!slot.has_header) {
+        return learnAfresh();
     }
     InputRejection verdict = InputRejection::kNone;
     if (not_newer) {
         verdict = InputRejection::kNotNewer;
-    } else if (header.seq < slot.last_seq) {
-        out = Freshness{offset_ns, -1, 0};  // a restarted sim: its clock may be another host's
-        return InputRejection::kNone;
+    } else if (header.seq < slot.last_seq ||
+               saturatingDifference(now_ns, slot.last_heard_ns) > relearnAfterNs()) {
+        // A restarted sim (its clock may be another host's), or the first message after a
+        // silence (no valid message at all, refused ones included: a path slower for good
+        // must not pass for a silence).
+        return learnAfresh();
+    } else if (out.learning.count < kLearningMessages) {
+        // Still learning: judged against the median of the offsets so far, its own included,
+        // so that one corrupt stamp among the first cannot set the clock.
+        out.learning.offsets[out.learning.count++] = offset_ns;
+        auto sorted = out.learning.offsets;
+        for (std::size_t i = 1; i < out.learning.count; ++i) {  // at most 5: insertion sort
+            for (std::size_t j = i; j > 0 && sorted[j] < sorted[j - 1]; --j) {
+                std::swap(sorted[j], sorted[j - 1]);
+            }
+        }
+        out.clock_offset_ns = sorted[out.learning.count / 2];
+        verdict = byDelay(saturatingDifference(offset_ns, out.clock_offset_ns));
+        if (verdict == InputRejection::kNone) {
+            return verdict;
+        }
     } else {
         const auto drift_ns = static_cast<std::int64_t>(
             kClockDriftAllowance * static_cast<double>(std::max<std::int64_t>(
@@ -185,7 +206,8 @@ InputRejection DaemonCore::freshness(const DeviceSlot& slot, const msgs::Message
         const std::int64_t allowed_offset_ns = slot.clock_offset_ns + drift_ns;
         verdict = byDelay(saturatingDifference(offset_ns, allowed_offset_ns));
         if (verdict == InputRejection::kNone) {
-            out = Freshness{std::min(offset_ns, allowed_offset_ns), -1, 0};
+            out.clock_offset_ns = std::min(offset_ns, allowed_offset_ns);
+            out.other_stream_since_ns = -1;
             return verdict;
         }
     }
@@ -199,8 +221,7 @@ InputRejection DaemonCore::freshness(const DeviceSlot& slot, const msgs::Message
     out.other_stream_since_ns = continues ? slot.other_stream_since_ns : now_ns;
     out.other_stream_seq = header.seq;
     if (continues && saturatingDifference(now_ns, slot.other_stream_since_ns) >= relearnAfterNs()) {
-        out = Freshness{offset_ns, -1, 0};
-        return InputRejection::kNone;
+        return learnAfresh();
     }
     return verdict;
 }
@@ -208,11 +229,16 @@ InputRejection DaemonCore::freshness(const DeviceSlot& slot, const msgs::Message
 InputRejection DaemonCore::account(DeviceSlot& slot, InputRejection reason,
                                    const msgs::MessageHeader& header,
                                    std::int64_t now_ns) noexcept {
-    Freshness judged{slot.clock_offset_ns, slot.other_stream_since_ns, slot.other_stream_seq};
+    Freshness judged{slot.clock_offset_ns, slot.other_stream_since_ns, slot.other_stream_seq,
+                     slot.clock_learning};
     if (reason == InputRejection::kNone) {
         reason = freshness(slot, header, now_ns, judged);
         slot.last_heard_ns = now_ns;
     }
+    // What the sim's clock was learnt to be, refused messages included (they count while it
+    // is being learnt, and towards a stream of their own).
+    slot.clock_offset_ns = judged.clock_offset_ns;
+    slot.clock_learning = judged.learning;
     slot.other_stream_since_ns = judged.other_stream_since_ns;
     slot.other_stream_seq = judged.other_stream_seq;
     if (reason == InputRejection::kNone) {
@@ -220,7 +246,6 @@ InputRejection DaemonCore::account(DeviceSlot& slot, InputRejection reason,
         slot.last_accepted_ns = now_ns;
         slot.last_seq = header.seq;
         slot.last_stamp_ns = header.stamp_ns;
-        slot.clock_offset_ns = judged.clock_offset_ns;
         slot.has_header = true;
     } else {
         ++slot.rejected;

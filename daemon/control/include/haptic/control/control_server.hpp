@@ -3,9 +3,9 @@
 // The daemon's end of the local control socket (control_socket.hpp), served by hapticd's
 // main (non-RT) thread: the only thread that submits to the RT thread's command queue, so the
 // queue keeps its single producer. Each caller's rights come from its peer credentials
-// (SO_PEERCRED), taken when it connects: root, hapticd's own user and members of the
-// operator group may enable, disable, clear and choose the method; anyone may read the status
-// and send an E-stop, because stopping is always allowed.
+// (SO_PEERCRED, and SO_PEERGROUPS for its supplementary groups), taken when it connects: root,
+// hapticd's own user and members of the operator group may enable, disable, clear and choose the
+// method; anyone may read the status and send an E-stop, because stopping is always allowed.
 
 #include <sys/types.h>
 
@@ -24,10 +24,11 @@ namespace haptic::control {
 
 class ControlServer {
   public:
-    // Creates the socket's directory (0755) when missing and binds the socket (0666: anyone
-    // may connect, the credentials decide). A socket file nobody listens on (a killed hapticd)
-    // is replaced. Throws std::runtime_error naming the path when another hapticd serves it
-    // or the socket cannot be made.
+    // Creates the socket's directory (0755) when missing, refuses one others may write to,
+    // takes <socket>.lock (flock, for the daemon's lifetime) and binds the socket (0666:
+    // anyone may connect, the credentials decide). A socket file left by a killed hapticd is
+    // replaced; any other file there is not. Throws std::runtime_error naming the path when
+    // another hapticd holds the lock or the socket cannot be made.
     ControlServer(std::filesystem::path path, std::string operator_group,
                   daemon::CommandChannel& channel);
     ~ControlServer();
@@ -64,6 +65,7 @@ class ControlServer {
         int fd;
         PeerCredentials peer;
         msgs::CommandKind kind;
+        std::chrono::steady_clock::time_point submitted;
     };
 
     void accept();
@@ -72,14 +74,17 @@ class ControlServer {
     void handleCommand(Caller& caller, const char* body, std::size_t size);
     void refuse(const Caller& caller, std::uint64_t request_id, const std::string& reason);
     void send(int fd, const std::vector<char>& datagram);
-    [[nodiscard]] bool mayOperate(const PeerCredentials& peer) const;
+    [[nodiscard]] bool mayOperate(int fd, const PeerCredentials& peer) const;
     void drop(int fd);
+    void expirePending();
 
     std::filesystem::path path_;
     std::string operator_group_;
     std::optional<gid_t> group_gid_;
     daemon::CommandChannel& channel_;
     int listen_fd_{-1};
+    int lock_fd_{-1};
+    int spare_fd_{-1};
     std::vector<Caller> callers_;
     std::vector<Pending> pending_;
     std::vector<char> status_datagram_;

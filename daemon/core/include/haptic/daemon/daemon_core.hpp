@@ -182,6 +182,13 @@ class DaemonCore {
     }
 
   private:
+    // The offsets (arrival minus stamp) of the first messages since the sim's clock was
+    // (re)learnt; their median stands for it until there are kLearningMessages of them.
+    static constexpr std::size_t kLearningMessages = 5;
+    struct ClockLearning {
+        std::array<std::int64_t, kLearningMessages> offsets{};
+        std::size_t count{0};
+    };
     struct DeviceSlot {
         DeviceDescriptor descriptor;
         std::int64_t last_accepted_ns{-1};
@@ -191,6 +198,7 @@ class DaemonCore {
         std::int64_t last_stamp_ns{0};
         // The smallest arrival minus stamp seen from this sim (its clock against ours).
         std::int64_t clock_offset_ns{0};
+        ClockLearning clock_learning{};
         bool has_header{false};
         // Refused content forming a stream of its own since then (-1: none), and its last
         // seq (see DaemonCore::freshness()).
@@ -229,6 +237,7 @@ class DaemonCore {
         std::int64_t clock_offset_ns;
         std::int64_t other_stream_since_ns;
         std::uint64_t other_stream_seq;
+        ClockLearning learning;
     };
     // kNone, kBadStamp, kNotNewer, kDelayed or kStampAhead.
     [[nodiscard]] InputRejection freshness(const DeviceSlot& slot,

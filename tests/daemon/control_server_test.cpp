@@ -1,0 +1,242 @@
+// The control socket's server in one thread: the test is the caller (raw SOCK_SEQPACKET, so
+// each step is explicit), hapticd's main thread (serve(), deliver()) and the RT thread
+// (taking the command from the channel and posting its reply) in turn. As root, which may
+// operate; who else may is ControlAccessTest's (device_safety_test, real users).
+
+#include "haptic/control/control_server.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "haptic/msgs/conversions.hpp"
+
+namespace haptic::control {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+class ControlServerTest : public ::testing::Test {
+  protected:
+    ControlServerTest()
+        : dir_(fs::temp_directory_path() / ("haptic-control-" + std::to_string(::getpid()))),
+          socket_(dir_ / "run" / "control-0.sock") {
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    ~ControlServerTest() override { fs::remove_all(dir_); }
+
+    int connectCaller() {
+        const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
+        sockaddr_un address{};
+        address.sun_family = AF_UNIX;
+        std::strncpy(address.sun_path, socket_.c_str(), sizeof(address.sun_path) - 1);
+        EXPECT_EQ(::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address)), 0)
+            << std::strerror(errno);
+        return fd;
+    }
+
+    // Sends `datagram`, lets the server accept and serve, and returns what came back (empty:
+    // nothing yet).
+    std::vector<char> exchange(ControlServer& server, int fd, const std::vector<char>& datagram) {
+        EXPECT_EQ(::send(fd, datagram.data(), datagram.size(), 0),
+                  static_cast<ssize_t>(datagram.size()));
+        server.serve(10ms);  // accepts
+        server.serve(10ms);  // serves
+        return receive(fd);
+    }
+
+    static std::vector<char> receive(int fd) {
+        std::vector<char> buffer(kMaxDatagram);
+        const ssize_t n = ::recv(fd, buffer.data(), buffer.size(), MSG_DONTWAIT);
+        buffer.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
+        return buffer;
+    }
+
+    static idl::HapticStatus statusNumbered(std::uint64_t seq) {
+        msgs::HapticStatus status;
+        status.header.seq = seq;
+        status.state = msgs::DaemonState::kIdle;
+        return msgs::toIdl(status);
+    }
+
+    static std::vector<char> commandDatagram(msgs::CommandKind kind, std::uint64_t request_id) {
+        msgs::HapticCommand command;
+        command.request_id = request_id;
+        command.kind = kind;
+        std::vector<char> datagram;
+        EXPECT_TRUE(encode(kCommandRequest, msgs::toIdl(command), datagram));
+        return datagram;
+    }
+
+    fs::path dir_;
+    fs::path socket_;
+    daemon::CommandChannel channel_;
+};
+
+TEST_F(ControlServerTest, AnswersTheStatusItWasGivenAndNothingBefore) {
+    ControlServer server(socket_, "haptic", channel_);
+    EXPECT_EQ(fs::status(socket_.parent_path()).permissions() & fs::perms::all,
+              fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                  fs::perms::others_read | fs::perms::others_exec);
+    const int fd = connectCaller();
+    std::vector<char> answer = exchange(server, fd, {kStatusRequest});
+    ASSERT_FALSE(answer.empty());
+    EXPECT_EQ(answer[0], kErrorAnswer);
+    EXPECT_EQ(std::string(answer.begin() + 1, answer.end()),
+              "no status yet (the loop is starting)");
+
+    server.publish(statusNumbered(42));
+    answer = exchange(server, fd, {kStatusRequest});
+    ASSERT_FALSE(answer.empty());
+    ASSERT_EQ(answer[0], kStatusAnswer);
+    idl::HapticStatus status;
+    ASSERT_TRUE(decode(answer.data() + 1, answer.size() - 1, status));
+    EXPECT_EQ(status.header().seq(), 42U);
+    ::close(fd);
+}
+
+// The command reaches the channel under a local request id; the RT thread's reply goes back
+// to the caller under the caller's own id; a status asked for after it waits for the next
+// snapshot (one taken before the command would show the state before it).
+TEST_F(ControlServerTest, ACommandGoesToTheRtThreadAndItsReplyBackToTheCaller) {
+    ControlServer server(socket_, "haptic", channel_);
+    server.publish(statusNumbered(1));
+    const int fd = connectCaller();
+    EXPECT_TRUE(exchange(server, fd, commandDatagram(msgs::CommandKind::kEstop, 77)).empty())
+        << "no answer before the RT thread's";
+    EXPECT_TRUE(server.awaitingReplies());
+
+    msgs::HapticCommand taken;
+    ASSERT_TRUE(channel_.takeCommand(taken));  // the RT thread
+    EXPECT_EQ(taken.kind, msgs::CommandKind::kEstop);
+    EXPECT_NE(taken.request_id & ControlServer::kLocalRequestBit, 0U);
+    msgs::HapticCommandReply reply;
+    reply.request_id = taken.request_id;
+    reply.accepted = true;
+    reply.message.assign("emergency stop");
+    ASSERT_TRUE(channel_.postReply(reply));
+
+    msgs::HapticCommandReply other = reply;
+    other.request_id = 5;  // a DDS caller's
+    EXPECT_FALSE(server.deliver(other));
+    msgs::HapticCommandReply answered;
+    ASSERT_TRUE(channel_.takeReply(answered));
+    EXPECT_TRUE(server.deliver(answered));
+    EXPECT_FALSE(server.awaitingReplies());
+    std::vector<char> answer = receive(fd);
+    ASSERT_FALSE(answer.empty());
+    ASSERT_EQ(answer[0], kReplyAnswer);
+    idl::HapticCommandReply wire;
+    ASSERT_TRUE(decode(answer.data() + 1, answer.size() - 1, wire));
+    EXPECT_EQ(wire.request_id(), 77U);
+    EXPECT_TRUE(wire.accepted());
+
+    EXPECT_TRUE(exchange(server, fd, {kStatusRequest}).empty()) << "the snapshot predates it";
+    server.publish(statusNumbered(2));
+    answer = receive(fd);
+    ASSERT_FALSE(answer.empty());
+    idl::HapticStatus status;
+    ASSERT_TRUE(decode(answer.data() + 1, answer.size() - 1, status));
+    EXPECT_EQ(status.header().seq(), 2U);
+    ::close(fd);
+}
+
+TEST_F(ControlServerTest, AMalformedCommandIsAnsweredAndNeverReachesTheRtThread) {
+    ControlServer server(socket_, "haptic", channel_);
+    const int fd = connectCaller();
+    const std::vector<char> answer = exchange(server, fd, {kCommandRequest, 1, 2, 3});
+    ASSERT_FALSE(answer.empty());
+    EXPECT_EQ(answer[0], kErrorAnswer);
+    msgs::HapticCommand taken;
+    EXPECT_FALSE(channel_.takeCommand(taken));
+    ::close(fd);
+}
+
+// One user opening connections without end keeps its newest 16; the others are closed.
+TEST_F(ControlServerTest, AUserKeepsItsNewestConnectionsOnly) {
+    ControlServer server(socket_, "haptic", channel_);
+    server.publish(statusNumbered(3));
+    std::vector<int> fds;
+    for (int i = 0; i < 20; ++i) {
+        fds.push_back(connectCaller());
+        server.serve(10ms);
+    }
+    for (int i = 0; i < 20; ++i) {
+        char byte = 0;
+        const ssize_t n = ::recv(fds[static_cast<std::size_t>(i)], &byte, 1, MSG_DONTWAIT);
+        if (i < 4) {
+            EXPECT_EQ(n, 0) << "connection " << i << " should have been closed";
+        } else {
+            EXPECT_EQ(n, -1) << "connection " << i << " should be open";
+        }
+    }
+    const std::vector<char> answer = exchange(server, fds.back(), {kStatusRequest});
+    ASSERT_FALSE(answer.empty());
+    EXPECT_EQ(answer[0], kStatusAnswer);
+    for (const int fd : fds) {
+        ::close(fd);
+    }
+}
+
+// A socket file left by a killed hapticd is replaced; a served one, or any other file, is not.
+TEST_F(ControlServerTest, AStaleSocketIsReplacedAndALiveOneOrAnotherFileIsNot) {
+    fs::create_directories(socket_.parent_path());
+    {
+        // What a SIGKILLed hapticd leaves: a bound socket file nobody listens on.
+        const int dead = ::socket(AF_UNIX, SOCK_SEQPACKET, 0);
+        sockaddr_un address{};
+        address.sun_family = AF_UNIX;
+        std::strncpy(address.sun_path, socket_.c_str(), sizeof(address.sun_path) - 1);
+        ASSERT_EQ(::bind(dead, reinterpret_cast<const sockaddr*>(&address), sizeof(address)), 0);
+        ::close(dead);
+    }
+    {
+        ControlServer first(socket_, "haptic", channel_);
+        EXPECT_TRUE(fs::is_socket(socket_));
+        const int fd = connectCaller();
+        ::close(fd);
+        daemon::CommandChannel other;
+        try {
+            ControlServer second(socket_, "haptic", other);
+            ADD_FAILURE() << "a second server took a live socket";
+        } catch (const std::runtime_error& error) {
+            EXPECT_NE(std::string(error.what()).find("another hapticd serves it"),
+                      std::string::npos)
+                << error.what();
+        }
+        EXPECT_TRUE(fs::is_socket(socket_)) << "the refused one left the live socket alone";
+    }
+    EXPECT_FALSE(fs::exists(socket_)) << "removed when its server stops";
+    std::ofstream(socket_) << "someone's file";
+    try {
+        ControlServer third(socket_, "haptic", channel_);
+        ADD_FAILURE() << "a regular file was replaced";
+    } catch (const std::runtime_error& error) {
+        EXPECT_NE(std::string(error.what()).find("exists and is not a socket"), std::string::npos)
+            << error.what();
+    }
+    EXPECT_TRUE(fs::is_regular_file(socket_));
+}
+
+// A directory others may write to could hold someone else's socket in hapticd's place.
+TEST_F(ControlServerTest, ADirectoryOthersMayWriteToIsRefused) {
+    fs::create_directories(socket_.parent_path());
+    fs::permissions(socket_.parent_path(), fs::perms::all);
+    try {
+        ControlServer server(socket_, "haptic", channel_);
+        ADD_FAILURE() << "took a world-writable directory";
+    } catch (const std::runtime_error& error) {
+        EXPECT_NE(std::string(error.what()).find("others cannot write to"), std::string::npos)
+            << error.what();
+    }
+}
+
+}  // namespace
+}  // namespace haptic::control
