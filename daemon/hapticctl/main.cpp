@@ -87,21 +87,34 @@ void reportNoDaemon(const haptic::config::DaemonConfig& cfg, double timeout_s) {
                  haptic::ipc::kStatusTopic, cfg.dds.domain_id, timeout_s);
 }
 
+constexpr int kConnected = 0;
+constexpr int kNoLocalDaemon = -1;
+
+// kConnected; kNoLocalDaemon when no hapticd serves a control socket on this host (no socket
+// file, or a stale one), for the caller to try DDS; or the exit code after saying why.
+int connectLocally(haptic::control::ControlClient& client) {
+    using Connect = haptic::control::ControlClient::Connect;
+    switch (client.connect()) {
+        case Connect::kConnected:
+            return kConnected;
+        case Connect::kNoSocket:
+        case Connect::kRefused:
+            return kNoLocalDaemon;
+        case Connect::kError:
+            break;
+    }
+    std::fprintf(stderr, "hapticctl: local control socket %s\n", client.error().c_str());
+    return kExitError;
+}
+
 // The status from hapticd's local control socket; nullopt when no hapticd serves one on this
 // host (no socket file, or a stale one), for the caller to try DDS.
 std::optional<int> printStatusLocally(const haptic::config::DaemonConfig& cfg, double timeout_s,
                                       bool json) {
     namespace control = haptic::control;
     control::ControlClient client(haptic::config::controlSocketPath(cfg));
-    switch (client.connect()) {
-        case control::ControlClient::Connect::kConnected:
-            break;
-        case control::ControlClient::Connect::kNoSocket:
-        case control::ControlClient::Connect::kRefused:
-            return std::nullopt;
-        case control::ControlClient::Connect::kError:
-            std::fprintf(stderr, "hapticctl: local control socket %s\n", client.error().c_str());
-            return kExitError;
+    if (const auto failed = connectLocally(client); failed != kConnected) {
+        return failed == kNoLocalDaemon ? std::nullopt : std::optional<int>(failed);
     }
     // A hapticd still starting answers "no status yet": ask again until the timeout.
     const auto deadline = std::chrono::steady_clock::now() + toMs(timeout_s);
@@ -377,15 +390,8 @@ std::optional<int> sendCommandLocally(const haptic::config::DaemonConfig& cfg,
                                       const haptic::idl::HapticCommand& wire, double timeout_s) {
     namespace control = haptic::control;
     control::ControlClient client(haptic::config::controlSocketPath(cfg));
-    switch (client.connect()) {
-        case control::ControlClient::Connect::kConnected:
-            break;
-        case control::ControlClient::Connect::kNoSocket:
-        case control::ControlClient::Connect::kRefused:
-            return std::nullopt;
-        case control::ControlClient::Connect::kError:
-            std::fprintf(stderr, "hapticctl: local control socket %s\n", client.error().c_str());
-            return kExitError;
+    if (const auto failed = connectLocally(client); failed != kConnected) {
+        return failed == kNoLocalDaemon ? std::nullopt : std::optional<int>(failed);
     }
     std::vector<char> datagram;
     if (!control::encode(control::kCommandRequest, wire, datagram)) {

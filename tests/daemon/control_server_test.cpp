@@ -59,6 +59,17 @@ class ControlServerTest : public ::testing::Test {
         return buffer;
     }
 
+    // The seq of the status an answer carries; 0 (after a failure) when it carries none.
+    static std::uint64_t statusSeqOf(const std::vector<char>& answer) {
+        idl::HapticStatus status;
+        if (answer.empty() || answer[0] != kStatusAnswer ||
+            !decode(answer.data() + 1, answer.size() - 1, status)) {
+            ADD_FAILURE() << "no status in an answer of " << answer.size() << " bytes";
+            return 0;
+        }
+        return status.header().seq();
+    }
+
     static idl::HapticStatus statusNumbered(std::uint64_t seq) {
         msgs::HapticStatus status;
         status.header.seq = seq;
@@ -93,12 +104,7 @@ TEST_F(ControlServerTest, AnswersTheStatusItWasGivenAndNothingBefore) {
               "no status yet (the loop is starting)");
 
     server.publish(statusNumbered(42));
-    answer = exchange(server, fd, {kStatusRequest});
-    ASSERT_FALSE(answer.empty());
-    ASSERT_EQ(answer[0], kStatusAnswer);
-    idl::HapticStatus status;
-    ASSERT_TRUE(decode(answer.data() + 1, answer.size() - 1, status));
-    EXPECT_EQ(status.header().seq(), 42U);
+    EXPECT_EQ(statusSeqOf(exchange(server, fd, {kStatusRequest})), 42U);
     ::close(fd);
 }
 
@@ -140,11 +146,7 @@ TEST_F(ControlServerTest, ACommandGoesToTheRtThreadAndItsReplyBackToTheCaller) {
 
     EXPECT_TRUE(exchange(server, fd, {kStatusRequest}).empty()) << "the snapshot predates it";
     server.publish(statusNumbered(2));
-    answer = receive(fd);
-    ASSERT_FALSE(answer.empty());
-    idl::HapticStatus status;
-    ASSERT_TRUE(decode(answer.data() + 1, answer.size() - 1, status));
-    EXPECT_EQ(status.header().seq(), 2U);
+    EXPECT_EQ(statusSeqOf(receive(fd)), 2U);
     ::close(fd);
 }
 

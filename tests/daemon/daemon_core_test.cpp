@@ -46,6 +46,15 @@ msgs::ConstraintSet validConstraintSet(std::string_view device, std::int64_t sen
     return message;
 }
 
+// A valid constraint set with its header's seq and stamp as given (the sim's own clock).
+msgs::ConstraintSet stampedConstraintSet(std::string_view device, std::uint64_t seq,
+                                         std::int64_t stamp_ns) {
+    msgs::ConstraintSet message = validConstraintSet(device);
+    message.header.seq = seq;
+    message.header.stamp_ns = stamp_ns;
+    return message;
+}
+
 msgs::ContactSurface validContactSurface(std::string_view device, std::int64_t sent_ns = 0) {
     msgs::ContactSurface message;
     message.header = nextHeader(device, sent_ns);
@@ -410,14 +419,31 @@ TEST(DaemonCoreHardwareEstop, PressedOrSilentStopsAtOnceAndOnlyAReleasedRelayLet
     EXPECT_EQ(core.state(), msgs::DaemonState::kEstop);
 }
 
-TEST(DaemonCoreRearm, ALongSimOutageWhileRenderingNeedsANewEnable) {
-    CoreSettings settings = oneMethodSettings();
-    settings.sim_rearm_after_ns = 250 * kMs;
-    DaemonCore core(settings, kOneExoskeleton);
-    core.markStarted(0);
-    msgs::HapticCommand enable;
-    enable.kind = msgs::CommandKind::kEnable;
+// One exoskeleton with the re-arm policy at 250 ms (loop.sim_rearm_after_ms), started, and
+// an operator's enable to send.
+class RearmCore {
+  public:
+    RearmCore() : core(settings(), kOneExoskeleton) { core.markStarted(0); }
+    bool enable(std::int64_t t) {
+        msgs::HapticCommand command;
+        command.kind = msgs::CommandKind::kEnable;
+        return core.applyCommand(command, t, reply).accepted;
+    }
+    DaemonCore core;
     msgs::HapticCommandReply reply;
+
+  private:
+    static CoreSettings settings() {
+        CoreSettings settings = oneMethodSettings();
+        settings.sim_rearm_after_ns = 250 * kMs;
+        return settings;
+    }
+};
+
+TEST(DaemonCoreRearm, ALongSimOutageWhileRenderingNeedsANewEnable) {
+    RearmCore rig;
+    DaemonCore& core = rig.core;
+    msgs::HapticCommandReply& reply = rig.reply;
     std::int64_t t = 0;
     auto run = [&](int ticks, bool feed) {
         for (int i = 0; i < ticks; ++i) {
@@ -428,7 +454,7 @@ TEST(DaemonCoreRearm, ALongSimOutageWhileRenderingNeedsANewEnable) {
             core.update(t, TickTiming{});
         }
     };
-    ASSERT_TRUE(core.applyCommand(enable, t, reply).accepted);
+    ASSERT_TRUE(rig.enable(t));
     run(400, false);  // the sim starts late: not an outage
     EXPECT_FALSE(core.awaitingEnable(0));
     run(200, true);
@@ -446,7 +472,7 @@ TEST(DaemonCoreRearm, ALongSimOutageWhileRenderingNeedsANewEnable) {
     msgs::HapticStatus status;
     core.fillStatus(t, status);
     EXPECT_TRUE(status.devices[0].awaiting_enable);
-    ASSERT_TRUE(core.applyCommand(enable, t, reply).accepted) << "enable while RENDERING re-arms";
+    ASSERT_TRUE(rig.enable(t)) << "enable while RENDERING re-arms";
     EXPECT_FALSE(core.awaitingEnable(0));
     double previous = core.outputGain(0);
     for (int i = 0; i < 150; ++i) {
@@ -470,45 +496,33 @@ TEST(DaemonCoreRearm, ALongSimOutageWhileRenderingNeedsANewEnable) {
 // costs a message or two, not the link. And a replay after a silence is still a replay.
 TEST_F(DaemonCoreTest, ACorruptStampWhileTheClockIsLearntCostsAMessageNotTheLink) {
     std::int64_t t = 0;
-    const auto offerAt = [&](std::int64_t stamp_ns) {
-        msgs::ConstraintSet message = validConstraintSet("exo_index");
-        message.header.stamp_ns = stamp_ns;
-        return sut.offerConstraintSet(0, message, t);
+    std::uint64_t seq = 100;
+    const auto offer = [&](std::int64_t stamp_ns) {
+        return sut.offerConstraintSet(0, stampedConstraintSet("exo_index", ++seq, stamp_ns), t);
+    };
+    // After a corrupt first message, 18 good ones at 100 Hz: at most one refused, none after
+    // the second.
+    const auto expectTheStreamTaken = [&](const char* after) {
+        int refused = 0;
+        for (int i = 0; i < 18; ++i) {
+            t = runTicks(t, 10);
+            const InputRejection verdict = offer(kSimClockAtZero + t - 3 * kMs);
+            refused += verdict == InputRejection::kNone ? 0 : 1;
+            EXPECT_TRUE(i < 2 || verdict == InputRejection::kNone) << after << ": " << i;
+        }
+        EXPECT_LE(refused, 1) << after;
     };
     // The very first message stamped near the int64 limit (taken: nothing to judge it by).
-    EXPECT_EQ(offerAt(std::numeric_limits<std::int64_t>::max() - 1), InputRejection::kNone);
-    int refused = 0;
-    for (int i = 0; i < 20; ++i) {
-        t = runTicks(t, 10);
-        const InputRejection verdict = offerAt(kSimClockAtZero + t - 3 * kMs);
-        refused += verdict == InputRejection::kNone ? 0 : 1;
-        if (i >= 2) {
-            EXPECT_EQ(verdict, InputRejection::kNone) << i;
-        }
-    }
-    EXPECT_LE(refused, 1);
-    // A restarted sim whose first message is stamped 1 s ahead of its clock.
-    msgs::ConstraintSet restarted = validConstraintSet("exo_index");
-    restarted.header.seq = 1;
-    restarted.header.stamp_ns = kSimClockAtZero + t + 1000 * kMs;
+    EXPECT_EQ(offer(std::numeric_limits<std::int64_t>::max() - 1), InputRejection::kNone);
+    expectTheStreamTaken("a corrupt first message");
+    // A restarted sim (seq from 1 again) whose first message is stamped 1 s ahead.
+    seq = 0;
     t = runTicks(t, 10);
-    EXPECT_EQ(sut.offerConstraintSet(0, restarted, t), InputRejection::kNone) << "a restart";
-    refused = 0;
-    for (std::uint64_t seq = 2; seq < 20; ++seq) {
-        t = runTicks(t, 10);
-        msgs::ConstraintSet message = validConstraintSet("exo_index");
-        message.header.seq = seq;
-        message.header.stamp_ns = kSimClockAtZero + t - 3 * kMs;
-        const InputRejection verdict = sut.offerConstraintSet(0, message, t);
-        refused += verdict == InputRejection::kNone ? 0 : 1;
-        if (seq >= 4) {
-            EXPECT_EQ(verdict, InputRejection::kNone) << seq;
-        }
-    }
-    EXPECT_LE(refused, 1);
+    EXPECT_EQ(offer(kSimClockAtZero + t + 1000 * kMs), InputRejection::kNone) << "a restart";
+    expectTheStreamTaken("a corrupt first message after a restart");
     // The last message again after 3 s of silence: a replay, not a new start.
     msgs::ConstraintSet last = validConstraintSet("exo_index");
-    last.header.seq = 19;
+    last.header.seq = seq;
     last.header.stamp_ns = kSimClockAtZero + t - 3 * kMs;
     t = runTicks(t, 3000);
     EXPECT_EQ(sut.offerConstraintSet(0, last, t), InputRejection::kNotNewer);
@@ -521,13 +535,8 @@ TEST_F(DaemonCoreTest, ACorruptStampWhileTheClockIsLearntCostsAMessageNotTheLink
 // learnt afresh and the force returns only after an operator's enable. A path that is slower
 // for good serves old content and is never taken.
 TEST(DaemonCoreFreshness, ASimWhoseClockChangedForGoodIsTakenAfterTheReArmAndAnEnable) {
-    CoreSettings settings = oneMethodSettings();
-    settings.sim_rearm_after_ns = 250 * kMs;  // re-learnt after 2 x 250 ms, at least 1 s
-    DaemonCore core(settings, kOneExoskeleton);
-    core.markStarted(0);
-    msgs::HapticCommand enable;
-    enable.kind = msgs::CommandKind::kEnable;
-    msgs::HapticCommandReply reply;
+    RearmCore rig;  // re-learnt after 2 x 250 ms, at least 1 s
+    DaemonCore& core = rig.core;
     std::int64_t t = 0;
     std::uint64_t seq = 1'000'000;  // the sim has been running for hours
     std::int64_t sim_clock = 0;     // the sim host's clock minus ours
@@ -554,11 +563,11 @@ TEST(DaemonCoreFreshness, ASimWhoseClockChangedForGoodIsTakenAfterTheReArmAndAnE
         ASSERT_TRUE(all(run(300), InputRejection::kNone));
         EXPECT_TRUE(core.awaitingEnable(0));
         EXPECT_EQ(core.outputGain(0), 0.0) << "no force before the operator's enable";
-        ASSERT_TRUE(core.applyCommand(enable, t, reply).accepted);
+        ASSERT_TRUE(rig.enable(t));
         EXPECT_TRUE(all(run(200), InputRejection::kNone));
         EXPECT_DOUBLE_EQ(core.outputGain(0), 1.0);
     };
-    ASSERT_TRUE(core.applyCommand(enable, t, reply).accepted);
+    ASSERT_TRUE(rig.enable(t));
     ASSERT_TRUE(all(run(200), InputRejection::kNone));
     ASSERT_DOUBLE_EQ(core.outputGain(0), 1.0);
 
@@ -604,10 +613,7 @@ TEST(DaemonCoreFreshness, OverIceoryxTheSimSharesOurClockAndItsAgeIsAbsolute) {
     std::int64_t t = 1000 * kMs;
     std::uint64_t seq = 0;
     const auto offer = [&](std::int64_t stamp_ns) {
-        msgs::ConstraintSet message = validConstraintSet("exo");
-        message.header.seq = ++seq;
-        message.header.stamp_ns = stamp_ns;
-        return core.offerConstraintSet(0, message, t);
+        return core.offerConstraintSet(0, stampedConstraintSet("exo", ++seq, stamp_ns), t);
     };
     EXPECT_EQ(offer(t - 25 * kMs), InputRejection::kDelayed) << "the first message is judged too";
     EXPECT_EQ(offer(t - 5 * kMs), InputRejection::kNone);
