@@ -27,6 +27,7 @@
 #include "HapticStatusPubSubTypes.h"
 #include "HapticTelemetryPubSubTypes.h"
 #include "SimStatusPubSubTypes.h"
+#include "bash_completion.hpp"
 #include "closed_loop_report.hpp"
 #include "haptic/common/clock.hpp"
 #include "haptic/config/daemon.hpp"
@@ -487,8 +488,8 @@ int sendCommand(const haptic::config::DaemonConfig& cfg, haptic::msgs::CommandKi
 
 int main(int argc, char** argv) {
     CLI::App app{
-        "hapticctl - status and commands for the haptic runtime (over hapticd's DDS "
-        "topics)"};
+        "hapticctl - status and commands for the haptic runtime (hapticd's local control "
+        "socket on its host, DDS elsewhere)"};
     app.set_version_flag("--version", "hapticctl " HAPTIC_VERSION);
     app.require_subcommand(1);
     // Global options may follow the subcommand too (hapticctl status --timeout 5).
@@ -574,14 +575,26 @@ int main(int argc, char** argv) {
     // The names hapticd knows, for --help; hapticd itself judges the name (it answers with
     // exit 2 and "unknown rendering method" for any other).
     std::string method_names;
+    std::vector<std::string> method_list;
     for (const auto& entry :
          haptic::config::EnumTraits<haptic::config::RenderingMethod>::kEntries) {
         method_names += (method_names.empty() ? "" : ", ") + std::string(entry.name);
+        method_list.emplace_back(entry.name);
     }
     auto* method =
         app.add_subcommand("method", "choose the rendering method (IDLE, or live while RENDERING)");
     method->add_option("name", method_name, "the exoskeleton's rendering method: " + method_names)
         ->required();
+    bool bash_completion = false;  // answered below, before parsing
+    app.add_flag("--bash-completion", bash_completion,
+                 "print the bash completion script (generated from these options) and exit");
+    // Before parsing: it needs no subcommand and no configuration.
+    for (int i = 1; i < argc; ++i) {
+        if (std::string(argv[i]) == "--bash-completion") {
+            std::cout << haptic::ctl::bashCompletion(app, {{"method", method_list}});
+            return EXIT_SUCCESS;
+        }
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
