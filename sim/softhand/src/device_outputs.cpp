@@ -289,6 +289,7 @@ void TactileOutput::fill(const Simulation& sim, msgs::ContactSurface& out) const
             moment += (sim.nodePosition(contact.node) - device.position_m).cross(contact.force_n);
         }
     }
+    const bool pad_pressed = std::find(pressed_.begin(), pressed_.end(), 1) != pressed_.end();
     for (const Sample& sample : samples_) {
         const Vec3 p_world = bone_position + bone_rotation * sample.p_bone_m;
         SurfaceQuery nearest = nearestSurface(p_world);
@@ -296,13 +297,18 @@ void TactileOutput::fill(const Simulation& sim, msgs::ContactSurface& out) const
         // tissue bulges past its rest shape around a light press: measured up to 1.4 mm in
         // the demo's onsets, with 0.2-0.65 N on the pad, the rigid point clear), the sample
         // takes the skin's depth: the plate must not stay retracted while the pad touches.
-        // Only where the contact pushes on that node: skin resting inside an object without
-        // force (the contact let go, the reference is 0 N) must not bring the plate up.
+        // Only where the contact pushes on that node.
         if (pressed_[static_cast<std::size_t>(sample.node - nodes_.first)] != 0) {
             const SurfaceQuery skin = nearestSurface(sim.nodePosition(sample.node));
             if (skin.phi_m < 0.0 && skin.phi_m < nearest.phi_m) {
                 nearest = skin;
             }
+        } else if (!pad_pressed) {
+            // A pad the sim presses nowhere (its reference 0 N) is in contact nowhere, wherever
+            // the rigid pad points lie: after a release, or beside a tip-first touch, they can
+            // sit inside an object the skin does not press (CI saw the plate raised for
+            // seconds on a pad with 0 N).
+            nearest.phi_m = std::max(nearest.phi_m, 0.0);
         }
         msgs::ContactSample out_sample;
         const Vec3 p_device = device.rotation.transpose() * (p_world - device.position_m);
