@@ -1,5 +1,6 @@
 #include "haptic/runtime/device_channel.hpp"
 
+#include <array>
 #include <cstdio>
 
 #include "haptic/protocol/frame_codec.hpp"
@@ -74,53 +75,9 @@ bool DeviceChannel::heldSafe() const noexcept {
     return latched_ != 0 || (link_bits_ & kHoldSafe) != 0;
 }
 
-void DeviceChannel::raise(daemon::DaemonCore& core, std::uint32_t fault_bit) noexcept {
-    // snprintf into a stack buffer: no allocation on the RT thread.
-    char message[msgs::kShortTextCapacity];
-    std::uint32_t code = 0;
-    switch (fault_bit) {
-        case devices::kHeartbeatLost:
-            code = kFaultHeartbeatLost;
-            std::snprintf(message, sizeof(message),
-                          "heartbeat lost: none for more than %d ms; device held safe",
-                          heartbeat_timeout_ms_);
-            break;
-        case devices::kBusOff:
-            code = kFaultBusOff;
-            std::snprintf(message, sizeof(message),
-                          "CAN bus-off: controller refuses to transmit; device held safe");
-            break;
-        case devices::kDeviceFault: {
-            code = kFaultDeviceReported;
-            const std::uint8_t reported = deviceFaultCode();
-            std::snprintf(message, sizeof(message), "device reports fault %u (%s); held safe",
-                          static_cast<unsigned>(reported), deviceFaultName(reported));
-            break;
-        }
-        case devices::kDeviceRebooted:
-            code = kFaultDeviceRebooted;
-            std::snprintf(message, sizeof(message),
-                          "device rebooted (uptime %u ms after %u ms); held safe",
-                          static_cast<unsigned>(link().uptimeAfterRebootMs()),
-                          static_cast<unsigned>(link().uptimeBeforeRebootMs()));
-            break;
-        case kImplausibleFeedback:
-            code = kFaultImplausibleFeedback;
-            std::snprintf(message, sizeof(message), "%s; held safe", implausibleMessage());
-            break;
-        default:
-            code = kFaultTransmitFailed;
-            std::snprintf(message, sizeof(message),
-                          "CAN transmit failed %d ticks in a row; device held safe",
-                          settings_.transmit_fault_ticks);
-            break;
-    }
-    core.raiseFault(code, name_, message);
-}
-
 namespace {
 
-// The code raise() gives a fault bit.
+// The code each fault bit is raised with.
 std::uint32_t faultCodeOf(std::uint32_t fault_bit) noexcept {
     switch (fault_bit) {
         case devices::kHeartbeatLost:
@@ -138,7 +95,49 @@ std::uint32_t faultCodeOf(std::uint32_t fault_bit) noexcept {
     }
 }
 
+// The latching fault bits, in the order they are raised (and a standing cause is named).
+constexpr std::array<std::uint32_t, 6> kFaultBitsInOrder{
+    devices::kHeartbeatLost,  devices::kBusOff,         devices::kDeviceFault,
+    devices::kTransmitFailed, devices::kDeviceRebooted, kImplausibleFeedback};
+
 }  // namespace
+
+void DeviceChannel::raise(daemon::DaemonCore& core, std::uint32_t fault_bit) noexcept {
+    // snprintf into a stack buffer: no allocation on the RT thread.
+    char message[msgs::kShortTextCapacity];
+    switch (fault_bit) {
+        case devices::kHeartbeatLost:
+            std::snprintf(message, sizeof(message),
+                          "heartbeat lost: none for more than %d ms; device held safe",
+                          heartbeat_timeout_ms_);
+            break;
+        case devices::kBusOff:
+            std::snprintf(message, sizeof(message),
+                          "CAN bus-off: controller refuses to transmit; device held safe");
+            break;
+        case devices::kDeviceFault: {
+            const std::uint8_t reported = deviceFaultCode();
+            std::snprintf(message, sizeof(message), "device reports fault %u (%s); held safe",
+                          static_cast<unsigned>(reported), deviceFaultName(reported));
+            break;
+        }
+        case devices::kDeviceRebooted:
+            std::snprintf(message, sizeof(message),
+                          "device rebooted (uptime %u ms after %u ms); held safe",
+                          static_cast<unsigned>(link().uptimeAfterRebootMs()),
+                          static_cast<unsigned>(link().uptimeBeforeRebootMs()));
+            break;
+        case kImplausibleFeedback:
+            std::snprintf(message, sizeof(message), "%s; held safe", implausibleMessage());
+            break;
+        default:
+            std::snprintf(message, sizeof(message),
+                          "CAN transmit failed %d ticks in a row; device held safe",
+                          settings_.transmit_fault_ticks);
+            break;
+    }
+    core.raiseFault(faultCodeOf(fault_bit), name_, message);
+}
 
 void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noexcept {
     link_bits_ = driverFaults(now_ns) & ~devices::kTransmitFailed;
@@ -173,22 +172,12 @@ void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noe
     // A cause the device still shows: `clear` is refused while it lasts (a device reboot is
     // an event, not a standing cause).
     report_.standing_fault = 0;
-    for (const std::uint32_t fault_bit :
-         {static_cast<std::uint32_t>(devices::kHeartbeatLost),
-          static_cast<std::uint32_t>(devices::kBusOff),
-          static_cast<std::uint32_t>(devices::kDeviceFault),
-          static_cast<std::uint32_t>(devices::kTransmitFailed), kImplausibleFeedback}) {
-        if ((active & fault_bit) != 0 && report_.standing_fault == 0) {
+    const std::uint32_t raised = active & ~latched_;
+    for (const std::uint32_t fault_bit : kFaultBitsInOrder) {
+        if ((active & fault_bit) != 0 && report_.standing_fault == 0 &&
+            fault_bit != devices::kDeviceRebooted) {
             report_.standing_fault = faultCodeOf(fault_bit);
         }
-    }
-    const std::uint32_t raised = active & ~latched_;
-    for (const std::uint32_t fault_bit :
-         {static_cast<std::uint32_t>(devices::kHeartbeatLost),
-          static_cast<std::uint32_t>(devices::kBusOff),
-          static_cast<std::uint32_t>(devices::kDeviceFault),
-          static_cast<std::uint32_t>(devices::kTransmitFailed),
-          static_cast<std::uint32_t>(devices::kDeviceRebooted), kImplausibleFeedback}) {
         if ((raised & fault_bit) != 0) {
             raise(core, fault_bit);
         }
