@@ -88,6 +88,16 @@ void reportNoDaemon(const haptic::config::DaemonConfig& cfg, double timeout_s) {
                  haptic::ipc::kStatusTopic, cfg.dds.domain_id, timeout_s);
 }
 
+// One status sample on stdout, as the screen or its JSON; the exit code.
+int printRenderedStatus(const haptic::idl::HapticStatus& sample, bool json) {
+    std::string screen;
+    if (!renderStatus(sample, screen, json)) {
+        return kExitError;
+    }
+    std::cout << screen << std::flush;
+    return EXIT_SUCCESS;
+}
+
 constexpr int kConnected = 0;
 constexpr int kNoLocalDaemon = -1;
 
@@ -136,12 +146,7 @@ std::optional<int> printStatusLocally(const haptic::config::DaemonConfig& cfg, d
                 std::fprintf(stderr, "hapticctl: malformed status on the control socket\n");
                 return kExitError;
             }
-            std::string screen;
-            if (!renderStatus(sample, screen, json)) {
-                return kExitError;
-            }
-            std::cout << screen << std::flush;
-            return EXIT_SUCCESS;
+            return printRenderedStatus(sample, json);
         }
         last_error.assign(answer->body.begin(), answer->body.end());
         if (std::chrono::steady_clock::now() + 20ms >= deadline) {
@@ -167,12 +172,7 @@ int printStatus(const haptic::config::DaemonConfig& cfg, double timeout_s, bool 
         reportNoDaemon(cfg, timeout_s);
         return kExitNoDaemon;
     }
-    std::string screen;
-    if (!renderStatus(sample, screen, json)) {
-        return kExitError;
-    }
-    std::cout << screen << std::flush;
-    return EXIT_SUCCESS;
+    return printRenderedStatus(sample, json);
 }
 
 // handsim's status (sim/status, which handsim publishes over DDS whichever sim link it uses).

@@ -489,6 +489,7 @@ int runDaemon(const DaemonOptions& options) {
     }
     // The control socket's requests wake this thread at once (an E-stop reaches the RT thread
     // within a tick or two); while a forwarded command awaits its reply, every millisecond.
+    // Each wake also relays haptic/command and the RT thread's replies.
     const auto serveUntil = [&](std::chrono::steady_clock::time_point until) {
         for (auto now = std::chrono::steady_clock::now();
              now < until && !process::shutdownRequested(); now = std::chrono::steady_clock::now()) {
@@ -504,7 +505,6 @@ int runDaemon(const DaemonOptions& options) {
         return !process::shutdownRequested();
     };
     while (serveUntil(std::chrono::steady_clock::now() + wake_period)) {
-        command_relay.poll();
         publishTelemetry();
         // The RT thread produces a snapshot per status period; publish each one once.
         const auto& snapshots = loop.status();
