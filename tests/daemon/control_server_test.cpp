@@ -5,6 +5,7 @@
 
 #include "haptic/control/control_server.hpp"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <sys/socket.h>
 #include <sys/un.h>
@@ -21,6 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
+using ::testing::HasSubstr;
 
 class ControlServerTest : public ::testing::Test {
   protected:
@@ -84,6 +86,17 @@ class ControlServerTest : public ::testing::Test {
         std::vector<char> datagram;
         EXPECT_TRUE(encode(kCommandRequest, msgs::toIdl(command), datagram));
         return datagram;
+    }
+
+    // Why a server on socket_ could not be made ("" when it could: then it is gone again).
+    std::string whyNoServer() {
+        daemon::CommandChannel channel;
+        try {
+            const ControlServer server(socket_, "haptic", channel);
+        } catch (const std::runtime_error& error) {
+            return error.what();
+        }
+        return "";
     }
 
     fs::path dir_;
@@ -204,26 +217,14 @@ TEST_F(ControlServerTest, AStaleSocketIsReplacedAndALiveOneOrAnotherFileIsNot) {
         EXPECT_TRUE(fs::is_socket(socket_));
         const int fd = connectCaller();
         ::close(fd);
-        daemon::CommandChannel other;
-        try {
-            ControlServer second(socket_, "haptic", other);
-            ADD_FAILURE() << "a second server took a live socket";
-        } catch (const std::runtime_error& error) {
-            EXPECT_NE(std::string(error.what()).find("another hapticd serves it"),
-                      std::string::npos)
-                << error.what();
-        }
+        EXPECT_THAT(whyNoServer(), HasSubstr("another hapticd serves it"))
+            << "a second server took a live socket";
         EXPECT_TRUE(fs::is_socket(socket_)) << "the refused one left the live socket alone";
     }
     EXPECT_FALSE(fs::exists(socket_)) << "removed when its server stops";
     std::ofstream(socket_) << "someone's file";
-    try {
-        ControlServer third(socket_, "haptic", channel_);
-        ADD_FAILURE() << "a regular file was replaced";
-    } catch (const std::runtime_error& error) {
-        EXPECT_NE(std::string(error.what()).find("exists and is not a socket"), std::string::npos)
-            << error.what();
-    }
+    EXPECT_THAT(whyNoServer(), HasSubstr("exists and is not a socket"))
+        << "a regular file was replaced";
     EXPECT_TRUE(fs::is_regular_file(socket_));
 }
 
@@ -231,13 +232,8 @@ TEST_F(ControlServerTest, AStaleSocketIsReplacedAndALiveOneOrAnotherFileIsNot) {
 TEST_F(ControlServerTest, ADirectoryOthersMayWriteToIsRefused) {
     fs::create_directories(socket_.parent_path());
     fs::permissions(socket_.parent_path(), fs::perms::all);
-    try {
-        ControlServer server(socket_, "haptic", channel_);
-        ADD_FAILURE() << "took a world-writable directory";
-    } catch (const std::runtime_error& error) {
-        EXPECT_NE(std::string(error.what()).find("others cannot write to"), std::string::npos)
-            << error.what();
-    }
+    EXPECT_THAT(whyNoServer(), HasSubstr("others cannot write to"))
+        << "took a world-writable directory";
 }
 
 }  // namespace
