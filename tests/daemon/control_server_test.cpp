@@ -72,9 +72,12 @@ class ControlServerTest : public ::testing::Test {
         return status.header().seq();
     }
 
-    static idl::HapticStatus statusNumbered(std::uint64_t seq) {
+    // A snapshot numbered `seq`, taken by the RT thread at `taken_ns` (default: seq ms).
+    static idl::HapticStatus statusNumbered(std::uint64_t seq, std::int64_t taken_ns = -1) {
         msgs::HapticStatus status;
         status.header.seq = seq;
+        status.header.stamp_ns =
+            taken_ns >= 0 ? taken_ns : static_cast<std::int64_t>(seq) * 1'000'000;
         status.state = msgs::DaemonState::kIdle;
         return msgs::toIdl(status);
     }
@@ -122,8 +125,8 @@ TEST_F(ControlServerTest, AnswersTheStatusItWasGivenAndNothingBefore) {
 }
 
 // The command reaches the channel under a local request id; the RT thread's reply goes back
-// to the caller under the caller's own id; a status asked for after it waits for the next
-// snapshot (one taken before the command would show the state before it).
+// to the caller under the caller's own id; a status asked for after it waits for a snapshot
+// taken after the tick that applied it (one taken before would show the state before it).
 TEST_F(ControlServerTest, ACommandGoesToTheRtThreadAndItsReplyBackToTheCaller) {
     ControlServer server(socket_, "haptic", channel_);
     server.publish(statusNumbered(1));
@@ -140,6 +143,7 @@ TEST_F(ControlServerTest, ACommandGoesToTheRtThreadAndItsReplyBackToTheCaller) {
     reply.request_id = taken.request_id;
     reply.accepted = true;
     reply.message.assign("emergency stop");
+    reply.header.stamp_ns = 1'500'000;  // the RT tick that applied it
     ASSERT_TRUE(channel_.postReply(reply));
 
     msgs::HapticCommandReply other = reply;
@@ -158,6 +162,9 @@ TEST_F(ControlServerTest, ACommandGoesToTheRtThreadAndItsReplyBackToTheCaller) {
     EXPECT_TRUE(wire.accepted());
 
     EXPECT_TRUE(exchange(server, fd, {kStatusRequest}).empty()) << "the snapshot predates it";
+    // A snapshot taken before that tick, published late by the main thread, is not enough.
+    server.publish(statusNumbered(7, 1'200'000));
+    EXPECT_TRUE(receive(fd).empty()) << "answered with a snapshot from before the command";
     server.publish(statusNumbered(2));
     EXPECT_EQ(statusSeqOf(receive(fd)), 2U);
     ::close(fd);

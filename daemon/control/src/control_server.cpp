@@ -175,7 +175,12 @@ void ControlServer::publish(const idl::HapticStatus& status) {
         status_datagram_.clear();
         return;
     }
-    status_predates_reply_ = false;
+    // A snapshot the RT thread took before the tick that applied the last command (published
+    // late by this thread) does not show that command yet: keep the callers waiting for one.
+    status_predates_reply_ = status.header().stamp_ns() <= last_reply_applied_ns_;
+    if (status_predates_reply_) {
+        return;
+    }
     for (const int fd : awaiting_status_) {
         send(fd, status_datagram_);
     }
@@ -373,6 +378,7 @@ bool ControlServer::deliver(const msgs::HapticCommandReply& reply) {
         return p.local_id == reply.request_id;
     });
     status_predates_reply_ = true;  // whoever sent the command
+    last_reply_applied_ns_ = std::max(last_reply_applied_ns_, reply.header.stamp_ns);
     if (pending == pending_.end()) {
         return false;
     }

@@ -92,6 +92,7 @@ class ControlServer {
     // loop.status_rate_hz): status requests then wait for the next one, so that `estop` then
     // `status` never shows the state before the stop.
     bool status_predates_reply_{false};
+    std::int64_t last_reply_applied_ns_{0};  // the RT tick of the last reply (its stamp)
     std::vector<int> awaiting_status_;
     std::vector<char> buffer_;
     std::uint64_t next_local_id_{0};
