@@ -4,6 +4,7 @@
 #include <poll.h>
 
 #include <cmath>
+#include <string>
 
 #include "haptic/common/clock.hpp"
 #include "haptic/devices/exoskeleton_driver.hpp"
@@ -21,6 +22,19 @@ constexpr std::int64_t kWaitLimitNs = 5'000'000'000;  // a lost reply, not a slo
 // TCG guest of the SocketCAN test, on a loaded CI machine, has taken more than 5 s.
 constexpr std::int64_t kStartupLimitNs = 60'000'000'000;
 constexpr double kTickS = 0.001;
+
+// "kBadCrc 1, ..." of a codec's rejected frames, for a failure message.
+template <typename Codec>
+std::string rejectsByReason(const Codec& codec) {
+    std::string text;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(protocol::RejectReason::kCount); ++i) {
+        const auto reason = static_cast<protocol::RejectReason>(i);
+        if (const std::uint64_t n = codec.rejects().of(reason); n > 0) {
+            text += std::string(protocol::toString(reason)) + " " + std::to_string(n) + "; ";
+        }
+    }
+    return text;
+}
 
 // Polls the bus (blocking in poll(2) up to 1 ms at a time) until `done` or the limit.
 template <typename Driver, typename Done>
@@ -116,7 +130,7 @@ void runExoskeletonScenario(can::CanBus& bus, const config::DeviceConfig& device
         ASSERT_EQ(state.actuator.command_echo, counter) << "round trip " << i;
         ASSERT_EQ(state.encoders.joint_rad, expected_encoders.joint_rad) << "round trip " << i;
     }
-    EXPECT_EQ(driver.codec().rejects().total(), 0U);
+    EXPECT_EQ(driver.codec().rejects().total(), 0U) << rejectsByReason(driver.codec());
     EXPECT_EQ(driver.codec().lostFrames(), 0U);
     EXPECT_EQ(driver.state().actuator_updates, static_cast<std::uint64_t>(round_trips));
     EXPECT_EQ(driver.faults(monotonicNowNs()) & devices::kHeartbeatLost, 0U);
@@ -138,7 +152,7 @@ void runExoskeletonScenario(can::CanBus& bus, const config::DeviceConfig& device
     ASSERT_TRUE(emulator.sendCommand("heartbeat start"));
     ASSERT_TRUE(commandUntilFault(bus, driver, send, devices::kHeartbeatLost, false))
         << "the heartbeat fault did not clear after the heartbeat resumed";
-    EXPECT_EQ(driver.codec().rejects().total(), 0U);
+    EXPECT_EQ(driver.codec().rejects().total(), 0U) << rejectsByReason(driver.codec());
 }
 
 void runThimbleScenario(can::CanBus& bus, const config::DeviceConfig& device,
@@ -182,7 +196,7 @@ void runThimbleScenario(can::CanBus& bus, const config::DeviceConfig& device,
         ASSERT_EQ(driver.state().servos.servo_angle_rad, decoded.state.servo_angle_rad)
             << "round trip " << i;
     }
-    EXPECT_EQ(driver.codec().rejects().total(), 0U);
+    EXPECT_EQ(driver.codec().rejects().total(), 0U) << rejectsByReason(driver.codec());
     EXPECT_EQ(driver.codec().lostFrames(), 0U);
 
     protocol::ThimbleCommand hold;
@@ -197,7 +211,7 @@ void runThimbleScenario(can::CanBus& bus, const config::DeviceConfig& device,
     EXPECT_NE(driver.faults(monotonicNowNs()) & devices::kHeartbeatLost, 0U);
     ASSERT_TRUE(emulator.sendCommand("heartbeat start"));
     ASSERT_TRUE(commandUntilFault(bus, driver, send, devices::kHeartbeatLost, false));
-    EXPECT_EQ(driver.codec().rejects().total(), 0U);
+    EXPECT_EQ(driver.codec().rejects().total(), 0U) << rejectsByReason(driver.codec());
 }
 
 }  // namespace haptic::testing
