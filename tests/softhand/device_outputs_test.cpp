@@ -210,10 +210,10 @@ TEST_F(TactileOutputTest, PitchedFingertipPressingTableReportsPenetrationAndTilt
     const int body = model.bones.front().body;
     const double pitch = 0.3;
     const Mat3 rotation = Eigen::AngleAxisd(pitch, Vec3::UnitY()).toRotationMatrix();
-    // The whole fingertip pitched, undeformed: the skin turns with the bone.
+    // The whole fingertip pitched, undeformed: its tissue turns with the bone.
     const Vec3 centre = model.simulation.bodyPosition(body);
     model.simulation.setBodyPose(body, centre, rotation);
-    for (int node : model.simulation.skinNodes()) {
+    for (int node = 0; node < model.simulation.nodeCount(); ++node) {
         model.simulation.setNodePosition(
             node, centre + rotation * (model.simulation.nodePosition(node) - centre));
     }

@@ -23,8 +23,9 @@ double EnergyTerms::skeleton(const Sim& sim, const Sim::Configuration& q, Assemb
         blocks.clear();
         blocks.push_back({nodeDof(attachment.node), Mat3::Identity()});
         appendBodyPoint(blocks, bodyDof(sim, b), lever, -1.0);
-        energy +=
-            addResidualTerm(assembler, attachment.stiffness * Mat3::Identity(), residual, blocks);
+        const Mat3 stiffness =
+            q.rotation[b] * attachment.stiffness_local * q.rotation[b].transpose();
+        energy += addResidualTerm(assembler, stiffness, residual, blocks);
     }
     for (int b = 0; b < sim.bodyCount(); ++b) {
         const auto& body = sim.bodies_[b];

@@ -98,6 +98,33 @@ struct Builder {
         if (attached == 0) {
             throw std::logic_error("hand builder: no tissue node close enough to bone " + name);
         }
+        // Below resolution 2 the grid's nearest ring lies outside the bone, so only nodes on
+        // its axis attach, and the tissue could turn about the bone with no energy at all: the
+        // friction of a slide over an edge spun the fingertip's pad to its side, for good. The
+        // nearest ring is therefore held against turning about the bone, along the tangent
+        // only (the pad's compression stays as it was), by what the tissue in between would
+        // give: the shear stiffness of one cell, G * cell.
+        double off_axis = 0.0;
+        for (int i = first; i < sim().nodeCount(); ++i) {
+            const Vec3 local = rotation.transpose() * (sim().nodePosition(i) - origin);
+            if (distanceToSegment(local, 0.0, length) <= attach_radius) {
+                off_axis = std::max(off_axis, std::hypot(local.y(), local.z()));
+            }
+        }
+        if (off_axis < 0.25 * cell) {
+            const double shear_modulus_pa = options.tissue.youngs_modulus_pa /
+                                            (2.0 * (1.0 + options.tissue.poisson_ratio));
+            for (int i = first; i < sim().nodeCount(); ++i) {
+                const Vec3 local = rotation.transpose() * (sim().nodePosition(i) - origin);
+                const double radial = std::hypot(local.y(), local.z());
+                if (local.x() < 0.0 || local.x() > length || radial <= attach_radius ||
+                    radial > 1.5 * cell) {
+                    continue;
+                }
+                const Vec3 tangent_local(0.0, -local.z() / radial, local.y() / radial);
+                sim().attachNodeAlong(i, b, rotation * tangent_local, shear_modulus_pa * cell);
+            }
+        }
         sim().setTrackingStiffness(b, options.tracking_linear_n_per_m,
                                    options.tracking_angular_nm_per_rad);
         model.bones.push_back(

@@ -115,6 +115,10 @@ class Simulation {
     int addJoint(const JointDesc& desc);
     // Couples a node to a body at the node's current position (docs/algorithms.md §2.4.4).
     void attachNode(int node, int body, double stiffness_n_per_m);
+    // The same coupling along one direction only (given in the world, carried by the body):
+    // holds a node against sliding along `direction` and leaves it free across it.
+    void attachNodeAlong(int node, int body, const Vec3& direction_world,
+                         double stiffness_n_per_m);
     // Dirichlet condition on the node's axes (x, y, z): they keep their current position.
     void pinNode(int node, std::array<bool, 3> axes = {true, true, true});
     int addCollider(const ColliderDesc& desc);
@@ -209,7 +213,7 @@ class Simulation {
         int node;
         int body;
         Vec3 offset_local;
-        double stiffness;
+        Mat3 stiffness_local;  // N/m, in the body frame
     };
     struct Collider {
         ColliderDesc desc;
