@@ -112,8 +112,8 @@ struct Builder {
             }
         }
         if (off_axis < 0.25 * cell) {
-            const double shear_modulus_pa = options.tissue.youngs_modulus_pa /
-                                            (2.0 * (1.0 + options.tissue.poisson_ratio));
+            const double shear_modulus_pa =
+                options.tissue.youngs_modulus_pa / (2.0 * (1.0 + options.tissue.poisson_ratio));
             for (int i = first; i < sim().nodeCount(); ++i) {
                 const Vec3 local = rotation.transpose() * (sim().nodePosition(i) - origin);
                 const double radial = std::hypot(local.y(), local.z());
