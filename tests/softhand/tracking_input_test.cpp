@@ -197,10 +197,8 @@ TEST(PressSlideEdgeScript, PlacesThePadOnTheScriptedPathAndLoops) {
 namespace haptic::softhand {
 namespace {
 
-// The default demo scene's physics (index finger, table, block, press_slide_edge) for one
-// script period at 100 Hz: the contact force on the block rises while pressing and sliding
-// and is gone once lifted; both devices' outputs follow. Release only (seconds under ASan).
-TEST(SceneSimulationScripted, PressSlideEdgeForcesRiseAndFallAndOutputsFollow) {
+// The default demo scene's physics at 100 Hz: index finger, table, block.
+config::SceneConfig defaultScenePhysics() {
     config::SceneConfig scene;
     scene.name = "test";
     scene.rate_hz = 100;
@@ -211,6 +209,14 @@ TEST(SceneSimulationScripted, PressSlideEdgeForcesRiseAndFallAndOutputsFollow) {
     table.friction = 0.6;
     scene.objects = {table, blockObject()};
     scene.tracking.target_object = "block";
+    return scene;
+}
+
+// The default demo scene's physics (index finger, table, block, press_slide_edge) for one
+// script period at 100 Hz: the contact force on the block rises while pressing and sliding
+// and is gone once lifted; both devices' outputs follow. Release only (seconds under ASan).
+TEST(SceneSimulationScripted, PressSlideEdgeForcesRiseAndFallAndOutputsFollow) {
+    const config::SceneConfig scene = defaultScenePhysics();
     const DeviceRequest exo{"exo", config::Finger::kIndex, true, {}, 64};
     const DeviceRequest thimble{"thimble", config::Finger::kIndex, false, {{0, 0, -0.012}, {}}, 64};
     SceneSimulation sim(scene, {exo, thimble}, realtimeSceneSettings());
@@ -461,16 +467,7 @@ namespace {
 // edge spun the pad to the finger's side for good (the pad then carried 0.15-0.4 N of a
 // 0.8-1.9 N press, and the demo's thimble stayed retracted after its first press).
 TEST(SceneSimulationScripted, ThePadCarriesThePressInEveryPeriodOfTheScript) {
-    config::SceneConfig scene;
-    scene.name = "test";
-    scene.rate_hz = 100;
-    scene.hand = handConfig(config::HandModel::kFinger);
-    config::SceneObject table;
-    table.name = "table";
-    table.shape = config::PlaneShape{};
-    table.friction = 0.6;
-    scene.objects = {table, blockObject()};
-    scene.tracking.target_object = "block";
+    const config::SceneConfig scene = defaultScenePhysics();
     const DeviceRequest thimble{"thimble", config::Finger::kIndex, false, {{0, 0, -0.012}, {}}, 64};
     config::SolverLimits shipped;  // config/scenes/default.yaml
     shipped.newton_iterations = 2;
@@ -518,8 +515,8 @@ TEST(SceneSimulationScripted, ThePadCarriesThePressInEveryPeriodOfTheScript) {
             pressed_steps += period == 0 ? 1 : 0;
         }
         if (phase > 5.2) {  // lifted clear: the tissue is back in its shape around the bone
-            for (int node = distal->first_node;
-                 node < distal->first_node + distal->node_count; ++node) {
+            for (int node = distal->first_node; node < distal->first_node + distal->node_count;
+                 ++node) {
                 lifted_shape_change[period] = std::max(
                     lifted_shape_change[period],
                     (inBone(node) - start[static_cast<std::size_t>(node - distal->first_node)])
@@ -531,9 +528,10 @@ TEST(SceneSimulationScripted, ThePadCarriesThePressInEveryPeriodOfTheScript) {
     for (int period = 0; period < periods; ++period) {
         const auto k = static_cast<std::size_t>(period);
         pad_mean[k] /= pressed_steps;
-        std::printf("period %d: pad reference %.3f N while pressed; lifted, the distal tissue "
-                    "is within %.2f mm of its start shape\n",
-                    period, pad_mean[k], 1e3 * lifted_shape_change[k]);
+        std::printf(
+            "period %d: pad reference %.3f N while pressed; lifted, the distal tissue "
+            "is within %.2f mm of its start shape\n",
+            period, pad_mean[k], 1e3 * lifted_shape_change[k]);
         EXPECT_GT(pad_mean[k], 0.5) << "period " << period;
         EXPECT_NEAR(pad_mean[k], pad_mean[0], 0.1 * pad_mean[0]) << "period " << period;
         EXPECT_LT(lifted_shape_change[k], 0.001) << "period " << period;
