@@ -109,8 +109,8 @@ int Simulation::addJoint(const JointDesc& d) {
 
 void Simulation::attachNode(int node, int body, double stiffness) {
     const Body& b = bodies_.at(static_cast<std::size_t>(body));
-    attachments_.push_back({node, body, b.rotation.transpose() * (x_.at(node) - b.c),
-                            stiffness * Mat3::Identity()});
+    attachments_.push_back(
+        {node, body, b.rotation.transpose() * (x_.at(node) - b.c), stiffness * Mat3::Identity()});
 }
 
 void Simulation::attachNodeAlong(int node, int body, const Vec3& direction_world,

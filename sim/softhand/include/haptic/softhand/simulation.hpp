@@ -117,8 +117,7 @@ class Simulation {
     void attachNode(int node, int body, double stiffness_n_per_m);
     // The same coupling along one direction only (given in the world, carried by the body):
     // holds a node against sliding along `direction` and leaves it free across it.
-    void attachNodeAlong(int node, int body, const Vec3& direction_world,
-                         double stiffness_n_per_m);
+    void attachNodeAlong(int node, int body, const Vec3& direction_world, double stiffness_n_per_m);
     // Dirichlet condition on the node's axes (x, y, z): they keep their current position.
     void pinNode(int node, std::array<bool, 3> axes = {true, true, true});
     int addCollider(const ColliderDesc& desc);
