@@ -105,9 +105,10 @@ TEST(ShippedConfig, Sim) {
     for (const DeviceConfig& device : cfg.devices) {
         EXPECT_TRUE(cfg.scene.devices.contains(device.name)) << device.name;
     }
-    // The wrist position only, as shipped (config/sim.yaml says why).
+    // Every channel, as shipped (config/sim.yaml says why).
     ASSERT_TRUE(cfg.tracking_filter.has_value());
-    EXPECT_FALSE(cfg.tracking_filter->angle_beta_s_per_rad.has_value());
+    ASSERT_TRUE(cfg.tracking_filter->angle_beta_s_per_rad.has_value());
+    EXPECT_EQ(*cfg.tracking_filter->angle_beta_s_per_rad, 10.0);
     EXPECT_EQ(cfg.tracking_filter->min_cutoff_hz, 2.0);
     EXPECT_EQ(cfg.tracking_filter->position_beta_s_per_m, 50.0);
 }
