@@ -187,13 +187,17 @@ class DeviceSafetyTest : public ::testing::Test {
     }
 
     // The real iox-roudi with the shipped configuration (also a restart after it was lost).
-    void startRoudi() { testing::startRoudi(roudi_, kConfigDir + "/roudi.toml"); }
+    void startRoudi() { testing::startRoudi(roudi_, kConfigDir + "/roudi.toml", roudi_launcher_); }
 
     // hapticd on the copied configuration (also a restart, as systemd's Restart= would do it).
     void startDaemon(const std::vector<std::string>& extra = {}) {
-        std::vector<std::string> argv{
-            HAPTICD_PATH,   "-c",    (config_.dir / "daemon.yaml").string(), "--realtime", "ignore",
-            "--dds-domain", domain()};
+        std::vector<std::string> argv = daemon_launcher_;
+        for (const std::string& part :
+             {std::string(HAPTICD_PATH), std::string("-c"), (config_.dir / "daemon.yaml").string(),
+              std::string("--realtime"), std::string("ignore"), std::string("--dds-domain"),
+              domain()}) {
+            argv.push_back(part);
+        }
         argv.insert(argv.end(), extra.begin(), extra.end());
         daemon_ = std::make_unique<ChildProcess>(argv, "hapticd");
     }
@@ -208,8 +212,12 @@ class DeviceSafetyTest : public ::testing::Test {
     }
 
     void startSim() {
-        sim_ = std::make_unique<ChildProcess>(
-            std::vector<std::string>{HANDSIM_PATH, "--dds-domain", domain()}, "handsim");
+        std::vector<std::string> argv = sim_launcher_;
+        for (const std::string& part :
+             {std::string(HANDSIM_PATH), std::string("--dds-domain"), domain()}) {
+            argv.push_back(part);
+        }
+        sim_ = std::make_unique<ChildProcess>(argv, "handsim");
     }
 
     // A generous --timeout: DDS discovery of a fresh hapticctl takes seconds under ASan.
@@ -291,6 +299,11 @@ class DeviceSafetyTest : public ::testing::Test {
     TestConfig config_;
     // More arguments for the exoskeleton's hapticemu (a fixture's constructor sets them).
     std::vector<std::string> exo_emulator_args_;
+    // What goes before RouDi's, hapticd's and handsim's commands (a fixture's constructor sets
+    // them; for example setpriv, to run one as another user).
+    std::vector<std::string> roudi_launcher_;
+    std::vector<std::string> daemon_launcher_;
+    std::vector<std::string> sim_launcher_;
     std::unique_ptr<ChildProcess> roudi_;
     std::unique_ptr<EmulatorProcess> exo_emu_;
     std::unique_ptr<EmulatorProcess> thimble_emu_;
