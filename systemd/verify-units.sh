@@ -16,8 +16,8 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cp "$units"/*.service "$work"/
 # verify requires every ExecStart binary to exist: point the installed paths at the build.
-sed -i "s#^ExecStart=${install_bindir}/hapticd #ExecStart=${hapticd_dir}/hapticd #" "$work"/hapticd.service
-sed -i "s#^ExecStart=${install_bindir}/handsim #ExecStart=${handsim_dir}/handsim #" "$work"/handsim.service
+sed -i -E "s#^(ExecStart|ExecStartPre)=${install_bindir}/hapticd #\1=${hapticd_dir}/hapticd #" "$work"/hapticd.service
+sed -i -E "s#^(ExecStart|ExecStartPre)=${install_bindir}/handsim #\1=${handsim_dir}/handsim #" "$work"/handsim.service
 
 status=0
 if ! output=$(cd "$work" && systemd-analyze verify ./*.service 2>&1) || [[ -n $output ]]; then
@@ -32,6 +32,8 @@ require() {  # unit, regex, why
         status=1
     fi
 }
+require hapticd.service 'ExecStartPre=.*/hapticd --config .*/daemon.yaml --check' 'a configuration error stops the start'
+require handsim.service 'ExecStartPre=.*/handsim --config .*/sim.yaml --check' 'a configuration error stops the start'
 require hapticd.service 'Type=notify' 'READY=1 after the RT loop runs'
 require hapticd.service 'WatchdogSec=[0-9]+m?s' 'pinged only while the RT loop ticks'
 require hapticd.service 'LimitRTPRIO=[0-9]+' 'SCHED_FIFO'
