@@ -8,7 +8,7 @@ PACKAGES=(
   libeigen3-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libgtest-dev libgmock-dev libbenchmark-dev
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libiceoryx-introspection-dev
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
-  libcli11-dev libsystemd-dev libbullet-dev libboost-dev nlohmann-json3-dev
+  libcli11-dev libsystemd-dev libbullet-dev libboost-dev nlohmann-json3-dev libssl-dev
   can-utils rt-tests gnuplot-nox procps
   qemu-system-x86 busybox-static iproute2 xz-utils clang
 )

@@ -50,7 +50,11 @@ const std::vector<double>& DeviceColumns::column(std::string_view name) const {
 }
 
 std::map<int, DeviceColumns> readTelemetryCsv(std::string_view csv) {
-    const std::vector<std::string_view> header = splitFields(nextLine(csv));
+    std::string_view first = nextLine(csv);
+    while (first.starts_with('#') && !csv.empty()) {  // hapticctl record's provenance
+        first = nextLine(csv);
+    }
+    const std::vector<std::string_view> header = splitFields(first);
     constexpr std::size_t kDeviceColumn = 2;
     constexpr std::size_t kKindColumn = 3;
     if (header.size() <= kKindColumn || header[kDeviceColumn] != "device" ||

@@ -260,7 +260,10 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
     haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
     auto reader = participant.createReader<haptic::idl::HapticTelemetryPubSubType>(
         haptic::ipc::kTelemetryTopic, haptic::ipc::TopicKind::kStream);
-    out << haptic::ctl::telemetryCsvHeader();
+    // The provenance comes from hapticd's status: its version, its configuration digest and
+    // the device names (kLatestState: the last status reaches a late reader).
+    auto status_reader = participant.createReader<haptic::idl::HapticStatusPubSubType>(
+        haptic::ipc::kStatusTopic, haptic::ipc::TopicKind::kLatestState);
     haptic::idl::HapticTelemetry sample;
     haptic::msgs::HapticTelemetry batch;
     std::int64_t origin_ns = -1;
@@ -281,6 +284,18 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
             if (origin_ns < 0) {
                 origin_ns = batch.samples[i].stamp_ns;
                 deadline = std::chrono::steady_clock::now() + toMs(duration_s);
+                const std::int64_t wall_clock_ns =
+                    std::chrono::duration_cast<std::chrono::nanoseconds>(
+                        std::chrono::system_clock::now().time_since_epoch())
+                        .count();
+                // Matched by now (telemetry arrived): one status period (50 ms shipped) at most.
+                haptic::idl::HapticStatus status_sample;
+                haptic::msgs::HapticStatus status;
+                const bool have_status = status_reader.waitAndTake(status_sample, 500ms) &&
+                                         haptic::msgs::fromIdl(status_sample, status).ok();
+                out << haptic::ctl::telemetryCsvProvenance(HAPTIC_VERSION, wall_clock_ns,
+                                                           have_status ? &status : nullptr)
+                    << haptic::ctl::telemetryCsvHeader();
             }
             const haptic::msgs::TelemetrySample& s = batch.samples[i];
             gaps.add(s.device_index, s.tick);

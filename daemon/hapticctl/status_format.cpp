@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "haptic/msgs/names.hpp"
 
 namespace haptic::ctl {
@@ -25,6 +27,13 @@ std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s) 
                                             status.uptime_s, status.header.seq)
                               : fmt::format("    Uptime: {:.1f} s   (status #{}, {:.2f} s old)\n",
                                             status.uptime_s, status.header.seq, sample_age_s);
+    // The first 12 hex digits tell configurations apart; the JSON and recordings carry all.
+    const std::string_view digest = status.config_digest.view();
+    out +=
+        fmt::format("   Version: hapticd {}   configuration {}\n",
+                    status.version.empty() ? std::string_view("(unknown)") : status.version.view(),
+                    digest.empty() ? std::string_view("(unknown)")
+                                   : digest.substr(0, std::min<std::size_t>(digest.size(), 19)));
 
     const auto& loop = status.loop;
     out += fmt::format(

@@ -35,6 +35,8 @@ std::string statusJson(const msgs::HapticStatus& status, double sample_age_s) {
     Json out = opening(kStatusJsonSchema, status.header, sample_age_s);
     out["state"] = msgs::toString(status.state);
     out["rendering_method"] = status.rendering_method.view();
+    out["version"] = status.version.view();
+    out["config_digest"] = status.config_digest.view();
     out["uptime_s"] = status.uptime_s;
     const msgs::LoopStatistics& loop = status.loop;
     out["loop"] = Json{{"rate_hz", loop.rate_hz},

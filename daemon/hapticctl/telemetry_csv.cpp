@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <ctime>
 #include <stdexcept>
 #include <string_view>
 
@@ -21,6 +22,34 @@ std::string quoted(const std::string& path) {
     return out + "'";
 }
 }  // namespace
+
+std::string telemetryCsvProvenance(std::string_view hapticctl_version, std::int64_t wall_clock_ns,
+                                   const msgs::HapticStatus* status) {
+    const std::time_t seconds = static_cast<std::time_t>(wall_clock_ns / 1'000'000'000);
+    std::tm utc{};
+    ::gmtime_r(&seconds, &utc);
+    std::string out = fmt::format("# hapticctl record {}\n", hapticctl_version);
+    out += fmt::format(
+        "# started {:04}-{:02}-{:02}T{:02}:{:02}:{:02}Z (first sample, wall clock)\n",
+        utc.tm_year + 1900, utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec);
+    if (status == nullptr) {
+        out += "# hapticd: no status received, version and configuration unknown\n";
+        return out;
+    }
+    out += fmt::format(
+        "# hapticd {}, configuration {}\n",
+        status->version.empty() ? std::string_view("(unknown)") : status->version.view(),
+        status->config_digest.empty() ? std::string_view("(unknown)")
+                                      : status->config_digest.view());
+    std::string devices;
+    for (std::size_t i = 0; i < status->devices.size(); ++i) {
+        const msgs::DeviceStatus& device = status->devices[i];
+        devices += fmt::format("{}{} {} ({})", i == 0 ? "" : ", ", i, device.device_id.view(),
+                               msgs::toString(device.kind));
+    }
+    out += fmt::format("# devices: {}\n", devices.empty() ? std::string("none") : devices);
+    return out;
+}
 
 std::string telemetryCsvHeader() {
     std::string header = "tick,time_s,device,device_kind,actuator_force_cmd_n";

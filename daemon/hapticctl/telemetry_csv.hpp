@@ -6,12 +6,18 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <string_view>
 
 #include "haptic/msgs/messages.hpp"
 
 namespace haptic::ctl {
 
 std::string telemetryCsvHeader();
+// The '#' lines before the header: who recorded, when (UTC wall clock of the first sample),
+// which hapticd with which configuration (from its status; nullptr: none received), and the
+// name of each device index. Readers skip '#' lines (gnuplot does too).
+std::string telemetryCsvProvenance(std::string_view hapticctl_version, std::int64_t wall_clock_ns,
+                                   const msgs::HapticStatus* status);
 // `origin_ns`: the stamp shown as t = 0 (the first recorded sample).
 std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t origin_ns);
 

@@ -58,6 +58,8 @@ struct DeviceEndpoints {
 
 daemon::CoreSettings coreSettings(const config::DaemonConfig& cfg) {
     daemon::CoreSettings settings;
+    settings.version = HAPTIC_VERSION;
+    settings.config_digest = config::configurationDigest(cfg);
     settings.rate_hz = cfg.loop.rate_hz;
     settings.telemetry_decimation = static_cast<std::uint32_t>(cfg.loop.telemetry_decimation);
     settings.overrun_limit = static_cast<std::uint32_t>(cfg.loop.overrun_limit);

@@ -2,6 +2,7 @@
 // and the end-to-end tests run with, so a change here should be a deliberate one.
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -352,6 +353,42 @@ TEST(ConfigTestData, RelativeReferencesIgnoreTheWorkingDirectory) {
     EXPECT_EQ(from_root.devices[1].source, resolved(kDataDir / "devices/thimble_ok.yaml"));
     EXPECT_EQ(from_elsewhere.devices[1].source, resolved(kDataDir / "devices/thimble_ok.yaml"));
     EXPECT_TRUE(from_elsewhere.devices[1].source.is_absolute());
+}
+
+}  // namespace
+}  // namespace haptic::config
+
+namespace haptic::config {
+namespace {
+
+// The digest names the bytes the daemon was configured from: stable across loads, changed by
+// one byte of a device file, and the same for a copy elsewhere (paths are not hashed).
+TEST(ConfigurationDigest, NamesTheBytesOfEveryFileTheDaemonRead) {
+    const DaemonConfig shipped = loadDaemonConfig(test::kConfigDir / "daemon.yaml");
+    const std::string digest = configurationDigest(shipped);
+    EXPECT_TRUE(std::regex_match(digest, std::regex("sha256:[0-9a-f]{64}"))) << digest;
+    EXPECT_EQ(configurationDigest(loadDaemonConfig(test::kConfigDir / "daemon.yaml")), digest);
+
+    const std::filesystem::path copy =
+        std::filesystem::temp_directory_path() / ("haptic-digest-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(copy);
+    std::filesystem::copy(test::kConfigDir, copy, std::filesystem::copy_options::recursive);
+    EXPECT_EQ(configurationDigest(loadDaemonConfig(copy / "daemon.yaml")), digest);
+    {
+        std::ofstream device(copy / "devices/thimble.yaml", std::ios::app);
+        device << "\n";  // one byte, no change of meaning
+    }
+    EXPECT_NE(configurationDigest(loadDaemonConfig(copy / "daemon.yaml")), digest);
+    const DaemonConfig changed = loadDaemonConfig(copy / "daemon.yaml");
+    std::filesystem::remove(copy / "devices/thimble.yaml");
+    try {
+        (void)configurationDigest(changed);
+        ADD_FAILURE() << "a device file that is gone was digested";
+    } catch (const ConfigError& error) {
+        EXPECT_NE(std::string(error.what()).find("thimble.yaml"), std::string::npos)
+            << error.what();
+    }
+    std::filesystem::remove_all(copy);
 }
 
 }  // namespace

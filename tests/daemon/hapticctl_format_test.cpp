@@ -77,7 +77,13 @@ TEST(StatusFormat, ShowsStateLoopSimLinkDevicesAndFaults) {
     fault.message.assign("heartbeat missing for 50 ms");
     status.faults.push_back(fault);
 
+    EXPECT_THAT(formatStatus(status, 0.05),
+                HasSubstr("Version: hapticd (unknown)   configuration (unknown)"));
+    status.version.assign("1.2.3");
+    status.config_digest.assign(
+        "sha256:0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef");
     const std::string text = formatStatus(status, 0.05);
+    EXPECT_THAT(text, HasSubstr("Version: hapticd 1.2.3   configuration sha256:0123456789ab\n"));
     EXPECT_THAT(text, HasSubstr("State: IDLE"));
     EXPECT_THAT(text, HasSubstr("Uptime: 12.5 s   (status #0, 0.05 s old)"));
     EXPECT_THAT(text, HasSubstr("rendering method: subspace"));
@@ -97,6 +103,8 @@ TEST(StatusJson, CarriesEveryFieldOfTheScreenUnderTheDocumentedNames) {
     status.header.seq = 42;
     status.state = msgs::DaemonState::kFault;
     status.rendering_method.assign("anisotropic");
+    status.version.assign("1.2.3");
+    status.config_digest.assign("sha256:00ff");
     status.uptime_s = 12.5;
     status.loop.rate_hz = 1000;
     status.loop.ticks = 12500;
@@ -129,6 +137,8 @@ TEST(StatusJson, CarriesEveryFieldOfTheScreenUnderTheDocumentedNames) {
     EXPECT_TRUE(json["age_s"].is_null());
     EXPECT_EQ(json["state"], "FAULT");
     EXPECT_EQ(json["rendering_method"], "anisotropic");
+    EXPECT_EQ(json["version"], "1.2.3");
+    EXPECT_EQ(json["config_digest"], "sha256:00ff");
     EXPECT_EQ(json["uptime_s"], 12.5);
     EXPECT_EQ(json["loop"]["ticks"], 12500);
     EXPECT_EQ(json["loop"]["overruns_compute"], 2);
@@ -333,6 +343,42 @@ TEST(ClosedLoopReport, TrackerToCommandLatencyIsTakenWhereTheSampleChanges) {
     const std::string decimated_text = formatReport(decimated_devices, {});
     EXPECT_NE(decimated_text.find("not measured"), std::string::npos) << decimated_text;
     EXPECT_EQ(decimated_text.find("scripted"), std::string::npos) << decimated_text;
+}
+
+// A recording says who made it, when, from which hapticd and configuration, and which device
+// each index is; the readers skip those lines.
+TEST(TelemetryCsv, TheProvenanceLinesNameTheRecordingAndReadersSkipThem) {
+    msgs::HapticStatus status;
+    status.version.assign("0.1.0");
+    status.config_digest.assign("sha256:00aa");
+    msgs::DeviceStatus exo;
+    exo.device_id.assign("exo");
+    exo.kind = msgs::DeviceKind::kExoskeleton;
+    msgs::DeviceStatus thimble;
+    thimble.device_id.assign("thimble");
+    thimble.kind = msgs::DeviceKind::kThimble;
+    ASSERT_TRUE(status.devices.push_back(exo));
+    ASSERT_TRUE(status.devices.push_back(thimble));
+    // 2026-11-27 07:55:12 UTC
+    const std::int64_t wall_clock_ns = 1'795'766'112LL * 1'000'000'000 + 250'000'000;
+    const std::string provenance = telemetryCsvProvenance("0.1.0", wall_clock_ns, &status);
+    EXPECT_EQ(provenance,
+              "# hapticctl record 0.1.0\n"
+              "# started 2026-11-27T07:55:12Z (first sample, wall clock)\n"
+              "# hapticd 0.1.0, configuration sha256:00aa\n"
+              "# devices: 0 exo (exoskeleton), 1 thimble (thimble)\n");
+    EXPECT_THAT(telemetryCsvProvenance("0.1.0", wall_clock_ns, nullptr),
+                HasSubstr("# hapticd: no status received, version and configuration unknown\n"));
+
+    msgs::TelemetrySample sample;
+    sample.device_index = 1;
+    sample.device_kind = msgs::DeviceKind::kThimble;
+    sample.tick = 7;
+    const auto devices =
+        readTelemetryCsv(provenance + telemetryCsvHeader() + telemetryCsvRow(sample, 0));
+    ASSERT_EQ(devices.size(), 1U);
+    EXPECT_EQ(devices.at(1).kind, "thimble");
+    EXPECT_EQ(devices.at(1).column("tick").front(), 7.0);
 }
 
 // Every 10th tick sent: per device, a step of 30 is two samples missing.

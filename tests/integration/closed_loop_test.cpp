@@ -156,6 +156,16 @@ TEST_F(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitch
     std::ifstream file(csv);
     std::stringstream text;
     text << file.rdbuf();
+    // The recording names its source: this hapticd's version and configuration digest, as
+    // its status shows them, and the device of each index.
+    const std::string provenance = text.str().substr(0, text.str().find("\ntick,"));
+    EXPECT_THAT(provenance, ::testing::StartsWith("# hapticctl record "));
+    EXPECT_THAT(provenance,
+                ::testing::ContainsRegex("# hapticd [0-9.]+, configuration sha256:[0-9a-f]{64}\n"));
+    EXPECT_THAT(provenance,
+                ::testing::HasSubstr("# devices: 0 exo (exoskeleton), 1 thimble (thimble)"));
+    EXPECT_THAT(status.out, ::testing::HasSubstr("   Version: hapticd " HAPTIC_VERSION
+                                                 "   configuration sha256:"));
     const auto devices = ctl::readTelemetryCsv(text.str());
     std::filesystem::remove(csv);
     ASSERT_EQ(devices.size(), 2U);

@@ -292,6 +292,9 @@ TEST_F(RoudiTest, EstopAndClearFromHapticctlDriveTheDaemonStateMachine) {
     std::ifstream rows(csv);
     std::string line;
     std::getline(rows, line);
+    EXPECT_THAT(line, HasSubstr("# hapticctl record " HAPTIC_VERSION));  // the provenance first
+    while (line.starts_with('#') && std::getline(rows, line)) {
+    }
     EXPECT_THAT(line, HasSubstr("tick,time_s,device,device_kind,actuator_force_cmd_n"));
     std::map<int, std::vector<unsigned long>> ticks_by_device;
     while (std::getline(rows, line)) {

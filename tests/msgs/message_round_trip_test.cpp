@@ -212,6 +212,8 @@ class Filler {
         fill(m.sim_link.rejected);
         fill(m.sim_link.late_input_ticks);
         fill(m.faults);
+        fill(m.version);
+        fill(m.config_digest);
     }
     void fill(TelemetrySample& s) {
         fill(s.tick);

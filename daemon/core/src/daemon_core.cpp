@@ -443,6 +443,8 @@ void DaemonCore::fillStatus(std::int64_t now_ns, msgs::HapticStatus& out) noexce
     out.header.source_id.assign("hapticd");
     out.state = machine_.state();
     out.rendering_method = machine_.method();
+    out.version.assign(settings_.version);
+    out.config_digest.assign(settings_.config_digest);
     out.uptime_s = static_cast<double>(now_ns - started_ns_) * 1e-9;
     // Percentiles cover the last full one-second window; counters are live.
     out.loop = last_window_;

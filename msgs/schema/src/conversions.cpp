@@ -290,6 +290,8 @@ idl::HapticStatus toIdl(const HapticStatus& in) {
     out.header(toIdl(in.header));
     out.state(toIdlEnum<idl::DaemonState>(in.state));
     copyString(in.rendering_method, out.rendering_method());
+    copyString(in.version, out.version());
+    copyString(in.config_digest, out.config_digest());
     out.uptime_s(in.uptime_s);
 
     idl::LoopStatistics loop;
@@ -353,6 +355,8 @@ ConversionResult fromIdl(const idl::HapticStatus& in, HapticStatus& out) {
     }
     fromIdl(in.header(), out.header);
     copyString(in.rendering_method(), out.rendering_method);
+    copyString(in.version(), out.version);
+    copyString(in.config_digest(), out.config_digest);
     out.uptime_s = in.uptime_s();
 
     const auto& loop = in.loop();

@@ -84,4 +84,9 @@ struct DaemonConfig {
 // Loads daemon.yaml and every device file it names. Throws ConfigError.
 [[nodiscard]] DaemonConfig loadDaemonConfig(const std::filesystem::path& path);
 
+// "sha256:<64 hex digits>" over the bytes of every file the configuration was loaded from:
+// daemon.yaml, the DDS profiles file, then each device file in order. It names what a daemon
+// runs with (status, recordings). Throws ConfigError when a file can no longer be read.
+[[nodiscard]] std::string configurationDigest(const DaemonConfig& config);
+
 }  // namespace haptic::config

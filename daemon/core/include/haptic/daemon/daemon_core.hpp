@@ -76,6 +76,8 @@ struct CoreSettings {
     // A single overrun only counts. 0 turns the policy off; at most kMaxOverrunLimit.
     std::uint32_t overrun_limit{0};
     std::int64_t overrun_window_ns{0};
+    std::string version{};        // shown in the status
+    std::string config_digest{};  // config::configurationDigest of what hapticd loaded
 };
 
 class DaemonCore {

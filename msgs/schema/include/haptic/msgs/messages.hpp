@@ -199,6 +199,8 @@ struct HapticStatus {
     BoundedArray<DeviceStatus, kMaxStatusDevices> devices{};
     SimLinkStatus sim_link{};
     BoundedArray<Fault, kMaxStatusFaults> faults{};
+    DeviceId version{};                               // hapticd's version
+    FixedString<kShortTextCapacity> config_digest{};  // config::configurationDigest
     friend bool operator==(const HapticStatus&, const HapticStatus&) = default;
 };
 
