@@ -9,6 +9,12 @@ ROOT=$(cd "$(dirname "$0")/.." && pwd)
 for tool in strace systemd-analyze; do
   command -v "$tool" >/dev/null || { echo "syscall-filter-check: $tool not installed" >&2; exit 2; }
 done
+# It kills the RouDi it traced and removes iceoryx's files: never with another RouDi running
+# (an installed service's, or the demo's).
+if pgrep -x iox-roudi >/dev/null; then
+  echo "syscall-filter-check: an iox-roudi is running (pid $(pgrep -x iox-roudi)); stop it first" >&2
+  exit 2
+fi
 work=$(mktemp -d /tmp/haptic-syscalls.XXXX)
 demo="$ROOT/scripts/.demo-under-strace.sh"
 trap 'rm -f "$demo"' EXIT
@@ -21,7 +27,7 @@ chmod +x "$demo"
 # strace does not pass the demo's SIGTERM on, so the demo kills what it traced at the end and
 # reports stale iceoryx files; they are cleaned below.
 "$demo" --duration 12 --record 6 >"$work/demo.log" 2>&1 || true
-pkill -9 -x iox-roudi 2>/dev/null || true
+pkill -9 -x iox-roudi 2>/dev/null || true  # only the traced one: none ran before
 rm -f /dev/shm/iceoryx_mgmt /tmp/roudi /tmp/roudi.lock /tmp/iox-unique-roudi.lock \
       /tmp/hapticd /tmp/hapticd.lock /tmp/handsim /tmp/handsim.lock "/dev/shm/$(id -gn)"
 fastdds shm clean >/dev/null 2>&1 || true

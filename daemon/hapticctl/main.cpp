@@ -261,7 +261,7 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
     auto reader = participant.createReader<haptic::idl::HapticTelemetryPubSubType>(
         haptic::ipc::kTelemetryTopic, haptic::ipc::TopicKind::kStream);
     // The provenance comes from hapticd's status: its version, its configuration digest and
-    // the device names (kLatestState: the last status reaches a late reader).
+    // the device names (read once the telemetry flows, so the status writer is matched too).
     auto status_reader = participant.createReader<haptic::idl::HapticStatusPubSubType>(
         haptic::ipc::kStatusTopic, haptic::ipc::TopicKind::kLatestState);
     haptic::idl::HapticTelemetry sample;
@@ -288,11 +288,21 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
                     std::chrono::duration_cast<std::chrono::nanoseconds>(
                         std::chrono::system_clock::now().time_since_epoch())
                         .count();
-                // Matched by now (telemetry arrived): one status period (50 ms shipped) at most.
+                // The next status comes within two status periods (the reader keeps no history
+                // for a late joiner); the telemetry history meanwhile holds what arrives.
+                const auto status_wait = std::chrono::milliseconds(
+                    100 + 2000 / std::max(cfg.loop.status_rate_hz, 1));
                 haptic::idl::HapticStatus status_sample;
                 haptic::msgs::HapticStatus status;
-                const bool have_status = status_reader.waitAndTake(status_sample, 500ms) &&
-                                         haptic::msgs::fromIdl(status_sample, status).ok();
+                bool have_status = false;
+                if (status_reader.waitAndTake(status_sample, status_wait)) {
+                    const auto converted = haptic::msgs::fromIdl(status_sample, status);
+                    have_status = converted.ok();
+                    if (!have_status) {
+                        std::fprintf(stderr, "hapticctl: malformed status sample: %s\n",
+                                     converted.error.c_str());
+                    }
+                }
                 out << haptic::ctl::telemetryCsvProvenance(HAPTIC_VERSION, wall_clock_ns,
                                                            have_status ? &status : nullptr)
                     << haptic::ctl::telemetryCsvHeader();

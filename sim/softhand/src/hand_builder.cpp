@@ -117,8 +117,11 @@ struct Builder {
             for (int i = first; i < sim().nodeCount(); ++i) {
                 const Vec3 local = rotation.transpose() * (sim().nodePosition(i) - origin);
                 const double radial = std::hypot(local.y(), local.z());
-                if (local.x() < 0.0 || local.x() > length || radial <= attach_radius ||
-                    radial > 1.5 * cell) {
+                // Rings along the bone only: the end faces (x = 0, x = length, up to rounding)
+                // stay free where they meet the next phalanx's tissue at the joint.
+                const double end_tolerance = 1e-6 * length;
+                if (local.x() < end_tolerance || local.x() > length - end_tolerance ||
+                    radial <= attach_radius || radial > 1.5 * cell) {
                     continue;
                 }
                 const Vec3 tangent_local(0.0, -local.z() / radial, local.y() / radial);
