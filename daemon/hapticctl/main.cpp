@@ -290,8 +290,8 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
                         .count();
                 // The next status comes within two status periods (the reader keeps no history
                 // for a late joiner); the telemetry history meanwhile holds what arrives.
-                const auto status_wait = std::chrono::milliseconds(
-                    100 + 2000 / std::max(cfg.loop.status_rate_hz, 1));
+                const auto status_wait =
+                    std::chrono::milliseconds(100 + 2000 / std::max(cfg.loop.status_rate_hz, 1));
                 haptic::idl::HapticStatus status_sample;
                 haptic::msgs::HapticStatus status;
                 bool have_status = false;
