@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "SimStatusPubSubTypes.h"
@@ -233,45 +234,34 @@ int runSim(const SimOptions& options) {
                 }
                 continue;
             }
+            // The device's targets of this step, stamped alike whichever transport carries them.
+            const auto fillTargets = [&](auto& message) {
+                message = std::remove_cvref_t<decltype(message)>{};
+                physics.fill(index, message);
+                message.tracking = origin;
+                message.header = {++link.seq, stamp, {}};
+                message.header.source_id.assign(name);
+            };
             if (dds_link) {
                 if (link.device->isExoskeleton()) {
-                    dds_constraints = msgs::ConstraintSet{};
-                    physics.fill(index, dds_constraints);
-                    dds_constraints.tracking = origin;
-                    dds_constraints.header = {++link.seq, stamp, {}};
-                    dds_constraints.header.source_id.assign(name);
+                    fillTargets(dds_constraints);
                     link.published += dds_link->publish(index, dds_constraints) ? 1 : 0;
                 } else {
-                    dds_surface = msgs::ContactSurface{};
-                    physics.fill(index, dds_surface);
-                    dds_surface.tracking = origin;
-                    dds_surface.header = {++link.seq, stamp, {}};
-                    dds_surface.header.source_id.assign(name);
+                    fillTargets(dds_surface);
                     link.published += dds_link->publish(index, dds_surface) ? 1 : 0;
                 }
                 link.states_received += dds_link->takeDeviceStates(index, dds_state);
                 continue;
             }
+            auto publishLoaned = [&](auto& sample) {  // iceoryx's function_ref takes no const
+                fillTargets(*sample);
+                sample.publish();
+                ++link.published;
+            };
             if (link.constraint_sets) {
-                link.constraint_sets->loan().and_then([&](auto& sample) {
-                    *sample = msgs::ConstraintSet{};
-                    physics.fill(index, *sample);
-                    sample->tracking = origin;
-                    sample->header = {++link.seq, stamp, {}};
-                    sample->header.source_id.assign(name);
-                    sample.publish();
-                    ++link.published;
-                });
+                link.constraint_sets->loan().and_then(publishLoaned);
             } else {
-                link.contact_surfaces->loan().and_then([&](auto& sample) {
-                    *sample = msgs::ContactSurface{};
-                    physics.fill(index, *sample);
-                    sample->tracking = origin;
-                    sample->header = {++link.seq, stamp, {}};
-                    sample->header.source_id.assign(name);
-                    sample.publish();
-                    ++link.published;
-                });
+                link.contact_surfaces->loan().and_then(publishLoaned);
             }
             while (
                 link.device_states->take().and_then([&](const auto&) { ++link.states_received; })) {
