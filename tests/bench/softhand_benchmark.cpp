@@ -4,13 +4,14 @@
 // thimble scene), one finger flexing against a table (the exoskeleton scene), and the whole
 // hand moved up and down by its tracking (no contact).
 // Counters: p50_us / p99_us over the steps of the run; pcg_iters, backtracks, substeps,
-// newton_extra (Newton iterations beyond the first) and zeroed (steps the energy check refused
-// with no substep left, which kept positions and zeroed velocities) per step; force_err = RMS(F -
-// F_ref) / RMS(F_ref) of the normal force on the table over the first second, press_err the same
-// over its first 0.2 s (pressing in, no sliding yet: the fine reference stick-slips while sliding,
-// which dominates force_err); tip_err_mm = RMS distance of the distal bone from the reference
-// (flex). The reference is the same scene one resolution level finer than the finest row, with PCG
-// to a relative tolerance of 1e-8 (up to 2000 iterations), computed once before the rows run.
+// newton_extra (Newton iterations beyond the first), rescaled (steps whose energy rose with no
+// substep left, velocities scaled down) and zeroed (steps held with no finite state) per step;
+// force_err = RMS(F - F_ref) / RMS(F_ref) of the normal force on the table over the first second,
+// press_err the same over its first 0.2 s (pressing in, no sliding yet: the fine reference
+// stick-slips while sliding, which dominates force_err); tip_err_mm = RMS distance of the distal
+// bone from the reference (flex). The reference is the same scene one resolution level finer than
+// the finest row, with PCG to a relative tolerance of 1e-8 (up to 2000 iterations), computed once
+// before the rows run.
 
 #include <benchmark/benchmark.h>
 #include <malloc.h>
@@ -141,6 +142,7 @@ void run(benchmark::State& state, int reference_level, StepLimits limits) {
         solver.max_newton_iterations = realtime.max_newton_iterations;
         solver.max_backtracks = realtime.max_backtracks;
         solver.max_substep_depth = realtime.max_substep_depth;
+        solver.newton_tolerance_m = realtime.newton_tolerance_m;
     }
     std::vector<double> step_us;
     std::vector<double> cpu_us;
@@ -149,6 +151,8 @@ void run(benchmark::State& state, int reference_level, StepLimits limits) {
     double substeps = 0.0;
     double newton = 0.0;
     double zeroed = 0.0;
+    double rescaled = 0.0;
+    double restarted = 0.0;
     double force_error2 = 0.0;
     double force_ref2 = 0.0;
     double tip_error2 = 0.0;
@@ -168,6 +172,8 @@ void run(benchmark::State& state, int reference_level, StepLimits limits) {
         substeps += r.substeps;
         newton += r.newton_iterations;
         zeroed += r.zeroed_steps;
+        rescaled += r.rescaled_steps;
+        restarted += r.restarted_solves;
         if (step < kCycleSteps) {
             const Sample s = scene.sample();
             const Sample& expected = ref[static_cast<std::size_t>(step)];
@@ -193,6 +199,8 @@ void run(benchmark::State& state, int reference_level, StepLimits limits) {
     state.counters["substeps"] = substeps / steps;
     state.counters["newton_extra"] = newton / steps;
     state.counters["zeroed"] = zeroed / steps;
+    state.counters["rescaled"] = rescaled / steps;
+    state.counters["restarted"] = restarted / steps;
     state.counters["force_err"] = std::sqrt(force_error2 / std::max(force_ref2, 1e-30));
     state.counters["press_err"] = std::sqrt(press_error2 / std::max(press_ref2, 1e-30));
     state.counters["tip_err_mm"] = 1e3 * std::sqrt(tip_error2 / compared);
@@ -280,6 +288,8 @@ void runDefaultScene(benchmark::State& state, int resolution,
     double substeps = 0.0;
     double backtracks = 0.0;
     double zeroed = 0.0;
+    double rescaled = 0.0;
+    double restarted = 0.0;
     double newton = 0.0;
     double substepped_us = 0.0;
     int substepped = 0;
@@ -296,6 +306,8 @@ void runDefaultScene(benchmark::State& state, int resolution,
         substeps += r.substeps;
         backtracks += r.backtracks;
         zeroed += r.zeroed_steps;
+        rescaled += r.rescaled_steps;
+        restarted += r.restarted_solves;
         newton += r.newton_iterations;
         if (r.substeps > 1) {
             substepped_us += step_us.back();
@@ -310,6 +322,8 @@ void runDefaultScene(benchmark::State& state, int resolution,
     state.counters["max_contacts"] = contacts;
     state.counters["backtracks"] = backtracks / static_cast<double>(step_us.size());
     state.counters["zeroed"] = zeroed / static_cast<double>(step_us.size());
+    state.counters["rescaled"] = rescaled / static_cast<double>(step_us.size());
+    state.counters["restarted"] = restarted / static_cast<double>(step_us.size());
     state.counters["substepped_mean_us"] = substepped > 0 ? substepped_us / substepped : 0.0;
     state.counters["p50_us"] = common::percentile(step_us, 0.5);
     state.counters["p99_us"] = common::percentile(step_us, 0.99);

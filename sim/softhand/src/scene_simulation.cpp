@@ -1,5 +1,6 @@
 #include "haptic/softhand/scene_simulation.hpp"
 
+#include <limits>
 #include <stdexcept>
 
 namespace haptic::softhand {
@@ -10,6 +11,7 @@ SceneSimulationSettings realtimeSceneSettings(const config::SolverLimits& limits
     settings.solver.max_newton_iterations = limits.newton_iterations;
     settings.solver.max_backtracks = 2;
     settings.solver.max_substep_depth = 0;
+    settings.solver.newton_tolerance_m = std::numeric_limits<double>::infinity();
     return settings;
 }
 

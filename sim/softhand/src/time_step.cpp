@@ -1,4 +1,5 @@
-// Backward Euler with one Newton step, PCG, and the energy check (docs/algorithms.md §2.6).
+// Backward Euler: Newton on the merit with an Armijo line search, PCG, and the energy guard
+// (docs/algorithms.md §2.6).
 
 #include <algorithm>
 #include <cmath>
@@ -37,6 +38,32 @@ void integrate(const Simulation::Configuration& q, const Eigen::VectorXd& veloci
         out.c[b] += h * velocity.segment<3>(dof);
         out.rotation[b] = orthonormalized(expMap(h * velocity.segment<3>(dof + 3)) * q.rotation[b]);
     }
+}
+
+// Armijo's sufficient-decrease constant, and the halvings a line search from a cold PCG
+// direction may take (a step of 2^-16 of that direction, rather than no step).
+constexpr double kArmijo = 1e-4;
+constexpr int kColdHalvings = 16;
+constexpr double kSignificantMove_m = 1e-5;
+
+// Adds the assembly's missing blocks to the pattern within a step. The Rayleigh part of the
+// system, frozen at the prediction, moves to the new pattern's slots (the new blocks are
+// contact couplings, which carry no tissue damping). Allocates, but only when a contact
+// couples a node to a body for the first time: the pattern keeps its blocks.
+void growPattern(int block_rows, Simulation::Workspace& w) {
+    const BlockPattern old = w.pattern;
+    std::vector<std::pair<int, int>> blocks = w.missing;
+    w.pattern.appendBlocks(blocks);
+    w.pattern.build(block_rows, std::move(blocks));
+    std::vector<double> damping(9 * static_cast<std::size_t>(w.pattern.blockCount()), 0.0);
+    for (int row = 0; row < old.blockRows(); ++row) {
+        for (int k = old.rowBegin(row); k < old.rowEnd(row); ++k) {
+            const int slot = w.pattern.find(row, old.column(k));
+            std::copy_n(w.damping_hessian.begin() + 9 * static_cast<std::ptrdiff_t>(k), 9,
+                        damping.begin() + 9 * static_cast<std::ptrdiff_t>(slot));
+        }
+    }
+    w.damping_hessian.swap(damping);
 }
 
 }  // namespace
@@ -116,14 +143,14 @@ StepReport Simulation::step(double dt_s) {
         report.energy_j = energyNow();
         return report;
     }
-    advance(dt_s, 0, report);
+    advance(dt_s, 0, report, std::numeric_limits<double>::quiet_NaN());
     report.substepped = report.substeps > 1;
     report.active_contacts = static_cast<int>(contact_forces_.size());
     report.energy_j = energyNow();
     return report;
 }
 
-bool Simulation::advance(double h, int depth, StepReport& report) {
+bool Simulation::advance(double h, int depth, StepReport& report, double energy_reference) {
     const Layout layout{nodeCount(), bodyCount()};
     const int n = layout.dofs();
     Workspace& w = work_;
@@ -137,6 +164,16 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
     // evaluated first: linearising there makes the direction a descent direction of the
     // merit, and contacts about to happen this step are already in the set.
     integrate(q, velocity, h, w.predicted);
+    // The energy guard's reference: the state as the last step left it, with the inputs set
+    // since (targets, collider poses) and the contact set it ended with. Taken before the
+    // contacts are detected at the prediction: a new contact's friction anchor is placed at
+    // the predicted point, so at q its spring is already stretched by the node's travel
+    // within the step, energy that no state ever held (at 1 kPa and 33 ms it let a step
+    // gain joules while the guard saw a fall).
+    // A first substep starts from its parent's state, whose contact set the parent already
+    // replaced: it takes the parent's reference.
+    const double energy_before =
+        std::isnan(energy_reference) ? kineticEnergy() + potentialNow(q) : energy_reference;
     detectContacts(w.predicted);
 
     const int block_rows = layout.nodes + 2 * layout.bodies;
@@ -172,144 +209,172 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
     const double damping_start =
         alpha * velocity.dot(w.mass_velocity) + gamma * velocity.dot(w.tissue_trial);
 
-    // Energy check. A step is accepted when it lowers the backward-Euler merit
-    //   Phi(v+) = 1/2 dv^T M dv + U(q + h v+) + h/2 v+^T D v+   (whose minimiser is the step)
-    // and does not raise the total energy 1/2 v^T M v + U(q). The exact backward-Euler step
-    // satisfies both for convex energies; one Newton step on a non-convex or non-smooth one
-    // (co-rotation, strain limits, friction switching between stick and slip, contacts
-    // starting within the step) may not.
+    // The step minimises the backward-Euler merit
+    //   Phi(v+) = 1/2 dv^T M dv + U(q + h v+) + h/2 v+^T D v+
+    // by Newton iterations with an Armijo line search on Phi (docs/algorithms.md §2.6). The
+    // system matrix is positive definite (co-rotated stiffness with R frozen, Gauss-Newton
+    // residual terms), so a PCG direction started from zero descends; a warm-started one is
+    // checked and replaced when it does not. Every accepted iterate lowers Phi, so the step
+    // always advances to the best iterate found. The total energy 1/2 v^T M v + U(q) is a
+    // guard, not an acceptance test: lowering Phi does not imply lowering it when U is
+    // non-convex or the contact set changes within the step, and the only point certain to
+    // pass it is v+ = 0, a frozen frame. When it rises, the step is first split into
+    // substeps (where the limits allow), then its velocities are scaled down until the rise
+    // is gone; positions keep the Newton result.
     struct Evaluation {
         double merit;
         double energy;
+        double tissue;
     };
-    double trial_tissue = 0.0;  // tissue energy of the last evaluation
-    const auto evaluate = [&](const Eigen::VectorXd& v_plus) {
-        StepAssembly::massTimes(node_mass_, bodies_, w, v_plus, w.mass_trial);
-        w.pattern.multiply(w.damping_hessian, v_plus, w.tissue_trial);
+    const auto evaluate = [&](const Eigen::VectorXd& v_trial) {
+        StepAssembly::massTimes(node_mass_, bodies_, w, v_trial, w.mass_trial);
+        w.pattern.multiply(w.damping_hessian, v_trial, w.tissue_trial);
         const double damping =
-            alpha * v_plus.dot(w.mass_trial) + gamma * v_plus.dot(w.tissue_trial);
-        integrate(q, v_plus, h, w.trial);
-        trial_tissue = EnergyTerms::tissue(*this, w.trial, nullptr, nullptr);
-        const double potential = trial_tissue + EnergyTerms::external(*this, w.trial, nullptr) +
+            alpha * v_trial.dot(w.mass_trial) + gamma * v_trial.dot(w.tissue_trial);
+        integrate(q, v_trial, h, w.trial);
+        const double tissue = EnergyTerms::tissue(*this, w.trial, nullptr, nullptr);
+        const double potential = tissue + EnergyTerms::external(*this, w.trial, nullptr) +
                                  EnergyTerms::skeleton(*this, w.trial, nullptr) +
                                  EnergyTerms::contact(*this, w.trial, nullptr);
-        const double kinetic_change = (v_plus - velocity).dot(w.mass_trial - w.mass_velocity);
+        const double kinetic_change = (v_trial - velocity).dot(w.mass_trial - w.mass_velocity);
         return Evaluation{0.5 * kinetic_change + potential + 0.5 * h * damping,
-                          0.5 * v_plus.dot(w.mass_trial) + potential};
+                          0.5 * v_trial.dot(w.mass_trial) + potential, tissue};
     };
-    const double energy_before = 0.5 * velocity.dot(w.mass_velocity) + potentialNow(q);
     // Phi(v) is the potential at the prediction, already summed by the assembly above.
     const double merit_start = potential_predicted + 0.5 * h * damping_start;
-    const double merit_slack = 1e-12 * std::max(1.0, std::abs(merit_start));
     const double energy_slack = 1e-12 + 1e-9 * std::abs(energy_before);
 
-    // Newton iterations on the merit. Most rejected full steps lower the merit but overshoot
-    // where the linearisation was wrong (a node modelled as sliding that the step stops, a
-    // node that touches within the step): they were halved and then substepped, each
-    // substep a full step again. Relinearising at the better point instead (a damped Newton
-    // iteration, with the same acceptance test) reaches the backward-Euler step in one or
-    // two more solves; substeps stay the last resort.
     if (warm_start_.size() != n || !warm_start_.allFinite()) {
         warm_start_ = Eigen::VectorXd::Zero(n);
     }
     Eigen::VectorXd& v_plus = w.v_plus;
     Eigen::VectorXd& iterate = w.iterate;
     iterate = velocity;
+    w.first_delta.setZero(n);
     double merit_iterate = merit_start;
-    bool accepted = false;
-    int halvings_left = settings_.max_backtracks;
     // Not with inverted elements: the inversion-safe energy has spurious minima there, and
     // converged iterations settled into one (SofthandStability.InvertedElementsRecover kept
     // 3 elements inverted), where substeps from a fresh prediction get out.
     const int newton_iterations =
         stats.inverted_elements > 0 ? 1 : std::max(1, settings_.max_newton_iterations);
+    bool evaluated_iterate = false;  // `iterate_value` holds Phi and E at `iterate`
+    Evaluation iterate_value{merit_start, 0.0, 0.0};
     for (int newton = 0; newton < newton_iterations && std::isfinite(merit_start); ++newton) {
-        const bool last = newton + 1 == newton_iterations;
         if (newton > 0) {
             integrate(q, iterate, h, w.trial);
-            Assembler assembler(w.pattern, w.hessian, w.tissue_hessian, w.gradient, w.missing,
-                                /*keep_tissue_part=*/false);
-            assembler.useElementBlocks(w.tet_slots, tets_.size());
-            (void)EnergyTerms::potential(*this, w.trial, &assembler, nullptr);
-            if (!w.missing.empty()) {
-                break;  // a new contact block: the pattern would change under D; substep
+            for (;;) {
+                Assembler assembler(w.pattern, w.hessian, w.tissue_hessian, w.gradient, w.missing,
+                                    /*keep_tissue_part=*/false);
+                assembler.useElementBlocks(w.tet_slots, tets_.size());
+                (void)EnergyTerms::potential(*this, w.trial, &assembler, nullptr);
+                if (w.missing.empty()) {
+                    break;
+                }
+                growPattern(block_rows, w);  // a contact couples a node to a new body
             }
             ++report.newton_iterations;
         }
         buildSystem(iterate, h, w);
-        w.delta = newton == 0 ? warm_start_ : Eigen::VectorXd::Zero(n);
-        const PcgResult pcg = solvePcg(w.pattern, w.system, w.rhs, w.free_mask, w.preconditioner,
-                                       settings_.pcg_max_iterations,
-                                       settings_.pcg_relative_tolerance, w.delta, w.pcg);
-        report.pcg_iterations += pcg.iterations;
-        report.pcg_relative_residual = pcg.relative_residual;
-        report.pcg_capped = report.pcg_capped || !pcg.converged;
-        report.clamped = report.clamped || !pcg.converged;
-        if (!w.delta.allFinite()) {
-            break;
+        // The first iteration's PCG starts from the last step's direction. When that
+        // direction does not descend, or its line search finds no lower Phi, the solve is
+        // repeated from zero, whose every PCG iterate descends, and its line search may
+        // halve further: the trap this closes was a capped warm-started direction 4x too
+        // long that the next step warm-started from again, freezing the fingertip scene.
+        bool warm = newton == 0;
+        double decrement = 0.0;
+        double best_fraction = 0.0;
+        bool sufficient = false;
+        Evaluation best_value = iterate_value;
+        for (;;) {
+            if (warm) {
+                w.delta = warm_start_;
+            } else {
+                w.delta.setZero(n);
+            }
+            const PcgResult pcg = solvePcg(w.pattern, w.system, w.rhs, w.free_mask,
+                                           w.preconditioner, settings_.pcg_max_iterations,
+                                           settings_.pcg_relative_tolerance, w.delta, w.pcg);
+            report.pcg_iterations += pcg.iterations;
+            report.pcg_relative_residual = pcg.relative_residual;
+            report.pcg_capped = report.pcg_capped || !pcg.converged;
+            report.clamped = report.clamped || !pcg.converged;
+            decrement = w.rhs.dot(w.delta);  // -slope of Phi along delta
+            const bool descends = w.delta.allFinite() && decrement > 0.0;
+            // A direction that moves no DoF by more than this over the step is a correction
+            // below what any output resolves: its line search failing is roundoff at a
+            // minimum (seen in steady sliding), not a trap, and is not worth a second solve.
+            const bool significant =
+                descends && h * w.delta.lpNorm<Eigen::Infinity>() > kSignificantMove_m;
+            if (descends) {
+                // Armijo backtracking on Phi; when the halvings run out, the lowest Phi
+                // seen, if it is below the iterate's.
+                const int halvings = warm || !significant
+                                         ? settings_.max_backtracks
+                                         : std::max(settings_.max_backtracks, kColdHalvings);
+                double step_fraction = 1.0;
+                best_value = iterate_value;
+                best_value.merit = merit_iterate;
+                for (int halving = 0;; ++halving) {
+                    v_plus = iterate + step_fraction * w.delta;
+                    const Evaluation value = evaluate(v_plus);
+                    if (std::isfinite(value.merit) && value.merit < best_value.merit) {
+                        best_value = value;
+                        best_fraction = step_fraction;
+                    }
+                    if (std::isfinite(value.merit) &&
+                        value.merit <= merit_iterate - kArmijo * step_fraction * decrement) {
+                        sufficient = true;
+                        break;
+                    }
+                    if (halving >= halvings) {
+                        break;
+                    }
+                    ++report.backtracks;
+                    step_fraction *= 0.5;
+                }
+            }
+            if (best_fraction > 0.0 || !warm || (descends && !significant)) {
+                break;
+            }
+            warm = false;
+            ++report.restarted_solves;
         }
         if (newton == 0) {
-            // The next step starts PCG from the first full Newton direction (not from the
-            // accepted, possibly halved or corrected step): with a small iteration cap the
+            // The next step starts PCG from this step's first Newton direction (not from
+            // the accepted, possibly shortened step): with a small iteration cap the
             // scripted scenes track their targets markedly better that way.
             w.first_delta = w.delta;
         }
-        double step_fraction = 1.0;
-        double previous_excess = std::numeric_limits<double>::infinity();
-        bool improved = false;
-        for (;;) {
-            v_plus = iterate + step_fraction * w.delta;
-            const Evaluation value = evaluate(v_plus);
-            const bool merit_lowered =
-                std::isfinite(value.merit) && value.merit <= merit_start + merit_slack;
-            const double excess = value.energy - energy_before;
-            if (merit_lowered && excess <= energy_slack) {
-                accepted = true;
-                break;
-            }
-            // Not yet acceptable but better than the iterate: linearise again there.
-            if (!last && std::isfinite(value.merit) && value.merit < merit_iterate) {
-                iterate = v_plus;
-                merit_iterate = value.merit;
-                improved = true;
-                break;
-            }
-            if (halvings_left-- <= 0) {
-                break;
-            }
-            ++report.backtracks;
-            // Only the energy rose, and a shorter step did not shrink the rise at least in
-            // proportion: the rise is in the inertial prediction itself, which no shorter
-            // Newton step removes; go straight to substeps instead of halving ten times.
-            if (merit_lowered && !(excess < 0.75 * previous_excess)) {
-                break;
-            }
-            previous_excess = merit_lowered ? excess : previous_excess;
-            step_fraction *= 0.5;
+        if (best_fraction == 0.0) {
+            break;  // no lower Phi along a descent direction: at a minimum to precision
         }
-        if (accepted || !improved) {
+        iterate += best_fraction * w.delta;
+        merit_iterate = best_value.merit;
+        iterate_value = best_value;
+        evaluated_iterate = true;
+        // Done when this iteration moved no DoF by more than the tolerance over the step
+        // and the energy guard passes. An iterate that still raises the energy gets the
+        // iterations left before the guard's remedy.
+        const double moved_m = h * best_fraction * w.delta.lpNorm<Eigen::Infinity>();
+        const bool energy_ok = best_value.energy - energy_before <= energy_slack;
+        if (!sufficient || (energy_ok && moved_m <= settings_.newton_tolerance_m)) {
             break;
         }
     }
-    if (!accepted) {
-        v_plus = velocity;
+    if (!evaluated_iterate) {
+        iterate_value = evaluate(iterate);
     }
-    if (!accepted && depth < settings_.max_substep_depth) {
-        const bool first = advance(0.5 * h, depth + 1, report);
+    v_plus = iterate;
+    const double excess = iterate_value.energy - energy_before;
+    const bool energy_rose = !(excess <= energy_slack);
+    const bool finite = std::isfinite(iterate_value.energy) && iterate.allFinite();
+    if (energy_rose && depth < settings_.max_substep_depth) {
+        const bool first = advance(0.5 * h, depth + 1, report, energy_before);
         const bool second = advance(0.5 * h, depth + 1, report);
         return first && second;
     }
-    if (!accepted) {
-        // Out of substeps: stop rather than gain energy. Positions stay, velocities vanish.
-        report.clamped = true;
-        ++report.zeroed_steps;
-        v_plus.setZero();
-    }
-    if (accepted) {
-        warm_start_ = w.first_delta;
-    } else {
-        warm_start_.setZero();
-    }
+    warm_start_ = w.first_delta.size() == n && w.first_delta.allFinite() ? w.first_delta
+                                                                         : Eigen::VectorXd::Zero(n);
 
     // Speed clamp: a tracking teleport must not fling tissue across the scene.
     bool speed_clamped = false;
@@ -323,12 +388,35 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
             speed_clamped = true;
         }
     }
+    if (!finite) {
+        // Nothing finite to advance to (a non-finite input got past the checks): hold the
+        // positions and stop. The one case that freezes a step; counted apart.
+        ++report.zeroed_steps;
+        report.clamped = true;
+        v_plus.setZero();
+    }
     integrate(q, v_plus, h, w.trial);
-    // The accepted evaluation was at these very positions unless the clamp moved them: its
-    // tissue energy (the costly term) is that of the new state, for the report and the
-    // next step's energy check.
-    tissue_energy_valid_ = accepted && !speed_clamped;
-    tissue_energy_ = trial_tissue;
+    if (energy_rose && finite) {
+        // Out of substeps: the positions keep the Newton result and the velocities are
+        // scaled so that the kinetic energy is what the energy before the step leaves above
+        // the new potential (zero when the new potential alone exceeds it; from rest the
+        // next step cannot rise, since Phi(v+) <= Phi(0) bounds its potential by this one).
+        report.clamped = true;
+        ++report.rescaled_steps;
+        StepAssembly::massTimes(node_mass_, bodies_, w, iterate, w.mass_trial);
+        const double kinetic = 0.5 * iterate.dot(w.mass_trial);
+        const double potential_after = iterate_value.energy - kinetic;
+        const double allowed = std::max(0.0, energy_before - potential_after);
+        const double scale = kinetic > 0.0 && std::isfinite(allowed / kinetic)
+                                 ? std::sqrt(std::min(1.0, allowed / kinetic))
+                                 : 0.0;
+        v_plus *= scale;
+    }
+    // The evaluation at the iterate was at these very positions unless the clamp moved
+    // them: its tissue energy (the costly term) is that of the new state, for the report
+    // and the next step's energy guard.
+    tissue_energy_valid_ = finite && !speed_clamped;
+    tissue_energy_ = iterate_value.tissue;
     const Configuration& next = w.trial;
     for (int i = 0; i < layout.nodes; ++i) {
         x_[i] = next.x[i];
@@ -345,7 +433,7 @@ bool Simulation::advance(double h, int depth, StepReport& report) {
     }
     updateAnchors();
     ++report.substeps;
-    return accepted;
+    return !energy_rose;
 }
 
 void Simulation::buildSystem(const Eigen::VectorXd& iterate, double h, Workspace& w) {
@@ -387,7 +475,7 @@ int Simulation::relax(double dt_s, int max_steps, double displacement_tolerance_
         for (int b = 0; b < bodyCount(); ++b) {
             largest = std::max(largest, (bodies_[b].c - body_before[b]).norm());
         }
-        // A zeroed step (energy check out of substeps) moves nothing but has not converged.
+        // A clamped step (PCG cap, energy rescale) may move little without having converged.
         if (largest < displacement_tolerance_m && !report.clamped) {
             return s;
         }

@@ -24,20 +24,14 @@ struct SceneSimulationSettings {
     KinestheticOutputSettings kinesthetic;
 };
 
-// handsim's solver budget: by default PCG capped at 30 iterations, one Newton iteration (no
-// re-linearisation), at most 2 halvings of the Newton step and no substeps: a step the
-// energy check still refuses keeps its positions and zeroes the velocities
-// (StepReport::zeroed_steps). Chosen so the scenes hold their rates: a cap of 30 costs less
-// on average than 10 (fewer failed steps) and is more accurate; one substep level, measured
-// against none, doubled the default scene's p99 (12.6 against 6.1 ms) and the thimble
-// scene's (2.8 against 1.6 ms) while zeroing about as many steps. Re-linearising (up to 5
-// Newton iterations) made the steps that needed it 2-4 times the median and, at levels 0
-// and 1, bought no accuracy: thimble press p99 1.28 against 0.73 ms, force error 0.115
-// against 0.118, 5.5% against 6.0% steps zeroed; finger flex p99 6.3 against 3.1 ms. At
-// level 2 it does help (21% of the press's steps zeroed with one iteration, 9% with five)
-// (docs/benchmarks.md, "handsim's limits"). A scene's `solver:` block overrides
-// the Newton and PCG counts: the default scene at 100 Hz takes 2 Newton iterations, because on
-// it one iteration zeroes about twice as many steps (11% against 6%).
+// handsim's solver budget: by default PCG capped at 30 iterations and one Newton iteration;
+// a line search of at most 2 halvings (16 more after a cold re-solve, docs/algorithms.md
+// §2.6), no substeps, and Newton iterations beyond the first only while the step still raises
+// the energy. A step whose energy still rises keeps the Newton positions and scales its
+// velocities down (StepReport::rescaled_steps); no finite step is frozen. A scene's `solver:`
+// block overrides the Newton and PCG counts: the default scene at 100 Hz takes 2 Newton
+// iterations. The choices and their measured costs are in docs/benchmarks.md ("Soft hand
+// step").
 [[nodiscard]] SceneSimulationSettings realtimeSceneSettings(
     const config::SolverLimits& limits = {});
 

@@ -1,14 +1,16 @@
 #pragma once
 
 // Soft hand simulation core (docs/algorithms.md §2, thesis ch. 3): tissue nodes and rigid bodies
-// (bones, object duplicates) advanced together by backward Euler with one Newton step per
-// step, solved by block-Jacobi PCG, guarded by an energy check that backtracks and substeps.
+// (bones, object duplicates) advanced together by backward Euler: Newton iterations with an
+// Armijo line search on the step's merit, solved by block-Jacobi PCG, and an energy guard
+// that substeps or scales velocities down, never freezing a finite step.
 //
 // Units: SI (m, kg, s, N, Pa). Frames: world, z up. No I/O; bad input is rejected with a
 // reason in the step report, never thrown from step().
 
 #include <Eigen/Core>
 #include <array>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,9 +41,13 @@ struct SolverSettings {
     double stiffness_damping_s{0.002};  // Rayleigh gamma
     int pcg_max_iterations{200};
     double pcg_relative_tolerance{1e-4};
-    int max_newton_iterations{5};               // per step (or substep), before substepping
-    int max_backtracks{10};                     // halvings of the Newton step before substepping
-    int max_substep_depth{3};                   // 2^3 = 8 substeps at most
+    int max_newton_iterations{5};  // per step (or substep)
+    // Newton iterations stop once one moves no DoF by more than this over the step and the
+    // energy guard passes. Real-time settings make it infinite: the first iterate that
+    // passes the guard ends the step.
+    double newton_tolerance_m{1e-6};
+    int max_backtracks{10};                     // halvings of a Newton step in its line search
+    int max_substep_depth{3};                   // on an energy rise, 2^3 = 8 substeps at most
     double max_speed_m_per_s{5.0};              // node and body speed clamp
     double contact_stiffness_n_per_m{2000.0};   // per skin node
     double friction_stiffness_n_per_m{2000.0};  // per skin node, tangential
@@ -86,13 +92,18 @@ struct ColliderDesc {
 struct StepReport {
     bool rejected_input{false};  // an input (target, dt) was refused and the old one kept
     std::string rejection_reason;
-    bool clamped{false};  // speed clamp, target-rate clamp, PCG cap or a step zeroed
+    bool clamped{false};  // speed clamp, target-rate clamp, PCG cap, energy rescale or hold
     bool substepped{false};
     int substeps{1};
     int backtracks{0};
-    // (Sub)steps the energy check refused with no substep left: they kept their positions
-    // and zeroed the velocities rather than gain energy (also counted as clamped).
+    // (Sub)steps whose total energy rose with no substep left: positions took the Newton
+    // result and the velocities were scaled down until the rise was gone (also clamped).
+    int rescaled_steps{0};
+    // (Sub)steps with no finite state to advance to: positions held, velocities zeroed.
+    // Only a non-finite input gets here; a finite one never freezes a step.
     int zeroed_steps{0};
+    // Warm-started PCG solves that did not descend and were solved again from zero.
+    int restarted_solves{0};
     int newton_iterations{0};  // beyond the first, summed over substeps
     int pcg_iterations{0};     // summed over substeps
     bool pcg_capped{false};
@@ -133,7 +144,7 @@ class Simulation {
     void setBodyPose(int body, const Vec3& position_m, const Mat3& rotation);
     void setBodyVelocity(int body, const Vec3& linear_m_per_s, const Vec3& angular_rad_per_s);
 
-    // Advances by dt_s (one step, or substeps when the energy check demands it).
+    // Advances by dt_s (one step, or substeps when the energy guard demands it).
     StepReport step(double dt_s);
     // Quasi-static relaxation for validation: steps of dt_s started from rest (a Newton
     // iteration on the potential, regularised by M/dt^2) until no node or body moves more
@@ -258,7 +269,9 @@ class Simulation {
     };
 
   private:
-    bool advance(double dt_s, int depth, StepReport& report);
+    // energy_reference: the energy guard's reference when the caller has it (NaN: measure).
+    bool advance(double dt_s, int depth, StepReport& report,
+                 double energy_reference = std::numeric_limits<double>::quiet_NaN());
     // The Newton system at v+ = iterate, its right-hand side and preconditioner.
     // (w.mass_velocity = M v must be set.)
     void buildSystem(const Eigen::VectorXd& iterate, double h, Workspace& w);
