@@ -103,10 +103,13 @@ std::string formatSimStatus(const msgs::SimStatus& status, double sample_age_s) 
         fmt::format("    Solver: last step {} PCG iterations, residual {:.2e}, energy {:.3e} J\n",
                     status.solver_iterations, status.solver_residual, status.energy_j);
     const double steps = status.steps > 0 ? static_cast<double>(status.steps) : 1.0;
+    const auto share = [&](std::uint64_t count) {
+        return 100.0 * static_cast<double>(count) / steps;
+    };
     out += fmt::format(
-        "      Held: {} steps zeroed by the energy check ({:.1f}%), {} substepped ({:.1f}%)\n",
-        status.steps_zeroed, 100.0 * static_cast<double>(status.steps_zeroed) / steps,
-        status.steps_substepped, 100.0 * static_cast<double>(status.steps_substepped) / steps);
+        "    Energy: {} steps rescaled ({:.1f}%), {} substepped ({:.1f}%), {} frozen ({:.1f}%)\n",
+        status.steps_rescaled, share(status.steps_rescaled), status.steps_substepped,
+        share(status.steps_substepped), status.steps_zeroed, share(status.steps_zeroed));
     out += status.inputs_rejected == 0
                ? std::string("  Tracking: no input rejected\n")
                : fmt::format("  Tracking: {} inputs rejected, last: {}\n", status.inputs_rejected,

@@ -97,6 +97,7 @@ std::string simStatusJson(const msgs::SimStatus& status, double sample_age_s) {
                          {"energy_j", status.energy_j}};
     out["steps_zeroed"] = status.steps_zeroed;
     out["steps_substepped"] = status.steps_substepped;
+    out["steps_rescaled"] = status.steps_rescaled;
     out["inputs_rejected"] = status.inputs_rejected;
     out["last_rejection"] = status.last_rejection.view();
     // Text from the daemon is not checked UTF-8: a bad byte becomes U+FFFD, not an exception.

@@ -136,6 +136,7 @@ int runSim(const SimOptions& options) {
     // Since start, for sim/status: what the solver did instead of a plain step.
     std::uint64_t total_rejected_inputs = 0;
     std::uint64_t zeroed_steps = 0;
+    std::uint64_t rescaled_steps = 0;
     std::uint64_t substepped_steps = 0;
     softhand::StepReport last_report;
     std::vector<double> run_step_times_us;  // whole run with --duration, summary at exit
@@ -217,6 +218,7 @@ int runSim(const SimOptions& options) {
             last_rejection = rejection;
         }
         zeroed_steps += report.zeroed_steps > 0 ? 1 : 0;
+        rescaled_steps += report.rescaled_steps > 0 ? 1 : 0;
         substepped_steps += report.substepped ? 1 : 0;
         const std::int64_t stamp = common::monotonicNowNs();
         const msgs::TrackingOrigin origin = tracking->origin();
@@ -296,6 +298,7 @@ int runSim(const SimOptions& options) {
             status.model.assign(physics.modelName());
             status.steps_zeroed = zeroed_steps;
             status.steps_substepped = substepped_steps;
+            status.steps_rescaled = rescaled_steps;
             status.inputs_rejected = total_rejected_inputs;
             status.last_rejection.assign(last_rejection);
             if (rejected_inputs > 0) {
@@ -326,9 +329,9 @@ int runSim(const SimOptions& options) {
         const msgs::Percentiles run = percentiles(run_step_times_us);
         spdlog::info(
             "{} steps in {:.1f} s ({:.1f} Hz); step time p50 {:.0f} us, p99 {:.0f} us, max {:.0f} "
-            "us; {} zeroed by the energy check, {} substepped; {} tracking input(s) rejected",
+            "us; energy guard: {} rescaled, {} substepped, {} frozen; {} tracking input(s) rejected",
             steps, run_s, static_cast<double>(steps) / run_s, run.p50, run.p99, run.max,
-            zeroed_steps, substepped_steps, total_rejected_inputs);
+            rescaled_steps, substepped_steps, zeroed_steps, total_rejected_inputs);
     }
     for (const auto& link : links) {
         spdlog::info("device '{}': published {} targets, received {} device states",

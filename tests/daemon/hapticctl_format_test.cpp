@@ -34,14 +34,15 @@ TEST(SimStatusFormat, ShowsRateStepTimeZeroedStepsAndTheLastRejectedInput) {
     status.solver_iterations = 30;
     status.solver_residual = 1.5e-4;
     status.energy_j = 2.5e-3;
-    status.steps_zeroed = 220;
+    status.steps_rescaled = 220;
     status.steps_substepped = 0;
+    status.steps_zeroed = 4;
     const std::string clean = formatSimStatus(status, 0.2);
     EXPECT_THAT(clean, HasSubstr("scene 'thimble_only'"));
     EXPECT_THAT(clean, HasSubstr("softhand_fingertip_index_res1 (169 nodes, 516 elements)"));
     EXPECT_THAT(clean, HasSubstr("4000 at 200.0 Hz"));
     EXPECT_THAT(clean, HasSubstr("p50   511.0 us"));
-    EXPECT_THAT(clean, HasSubstr("220 steps zeroed by the energy check (5.5%)"));
+    EXPECT_THAT(clean, HasSubstr("220 steps rescaled (5.5%), 0 substepped (0.0%), 4 frozen (0.1%)"));
     EXPECT_THAT(clean, HasSubstr("no input rejected"));
 
     status.inputs_rejected = 3;
@@ -167,6 +168,7 @@ TEST(StatusJson, HandsimsStatusToo) {
     status.model.assign("softhand_finger_index_res1");
     status.steps = 900;
     status.steps_zeroed = 12;
+    status.steps_rescaled = 7;
     status.step_time_us = {4000.0, 9000.0, 12000.0};
     status.last_rejection.assign("HandPose on 'tracking/hand': wrist_position_m is not finite");
     const auto json = nlohmann::json::parse(simStatusJson(status, 0.1));
@@ -175,6 +177,7 @@ TEST(StatusJson, HandsimsStatusToo) {
     EXPECT_EQ(json["model"], "softhand_finger_index_res1");
     EXPECT_EQ(json["steps"], 900);
     EXPECT_EQ(json["steps_zeroed"], 12);
+    EXPECT_EQ(json["steps_rescaled"], 7);
     EXPECT_EQ(json["step_time_us"]["p99"], 9000.0);
     EXPECT_EQ(json["last_rejection"], std::string(status.last_rejection.view()));
 }

@@ -146,7 +146,7 @@ TEST_F(RoudiTest, DaemonAndSimExchangeMessagesAndStatusIsLive) {
     ASSERT_EQ(sim_status.exit_code, 0) << sim_status.err;
     EXPECT_THAT(sim_status.out, HasSubstr("handsim - soft hand simulation, scene 'default'"));
     EXPECT_THAT(sim_status.out, HasSubstr("softhand_finger_index_res1 (602 nodes"));
-    EXPECT_THAT(sim_status.out, HasSubstr("steps zeroed by the energy check"));
+    EXPECT_THAT(sim_status.out, HasSubstr("steps rescaled"));
     EXPECT_THAT(sim_status.out, HasSubstr("Tracking: no input rejected"));
 
     // The same two snapshots for scripts (docs/hapticctl.md, "Machine-readable status").

@@ -276,6 +276,7 @@ class Filler {
         fill(m.steps_substepped);
         fill(m.inputs_rejected);
         fill(m.last_rejection);
+        fill(m.steps_rescaled);
     }
 
   private:

@@ -557,6 +557,7 @@ idl::SimStatus toIdl(const SimStatus& in) {
     out.steps_substepped(in.steps_substepped);
     out.inputs_rejected(in.inputs_rejected);
     copyString(in.last_rejection, out.last_rejection());
+    out.steps_rescaled(in.steps_rescaled);
     return out;
 }
 
@@ -575,6 +576,7 @@ ConversionResult fromIdl(const idl::SimStatus& in, SimStatus& out) {
     out.steps_substepped = in.steps_substepped();
     out.inputs_rejected = in.inputs_rejected();
     copyString(in.last_rejection(), out.last_rejection);
+    out.steps_rescaled = in.steps_rescaled();
     return {};
 }
 

@@ -291,12 +291,15 @@ struct SimStatus {
     std::uint32_t solver_iterations{0};
     double energy_j{0.0};
     FixedString<kModelNameCapacity> model{};
-    // Since handsim started: steps the energy check zeroed (positions held, velocities 0),
-    // steps it split into substeps, and refused tracking inputs with the latest reason.
+    // Since handsim started: steps held with no finite state to advance to (positions kept,
+    // velocities 0: a frozen frame; a finite step never gets here), steps the energy guard
+    // split into substeps, steps whose energy rose and had their velocities scaled down
+    // (positions from the Newton result), and refused tracking inputs with the latest reason.
     std::uint64_t steps_zeroed{0};
     std::uint64_t steps_substepped{0};
     std::uint64_t inputs_rejected{0};
     FixedString<kShortTextCapacity> last_rejection{};
+    std::uint64_t steps_rescaled{0};
     friend bool operator==(const SimStatus&, const SimStatus&) = default;
 };
 
