@@ -329,7 +329,8 @@ int runSim(const SimOptions& options) {
         const msgs::Percentiles run = percentiles(run_step_times_us);
         spdlog::info(
             "{} steps in {:.1f} s ({:.1f} Hz); step time p50 {:.0f} us, p99 {:.0f} us, max {:.0f} "
-            "us; energy guard: {} rescaled, {} substepped, {} frozen; {} tracking input(s) rejected",
+            "us; energy guard: {} rescaled, {} substepped, {} frozen; {} tracking input(s) "
+            "rejected",
             steps, run_s, static_cast<double>(steps) / run_s, run.p50, run.p99, run.max,
             rescaled_steps, substepped_steps, zeroed_steps, total_rejected_inputs);
     }
