@@ -23,9 +23,15 @@ double EnergyTerms::skeleton(const Sim& sim, const Sim::Configuration& q, Assemb
         blocks.clear();
         blocks.push_back({nodeDof(attachment.node), Mat3::Identity()});
         appendBodyPoint(blocks, bodyDof(sim, b), lever, -1.0);
-        const Mat3 stiffness =
-            q.rotation[b] * attachment.stiffness_local * q.rotation[b].transpose();
-        energy += addResidualTerm(assembler, stiffness, residual, blocks);
+        if (attachment.direction_local.isZero()) {
+            energy += addResidualTerm(assembler, attachment.stiffness * Mat3::Identity(), residual,
+                                      blocks);
+        } else {
+            const Vec3 direction = q.rotation[b] * attachment.direction_local;
+            energy +=
+                addResidualTerm(assembler, attachment.stiffness * direction * direction.transpose(),
+                                residual, blocks);
+        }
     }
     for (int b = 0; b < sim.bodyCount(); ++b) {
         const auto& body = sim.bodies_[b];

@@ -110,7 +110,7 @@ int Simulation::addJoint(const JointDesc& d) {
 void Simulation::attachNode(int node, int body, double stiffness) {
     const Body& b = bodies_.at(static_cast<std::size_t>(body));
     attachments_.push_back(
-        {node, body, b.rotation.transpose() * (x_.at(node) - b.c), stiffness * Mat3::Identity()});
+        {node, body, b.rotation.transpose() * (x_.at(node) - b.c), stiffness, Vec3::Zero()});
 }
 
 void Simulation::attachNodeAlong(int node, int body, const Vec3& direction_world,
@@ -120,8 +120,8 @@ void Simulation::attachNodeAlong(int node, int body, const Vec3& direction_world
         throw std::invalid_argument("attachNodeAlong: the direction must not be zero");
     }
     const Vec3 direction = b.rotation.transpose() * direction_world.normalized();
-    attachments_.push_back({node, body, b.rotation.transpose() * (x_.at(node) - b.c),
-                            stiffness * direction * direction.transpose()});
+    attachments_.push_back(
+        {node, body, b.rotation.transpose() * (x_.at(node) - b.c), stiffness, direction});
 }
 
 void Simulation::pinNode(int node, std::array<bool, 3> axes) {

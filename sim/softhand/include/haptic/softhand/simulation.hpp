@@ -223,7 +223,10 @@ class Simulation {
         int node;
         int body;
         Vec3 offset_local;
-        Mat3 stiffness_local;  // N/m, in the body frame
+        double stiffness;  // N/m
+        // Body-frame unit direction of a hold along one direction (attachNodeAlong); zero for
+        // an isotropic attachment, whose stiffness needs no rotation per evaluation.
+        Vec3 direction_local;
     };
     struct Collider {
         ColliderDesc desc;
