@@ -388,6 +388,15 @@ TEST(ConfigurationDigest, NamesTheBytesOfEveryFileTheDaemonRead) {
         EXPECT_NE(std::string(error.what()).find("thimble.yaml"), std::string::npos)
             << error.what();
     }
+    // A directory where the file was opens as a stream and reads as nothing: refused too.
+    std::filesystem::create_directory(copy / "devices/thimble.yaml");
+    try {
+        (void)configurationDigest(changed);
+        ADD_FAILURE() << "a directory was digested as an empty device file";
+    } catch (const ConfigError& error) {
+        EXPECT_NE(std::string(error.what()).find("thimble.yaml"), std::string::npos)
+            << error.what();
+    }
     std::filesystem::remove_all(copy);
 }
 
