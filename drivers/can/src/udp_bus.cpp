@@ -46,6 +46,14 @@ UdpBus::UdpBus(const UdpBusConfig& config) : config_(config) {
     if (socket_ < 0) {
         throw std::runtime_error(std::string("udp bus: socket: ") + std::strerror(errno));
     }
+    // The default receive buffer (net.core.rmem_default, 208 KiB here) holds about 230
+    // datagrams, since each small frame is charged a whole buffer: some 50 ms of the
+    // emulated devices' traffic. A reader starved longer (a loaded test machine) lost a burst
+    // and saw an alive-counter jump. 1 MiB, capped by net.core.rmem_max; best effort, as the
+    // default still works when the reader keeps up.
+    const int receive_buffer_bytes = 1 << 20;
+    (void)::setsockopt(socket_, SOL_SOCKET, SO_RCVBUF, &receive_buffer_bytes,
+                       sizeof(receive_buffer_bytes));
     for (std::uint16_t slot = 0; slot < config.slots; ++slot) {
         const sockaddr_in address = loopbackAddress(config.base_port + slot);
         if (::bind(socket_, reinterpret_cast<const sockaddr*>(&address), sizeof(address)) == 0) {
