@@ -109,10 +109,16 @@ PcgResult solvePcg(const BlockPattern& pattern, const std::vector<double>& value
     double rz = r.dot(z);
     const double target = relative_tolerance * b_norm;
     double r_norm = r.norm();
-    // With an iteration cap the last iterate is not always the best one; keep the best.
+    // With an iteration cap the iterate kept is the one with the lowest quadratic model
+    // q(x) = 1/2 x^T A x - b^T x = -(b + r)^T x / 2, which is what the Newton step needs: a
+    // lower q is a longer descent along the merit's model. CG lowers q at every iteration, but
+    // not always the residual norm: keeping the smallest residual instead returned the start
+    // (x = 0, no step at all) for a cantilever whose residual rose over the first 30
+    // iterations, and froze it.
     Eigen::VectorXd& best = work.best;
     best = x;
     double best_norm = r_norm;
+    double best_model = -0.5 * (b + r).dot(x);
     while (r_norm > target && result.iterations < max_iterations) {
         pattern.multiply(values, p, ap);
         ap = ap.cwiseProduct(mask);
@@ -125,9 +131,11 @@ PcgResult solvePcg(const BlockPattern& pattern, const std::vector<double>& value
         r -= alpha * ap;
         r_norm = r.norm();
         ++result.iterations;
-        if (r_norm < best_norm) {
+        const double model = -0.5 * (b + r).dot(x);
+        if (model < best_model) {
             best = x;
             best_norm = r_norm;
+            best_model = model;
         }
         pre.apply(r, z);
         z = z.cwiseProduct(mask);
