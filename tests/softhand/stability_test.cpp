@@ -94,12 +94,12 @@ TEST_P(SofthandStabilityGrid, PressIntoTableEndsFiniteAndBounded) {
         return Vec3(start + Vec3(0.0, 0.0, -kPress * std::min(1.0, t / 0.04)));
     });
     const double spring_energy = 0.5 * options.tracking_linear_n_per_m * kPress * kPress;
-    std::printf("E %.0e Pa, contact %.0e N/m, dt %.3f s: bone down %.2f mm, table force %.3f N, "
-                "energy at most %.2f mJ above its start, %d of %d steps rescaled, %d frozen\n",
-                youngs, contact_k, dt, 1e3 * (start - model.simulation.bodyPosition(bone)).z(),
-                -model.simulation.forceOnCollider(table).z(),
-                1e3 * (summary.max_energy_j - start_energy), summary.rescaled_steps,
-                summary.steps, summary.frozen_steps);
+    std::printf(
+        "E %.0e Pa, contact %.0e N/m, dt %.3f s: bone down %.2f mm, table force %.3f N, "
+        "energy at most %.2f mJ above its start, %d of %d steps rescaled, %d frozen\n",
+        youngs, contact_k, dt, 1e3 * (start - model.simulation.bodyPosition(bone)).z(),
+        -model.simulation.forceOnCollider(table).z(), 1e3 * (summary.max_energy_j - start_energy),
+        summary.rescaled_steps, summary.steps, summary.frozen_steps);
     EXPECT_TRUE(summary.finite);
     EXPECT_LT(summary.max_energy_j - start_energy, 3.0 * spring_energy);
     EXPECT_LT(summary.max_distance_m, 0.1);

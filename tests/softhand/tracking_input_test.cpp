@@ -303,9 +303,10 @@ TEST(SceneSimulationScripted, WholeHandSceneAt200HzPressesTheBlockWithTheIndex) 
             }
         }
     }
-    std::printf("pressed force %.2f N, deepest pad sample %.2f mm, %d of %d steps rescaled by "
-                "the energy guard, %d frozen\n",
-                pressed_force, 1e3 * pressed_min_distance, rescaled, steps, zeroed);
+    std::printf(
+        "pressed force %.2f N, deepest pad sample %.2f mm, %d of %d steps rescaled by "
+        "the energy guard, %d frozen\n",
+        pressed_force, 1e3 * pressed_min_distance, rescaled, steps, zeroed);
     EXPECT_GT(pressed_force, 0.2);
     EXPECT_LT(pressed_min_distance, -0.0005);
     // No step is frozen; the energy guard's rescales are reported.

@@ -3,9 +3,31 @@
 #include <cmath>
 #include <vector>
 
+#include "haptic/softhand/scene_simulation.hpp"
 #include "haptic/softhand/simulation.hpp"
 
 namespace haptic::softhand {
+
+SolverSettings withProfile(SolverSettings settings, SolverProfile profile) {
+    if (profile == SolverProfile::kShipped) {
+        const SolverSettings shipped = realtimeSceneSettings().solver;
+        settings.pcg_max_iterations = shipped.pcg_max_iterations;
+        settings.pcg_relative_tolerance = shipped.pcg_relative_tolerance;
+        settings.max_newton_iterations = shipped.max_newton_iterations;
+        settings.max_backtracks = shipped.max_backtracks;
+        settings.max_substep_depth = shipped.max_substep_depth;
+        settings.newton_tolerance_m = shipped.newton_tolerance_m;
+    }
+    return settings;
+}
+
+int relaxSteps(int converged, SolverProfile profile) {
+    return profile == SolverProfile::kShipped ? 40 * converged : converged;
+}
+
+std::string profileName(SolverProfile profile) {
+    return profile == SolverProfile::kShipped ? "Shipped" : "Converged";
+}
 
 namespace {
 
@@ -21,12 +43,12 @@ SolverSettings staticSettings() {
 
 }  // namespace
 
-double cantileverTipDeflectionRatio(std::array<int, 3> cells) {
+double cantileverTipDeflectionRatio(std::array<int, 3> cells, SolverProfile profile) {
     const double length = 0.1;
     const double side = 0.01;
     const double youngs = 1.0e6;
     const double load = 0.0025;  // EB tip deflection 1 mm: small-deflection regime
-    Simulation sim(staticSettings());
+    Simulation sim(withProfile(staticSettings(), profile));
     TissueMaterial material;
     material.youngs_modulus_pa = youngs;
     material.poisson_ratio = 0.3;
@@ -55,7 +77,7 @@ double cantileverTipDeflectionRatio(std::array<int, 3> cells) {
     for (std::size_t k = 0; k < tip.size(); ++k) {
         sim.setNodeForce(tip[k], Vec3(0.0, 0.0, -load * weights[k] / weight_sum));
     }
-    sim.relax(1.0, 20, 1e-10);
+    sim.relax(1.0, relaxSteps(20, profile), 1e-10);
     double tip_z = 0.0;
     for (int i : tip) {
         tip_z += sim.nodePosition(i).z() - sim.nodeRestPosition(i).z();
@@ -65,7 +87,8 @@ double cantileverTipDeflectionRatio(std::array<int, 3> cells) {
     return -tip_z / static_cast<double>(tip.size()) / euler_bernoulli;
 }
 
-double hertzForceRatio(int cells, double grading, double width_m, double indentation_m) {
+double hertzForceRatio(int cells, double grading, double width_m, double indentation_m,
+                       SolverProfile profile) {
     const double youngs = 1.0e5;
     const double poisson = 0.3;
     const double radius = 0.01;
@@ -74,7 +97,7 @@ double hertzForceRatio(int cells, double grading, double width_m, double indenta
     // Per-node penalty: at these forces the penetration is < 1 um against d >= 100 um.
     settings.contact_stiffness_n_per_m = 2.0e4;
     settings.friction_stiffness_n_per_m = 0.0;  // Hertz is frictionless
-    Simulation sim(settings);
+    Simulation sim(withProfile(settings, profile));
     const auto lateral = gradedCoordinates(0.0, width_m, cells, grading);
     std::vector<double> depth;
     for (double v : lateral) {
@@ -96,7 +119,7 @@ double hertzForceRatio(int cells, double grading, double width_m, double indenta
     for (double fraction : {0.5, 1.0}) {
         sim.setColliderPose(sphere, Vec3(0.0, 0.0, radius - fraction * indentation_m),
                             Mat3::Identity());
-        sim.relax(1.0, 60, 1e-10);
+        sim.relax(1.0, relaxSteps(60, profile), 1e-10);
     }
     const double force = 4.0 * sim.forceOnCollider(sphere).z();
     const double e_star = youngs / (1.0 - poisson * poisson);
