@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Runs handsim on every shipped scene for a while at the scene's own rate and prints, per
+# scene, the line handsim logs at exit: steps, rate held, step time p50/p99/max, and what the
+# energy guard did (rescaled, substepped, frozen steps). Not part of CI (4 x the duration).
+#
+#   scripts/handsim-scenes.sh [--duration 60] [--build build/release]
+#
+# Each run uses a copy of config/ whose sim.yaml names the scene (and, for the thimble scene,
+# only the thimble), with --sim-link dds on its own DDS domain: no RouDi, no hapticd. Nothing
+# else should run meanwhile: the step times are wall clock.
+set -euo pipefail
+
+duration=60
+build=build/release
+while [[ $# -gt 0 ]]; do
+    case "$1" in
+        --duration) duration="$2"; shift 2 ;;
+        --build) build="$2"; shift 2 ;;
+        *) echo "usage: $0 [--duration S] [--build DIR]" >&2; exit 2 ;;
+    esac
+done
+
+root="$(cd "$(dirname "$0")/.." && pwd)"
+handsim="$root/$build/sim/handsim/handsim"
+[[ -x "$handsim" ]] || { echo "$handsim not built" >&2; exit 1; }
+work="$(mktemp -d /tmp/handsim-scenes.XXXX)"
+echo "# $(date -u +%FT%TZ) $(git -C "$root" rev-parse --short HEAD) $(nproc) cores, load $(cut -d' ' -f1 /proc/loadavg)"
+echo "# $0 --duration $duration --build $build; logs in $work"
+
+domain=90
+for scene in thimble_only default whole_hand grasp_box; do
+    copy="$work/$scene"
+    cp -r "$root/config" "$copy"
+    sed -i "s|^scene: .*|scene: scenes/$scene.yaml|" "$copy/sim.yaml"
+    if [[ "$scene" == thimble_only ]]; then
+        sed -i '/^  - devices\/exoskeleton.yaml/d' "$copy/sim.yaml"
+    fi
+    domain=$((domain + 1))
+    "$handsim" -c "$copy/sim.yaml" --sim-link dds --dds-domain "$domain" \
+        --duration "$duration" > "$work/$scene.log" 2>&1 || {
+        echo "$scene: handsim failed, see $work/$scene.log" >&2
+        exit 1
+    }
+    echo "$scene: $(grep -E 'steps in .* s \(' "$work/$scene.log" | tail -1 | sed -E 's/^.*\] //')"
+done
