@@ -143,6 +143,12 @@ PcgResult solvePcg(const BlockPattern& pattern, const std::vector<double>& value
         p = z + (rz_next / rz) * p;
         rz = rz_next;
     }
+    if (r_norm <= target) {
+        // Converged: the last iterate. Near convergence the model falls by less than its
+        // rounding, and an earlier iterate could otherwise win on noise.
+        best = x;
+        best_norm = r_norm;
+    }
     x = best;
     result.relative_residual = best_norm / b_norm;
     result.converged = best_norm <= target;

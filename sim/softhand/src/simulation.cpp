@@ -262,7 +262,11 @@ void Simulation::updateAnchors() {
     const double k_n = settings_.contact_stiffness_n_per_m;
     const double k_f = settings_.friction_stiffness_n_per_m;
     contact_forces_.clear();
-    for (const auto& contact : contacts_) {
+    // The contact set is brought to the new state too (projected anchors, lost contacts
+    // gone): the next step's energy guard measures its reference with it before detecting
+    // contacts again, and must not count friction springs the projection already relaxed.
+    std::size_t kept = 0;
+    for (auto& contact : contacts_) {
         const std::size_t slot = anchorSlot(contact.node, contact.collider);
         const auto [c, rotation] = colliderPose(q, contact.collider);
         const Vec3 local = rotation.transpose() * (x_[contact.node] - c);
@@ -288,7 +292,13 @@ void Simulation::updateAnchors() {
         const Vec3 force_local = normal_force * query.normal - k_f * stretch;
         contact_forces_.push_back(
             {contact.node, contact.collider, rotation * force_local, sliding});
+        contact.normal = rotation * query.normal;
+        contact.anchor_local = anchor;
+        contact.friction_limit_n = limit;
+        contact.sliding = sliding;
+        contacts_[kept++] = contact;
     }
+    contacts_.resize(kept);
 }
 
 SurfaceQuery Simulation::queryCollider(int collider, const Vec3& p_world_m) const {

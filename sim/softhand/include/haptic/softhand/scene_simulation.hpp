@@ -25,7 +25,7 @@ struct SceneSimulationSettings {
 };
 
 // handsim's solver budget: by default PCG capped at 30 iterations and one Newton iteration;
-// a line search of at most 2 halvings (16 more after a cold re-solve, docs/algorithms.md
+// a line search of at most 2 halvings (6 along a direction solved from zero, docs/algorithms.md
 // §2.6), no substeps, and Newton iterations beyond the first only while the step still raises
 // the energy. A step whose energy still rises keeps the Newton positions and scales its
 // velocities down (StepReport::rescaled_steps); no finite step is frozen. A scene's `solver:`

@@ -236,9 +236,10 @@ class Simulation {
     struct Contact {
         int node;
         int collider;
-        Vec3 normal;              // world, at detection
+        // At detection (the prediction), then brought to the end state by updateAnchors.
+        Vec3 normal;              // world
         Vec3 anchor_local;        // friction anchor in the collider frame
-        double friction_limit_n;  // mu * normal force at detection (lagged one step)
+        double friction_limit_n;  // mu * normal force (lagged one step)
         bool sliding;             // the anchor was dragged at the end of the last step
     };
     struct Anchor {
