@@ -25,6 +25,11 @@ TEST_P(SofthandContactValidation, HertzCoarseMeshFollowsHertzWithin25Percent) {
         std::printf("%s: F / F_Hertz %.4f at %.1f mm\n", profileName(GetParam()).c_str(), ratio,
                     1e3 * indentation);
         EXPECT_NEAR(ratio, 1.0, 0.25) << "indentation " << indentation;
+        if (GetParam() == SolverProfile::kShipped) {
+            // As shipped, within 2 % of the converged solve of the same mesh.
+            const double converged = hertzForceRatio(8, 1.45, 0.02, indentation);
+            EXPECT_NEAR(ratio, converged, 0.02 * converged) << "indentation " << indentation;
+        }
     }
 }
 

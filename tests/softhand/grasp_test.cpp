@@ -125,8 +125,9 @@ TEST_P(SofthandGrasp, PinchLiftPlaceAndPushABoxInBullet) {
         placed_table_force_n, largest_box_force_n,
         1e3 * (engine.enginePosition(kObstacle).x() - obstacle_start.x()), 1e3 * smallest_gap_m);
 
-    // Lifted: the box rose with the hand by most of the 5 cm and stayed in the pinch.
-    EXPECT_GT(lowest_while_up - box_start.z(), 0.035)
+    // Lifted: the box rose with the hand by most of the 5 cm and stayed in the pinch (46.0-46.7
+    // mm in all three cases on 2026-11-27; docs/softhand.md).
+    EXPECT_GT(lowest_while_up - box_start.z(), 0.044)
         << "the box did not rise with the hand (or slipped out of the pinch)";
 
     // Set down: back on Bullet's table, at its half height, upright, near where it stood.
@@ -134,7 +135,7 @@ TEST_P(SofthandGrasp, PinchLiftPlaceAndPushABoxInBullet) {
     EXPECT_NEAR(placed_z, box_half_z, 3e-3) << "the box rests on the table";
     EXPECT_NEAR(placed_corner_z, 0.0, 1.5e-3) << "its lowest corner touches the table";
     EXPECT_GT(placed_table_force_n, 0.0) << "Bullet's table carries it";
-    EXPECT_LT(placed_tilt, 0.25) << "rad";
+    EXPECT_LT(placed_tilt, 0.025) << "rad";
     EXPECT_LT(std::hypot(placed_drift.x(), placed_drift.y()), 0.015);
 
     // Pushed against the obstacle: the boxes touched in Bullet, the obstacle slid along +x,

@@ -9,8 +9,9 @@
 
 namespace haptic::softhand {
 
-// The two solver settings every validation runs at. kConverged: the test's own (PCG to a tight
-// tolerance, SolverSettings' Newton, halving and substep limits). kShipped: handsim's real-time
+// The two solver settings every validation runs at. kConverged: the test's own (the static
+// tests solve PCG to 1e-9-1e-10; the incline tests keep SolverSettings' PCG, 200 iterations to
+// 1e-4) with SolverSettings' Newton, halving and substep limits. kShipped: handsim's real-time
 // limits from realtimeSceneSettings() on top (PCG cap 30 at 1e-4, one Newton iteration, 2
 // halvings, no substeps), the solver as it ships; quasi-static tests give it more relax steps.
 enum class SolverProfile { kConverged, kShipped };

@@ -15,7 +15,7 @@
 namespace haptic::softhand {
 namespace {
 
-constexpr double kShippedPatchTolerance_m = 1e-9;
+constexpr double kPatchTolerance_m = 1e-9;
 
 SolverSettings staticSettings() {
     SolverSettings s;
@@ -79,10 +79,10 @@ std::string profileParamName(const ::testing::TestParamInfo<SolverProfile>& info
     return profileName(info.param);
 }
 
-// The patch tolerance: 1 nm converged; as shipped the capped PCG stops at a relative residual
-// of 1e-4 per step, and the relaxation's last steps leave what is stated here.
-double patchTolerance(SolverProfile profile) {
-    return profile == SolverProfile::kShipped ? kShippedPatchTolerance_m : 1e-9;
+// The patch tolerance is 1 nm at both settings: the shipped relaxation takes 40x the steps,
+// and its capped PCG steps reach the affine field as closely as the converged ones.
+double patchTolerance(SolverProfile /*profile*/) {
+    return kPatchTolerance_m;
 }
 
 TEST_P(SofthandValidation, PatchTestAffineStretchIsReproducedInside) {
@@ -108,6 +108,13 @@ TEST_P(SofthandValidation, CantileverConvergesTowardsEulerBernoulliFromTheStiffS
     EXPECT_GT(coarse, 0.2);
     EXPECT_LT(coarse, finer);
     EXPECT_LT(finer, 1.0);
+    if (GetParam() == SolverProfile::kShipped) {
+        // Against the converged solve of the same mesh: the shipped relaxation is stated to
+        // reach within 10 % of it (0.584 against 0.620 at 20x3x3 on 2026-11-27).
+        EXPECT_NEAR(coarse, cantileverTipDeflectionRatio({10, 2, 2}), 0.10 * coarse);
+        const double converged = cantileverTipDeflectionRatio({20, 3, 3});
+        EXPECT_NEAR(finer, converged, 0.10 * converged);
+    }
 }
 
 TEST_P(SofthandValidation, SoftBallJointSagsByWeightOverStiffness) {
