@@ -118,9 +118,8 @@ int runSim(const SimOptions& options) {
     auto tracking = makeTrackingSource(cfg.scene, physics, participant, cfg.tracking_filter);
     physics.reset(tracking->initialPose());
     const double dt_s = 1.0 / cfg.scene.rate_hz;
-    spdlog::info("scene '{}': soft hand {} ({} nodes, {} tetrahedra), tracking from {}",
-                 cfg.scene.name, physics.modelName(), physics.model().simulation.nodeCount(),
-                 physics.model().simulation.tetCount(), tracking->describe());
+    spdlog::info("scene '{}': soft hand {} ({}), tracking from {}", cfg.scene.name,
+                 physics.modelName(), softhand::toString(physics.size()), tracking->describe());
     spdlog::info("stepping at {} Hz for {} device(s); solver: {} Newton iteration(s), PCG cap {}",
                  cfg.scene.rate_hz, cfg.devices.size(), cfg.scene.solver.newton_iterations,
                  cfg.scene.solver.pcg_max_iterations);

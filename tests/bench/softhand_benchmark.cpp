@@ -137,12 +137,9 @@ void run(benchmark::State& state, int reference_level, StepLimits limits) {
     const std::vector<Sample>& ref = reference<Scene>(reference_level);
     Scene scene(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), 1e-4);
     if (limits == StepLimits::kHandsim) {
-        const SolverSettings realtime = realtimeSceneSettings().solver;
-        SolverSettings& solver = scene.solver();
-        solver.max_newton_iterations = realtime.max_newton_iterations;
-        solver.max_backtracks = realtime.max_backtracks;
-        solver.max_substep_depth = realtime.max_substep_depth;
-        solver.newton_tolerance_m = realtime.newton_tolerance_m;
+        config::SolverLimits budget;  // handsim's default Newton count, this row's PCG cap
+        budget.pcg_max_iterations = static_cast<int>(state.range(1));
+        scene.solver() = withRealtimeLimits(scene.solver(), budget);
     }
     std::vector<double> step_us;
     std::vector<double> cpu_us;

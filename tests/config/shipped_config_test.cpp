@@ -380,23 +380,20 @@ TEST(ConfigurationDigest, NamesTheBytesOfEveryFileTheDaemonRead) {
     }
     EXPECT_NE(configurationDigest(loadDaemonConfig(copy / "daemon.yaml")), digest);
     const DaemonConfig changed = loadDaemonConfig(copy / "daemon.yaml");
+    const auto expectRefusedNamingTheThimbleFile = [&changed](const char* what) {
+        try {
+            (void)configurationDigest(changed);
+            ADD_FAILURE() << what << " was digested";
+        } catch (const ConfigError& error) {
+            EXPECT_NE(std::string(error.what()).find("thimble.yaml"), std::string::npos)
+                << error.what();
+        }
+    };
     std::filesystem::remove(copy / "devices/thimble.yaml");
-    try {
-        (void)configurationDigest(changed);
-        ADD_FAILURE() << "a device file that is gone was digested";
-    } catch (const ConfigError& error) {
-        EXPECT_NE(std::string(error.what()).find("thimble.yaml"), std::string::npos)
-            << error.what();
-    }
+    expectRefusedNamingTheThimbleFile("a device file that is gone");
     // A directory where the file was opens as a stream and reads as nothing: refused too.
     std::filesystem::create_directory(copy / "devices/thimble.yaml");
-    try {
-        (void)configurationDigest(changed);
-        ADD_FAILURE() << "a directory was digested as an empty device file";
-    } catch (const ConfigError& error) {
-        EXPECT_NE(std::string(error.what()).find("thimble.yaml"), std::string::npos)
-            << error.what();
-    }
+    expectRefusedNamingTheThimbleFile("a directory in place of a device file");
     std::filesystem::remove_all(copy);
 }
 

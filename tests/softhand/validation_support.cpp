@@ -9,16 +9,7 @@
 namespace haptic::softhand {
 
 SolverSettings withProfile(SolverSettings settings, SolverProfile profile) {
-    if (profile == SolverProfile::kShipped) {
-        const SolverSettings shipped = realtimeSceneSettings().solver;
-        settings.pcg_max_iterations = shipped.pcg_max_iterations;
-        settings.pcg_relative_tolerance = shipped.pcg_relative_tolerance;
-        settings.max_newton_iterations = shipped.max_newton_iterations;
-        settings.max_backtracks = shipped.max_backtracks;
-        settings.max_substep_depth = shipped.max_substep_depth;
-        settings.newton_tolerance_m = shipped.newton_tolerance_m;
-    }
-    return settings;
+    return profile == SolverProfile::kShipped ? withRealtimeLimits(settings) : settings;
 }
 
 int relaxSteps(int converged, SolverProfile profile) {

@@ -5,13 +5,19 @@
 
 namespace haptic::softhand {
 
+SolverSettings withRealtimeLimits(SolverSettings physics, const config::SolverLimits& limits) {
+    physics.pcg_max_iterations = limits.pcg_max_iterations;
+    physics.pcg_relative_tolerance = SolverSettings{}.pcg_relative_tolerance;
+    physics.max_newton_iterations = limits.newton_iterations;
+    physics.max_backtracks = 2;
+    physics.max_substep_depth = 0;
+    physics.newton_tolerance_m = std::numeric_limits<double>::infinity();
+    return physics;
+}
+
 SceneSimulationSettings realtimeSceneSettings(const config::SolverLimits& limits) {
     SceneSimulationSettings settings;
-    settings.solver.pcg_max_iterations = limits.pcg_max_iterations;
-    settings.solver.max_newton_iterations = limits.newton_iterations;
-    settings.solver.max_backtracks = 2;
-    settings.solver.max_substep_depth = 0;
-    settings.solver.newton_tolerance_m = std::numeric_limits<double>::infinity();
+    settings.solver = withRealtimeLimits(settings.solver, limits);
     return settings;
 }
 
@@ -100,6 +106,27 @@ const KinestheticOutput* SceneSimulation::kinesthetic(std::size_t device) const 
 
 const TactileOutput* SceneSimulation::tactile(std::size_t device) const {
     return tactile_.at(device) ? &*tactile_[device] : nullptr;
+}
+
+SceneSize SceneSimulation::size() const {
+    const Simulation& sim = model_.simulation;
+    SceneSize out{sim.nodeCount(),  sim.tetCount(),      static_cast<int>(model_.bones.size()),
+                  sim.jointCount(), sim.colliderCount(), {}};
+    for (const BoneInfo& bone : model_.bones) {
+        out.bone_names.push_back(bone.name);
+    }
+    return out;
+}
+
+std::string toString(const SceneSize& size) {
+    std::string bones;
+    for (const std::string& name : size.bone_names) {
+        bones += (bones.empty() ? "" : " ") + name;
+    }
+    return std::to_string(size.nodes) + " nodes, " + std::to_string(size.tetrahedra) +
+           " tetrahedra, " + std::to_string(size.bones) + " bones (" + bones + "), " +
+           std::to_string(size.joints) + " joints, " + std::to_string(size.colliders) +
+           " colliders";
 }
 
 std::string SceneSimulation::modelName() const {

@@ -169,8 +169,8 @@ struct DeviceBinding {
 // re-linearise a stiff contact once more, a 200 Hz fingertip cannot. The trade is measured in
 // docs/benchmarks.md ("handsim's limits"). Omitted keys keep these defaults.
 struct SolverLimits {
-    // Newton iterations per step. More re-linearise after the first PCG solve, which halves
-    // the steps the energy check refuses on the default scene but doubles the p99.
+    // Newton iterations per step. Under handsim's limits those beyond the first are spent only
+    // on steps that still raise the energy (docs/algorithms.md §2.6).
     int newton_iterations{1};
     int pcg_max_iterations{30};  // per Newton iteration
 

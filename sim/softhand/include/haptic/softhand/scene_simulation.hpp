@@ -32,6 +32,10 @@ struct SceneSimulationSettings {
 // block overrides the Newton and PCG counts: the default scene at 100 Hz takes 2 Newton
 // iterations. The choices and their measured costs are in docs/benchmarks.md ("Soft hand
 // step").
+// `physics` (stiffnesses, damping, gravity) with that budget: what realtimeSceneSettings()
+// ships, for benchmarks and validation that run their own scenes as handsim would.
+[[nodiscard]] SolverSettings withRealtimeLimits(SolverSettings physics,
+                                                const config::SolverLimits& limits = {});
 [[nodiscard]] SceneSimulationSettings realtimeSceneSettings(
     const config::SolverLimits& limits = {});
 
@@ -43,6 +47,18 @@ struct DeviceRequest {
     config::Transform finger_from_device;  // thimble: finger_calibration.T_finger_device
     int max_samples{64};                   // thimble: optimiser.pad_samples
 };
+
+// What a scene's builder made: a scene models only what it needs (a fingertip scene the
+// distal phalanx, a one-finger scene that finger and the palm), and handsim logs this.
+struct SceneSize {
+    int nodes{0};
+    int tetrahedra{0};
+    int bones{0};
+    int joints{0};
+    int colliders{0};  // object surfaces the skin is tested against
+    std::vector<std::string> bone_names;
+};
+[[nodiscard]] std::string toString(const SceneSize& size);
 
 class SceneSimulation {
   public:
@@ -67,6 +83,7 @@ class SceneSimulation {
     [[nodiscard]] const KinestheticOutput* kinesthetic(std::size_t device) const;
     [[nodiscard]] const TactileOutput* tactile(std::size_t device) const;
     [[nodiscard]] std::string modelName() const;
+    [[nodiscard]] SceneSize size() const;
 
   private:
     HandModel model_;

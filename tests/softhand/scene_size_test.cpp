@@ -1,0 +1,76 @@
+// Each shipped scene builds only what it needs: the fingertip scene the distal phalanx of its
+// finger, the one-finger scene that finger and the palm, the grasp scene the two fingers it
+// names, the whole hand all five. Sizes are printed for the record.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "haptic/config/scene.hpp"
+#include "haptic/softhand/scene_simulation.hpp"
+
+namespace haptic::softhand {
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::UnorderedElementsAreArray;
+
+struct Built {
+    SceneSize size;
+    std::set<std::string> fingers;  // of every bone but the palm
+};
+
+Built build(const std::string& file) {
+    const config::SceneConfig scene =
+        config::loadSceneConfig(std::string(HAPTIC_SOURCE_DIR) + "/config/scenes/" + file);
+    std::vector<DeviceRequest> devices;
+    for (const auto& [name, binding] : scene.devices) {
+        const bool kinesthetic = name == "exo";
+        devices.push_back({name, binding.finger, kinesthetic, {{0.0, 0.0, -0.012}, {}}, 64});
+    }
+    const SceneSimulation sim(scene, devices, realtimeSceneSettings(scene.solver));
+    Built out{sim.size(), {}};
+    for (const BoneInfo& bone : sim.model().bones) {
+        if (bone.finger) {
+            out.fingers.insert(std::string(config::toString(*bone.finger)));
+        }
+    }
+    std::printf("%s: %s\n", file.c_str(), toString(out.size).c_str());
+    return out;
+}
+
+TEST(SceneSize, TheThimbleSceneBuildsTheDistalPhalanxOnly) {
+    const Built built = build("thimble_only.yaml");
+    EXPECT_THAT(built.size.bone_names, ElementsAre("index_distal"));
+    EXPECT_EQ(built.size.joints, 0);
+    EXPECT_EQ(built.size.nodes, 169);  // resolution 1, docs/benchmarks.md
+    EXPECT_GT(built.size.colliders, 0);
+}
+
+TEST(SceneSize, TheDefaultSceneBuildsOneFingerAndThePalm) {
+    const Built built = build("default.yaml");
+    EXPECT_THAT(built.size.bone_names, UnorderedElementsAreArray({"palm", "index_proximal",
+                                                                  "index_middle", "index_distal"}));
+    EXPECT_THAT(built.fingers, ElementsAre("index"));
+    EXPECT_EQ(built.size.joints, 3);
+}
+
+TEST(SceneSize, TheGraspSceneBuildsTheThumbAndTheIndexOnly) {
+    const Built built = build("grasp_box.yaml");
+    EXPECT_EQ(built.size.bones, 7);
+    EXPECT_THAT(built.fingers, UnorderedElementsAreArray({"thumb", "index"}));
+}
+
+TEST(SceneSize, TheWholeHandSceneBuildsFiveFingers) {
+    const Built built = build("whole_hand.yaml");
+    EXPECT_EQ(built.size.bones, 16);
+    EXPECT_EQ(built.fingers.size(), 5U);
+    EXPECT_EQ(built.size.joints, 15);
+}
+
+}  // namespace
+}  // namespace haptic::softhand
