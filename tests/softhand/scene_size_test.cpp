@@ -61,13 +61,13 @@ TEST(SceneSize, TheDefaultSceneBuildsOneFingerAndThePalm) {
 
 TEST(SceneSize, TheGraspSceneBuildsTheThumbAndTheIndexOnly) {
     const Built built = build("grasp_box.yaml");
-    EXPECT_EQ(built.size.bones, 7);
+    EXPECT_EQ(built.size.bone_names.size(), 7U);
     EXPECT_THAT(built.fingers, UnorderedElementsAreArray({"thumb", "index"}));
 }
 
 TEST(SceneSize, TheWholeHandSceneBuildsFiveFingers) {
     const Built built = build("whole_hand.yaml");
-    EXPECT_EQ(built.size.bones, 16);
+    EXPECT_EQ(built.size.bone_names.size(), 16U);
     EXPECT_EQ(built.fingers.size(), 5U);
     EXPECT_EQ(built.size.joints, 15);
 }

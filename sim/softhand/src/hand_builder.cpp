@@ -114,12 +114,12 @@ struct Builder {
         if (off_axis < 0.25 * cell) {
             const double shear_modulus_pa =
                 options.tissue.youngs_modulus_pa / (2.0 * (1.0 + options.tissue.poisson_ratio));
+            // Rings along the bone only: the end faces (x = 0, x = length, up to rounding)
+            // stay free where they meet the next phalanx's tissue at the joint.
+            const double end_tolerance = 1e-6 * length;
             for (int i = first; i < sim().nodeCount(); ++i) {
                 const Vec3 local = rotation.transpose() * (sim().nodePosition(i) - origin);
                 const double radial = std::hypot(local.y(), local.z());
-                // Rings along the bone only: the end faces (x = 0, x = length, up to rounding)
-                // stay free where they meet the next phalanx's tissue at the joint.
-                const double end_tolerance = 1e-6 * length;
                 if (local.x() < end_tolerance || local.x() > length - end_tolerance ||
                     radial <= attach_radius || radial > 1.5 * cell) {
                     continue;

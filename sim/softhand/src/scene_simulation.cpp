@@ -110,8 +110,7 @@ const TactileOutput* SceneSimulation::tactile(std::size_t device) const {
 
 SceneSize SceneSimulation::size() const {
     const Simulation& sim = model_.simulation;
-    SceneSize out{sim.nodeCount(),  sim.tetCount(),      static_cast<int>(model_.bones.size()),
-                  sim.jointCount(), sim.colliderCount(), {}};
+    SceneSize out{sim.nodeCount(), sim.tetCount(), sim.jointCount(), sim.colliderCount(), {}};
     for (const BoneInfo& bone : model_.bones) {
         out.bone_names.push_back(bone.name);
     }
@@ -124,7 +123,7 @@ std::string toString(const SceneSize& size) {
         bones += (bones.empty() ? "" : " ") + name;
     }
     return std::to_string(size.nodes) + " nodes, " + std::to_string(size.tetrahedra) +
-           " tetrahedra, " + std::to_string(size.bones) + " bones (" + bones + "), " +
+           " tetrahedra, " + std::to_string(size.bone_names.size()) + " bones (" + bones + "), " +
            std::to_string(size.joints) + " joints, " + std::to_string(size.colliders) +
            " colliders";
 }

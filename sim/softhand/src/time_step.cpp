@@ -253,13 +253,13 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
     Eigen::VectorXd& iterate = w.iterate;
     iterate = velocity;
     w.first_delta.setZero(n);
-    double merit_iterate = merit_start;
     // Not with inverted elements: the inversion-safe energy has spurious minima there, and
     // converged iterations settled into one (SofthandStability.InvertedElementsRecover kept
     // 3 elements inverted), where substeps from a fresh prediction get out.
     const int newton_iterations =
         stats.inverted_elements > 0 ? 1 : std::max(1, settings_.max_newton_iterations);
-    bool evaluated_iterate = false;  // `iterate_value` holds Phi and E at `iterate`
+    // Phi (and, once evaluated, E) at `iterate`; its merit is the line search's reference.
+    bool evaluated_iterate = false;
     Evaluation iterate_value{merit_start, 0.0, 0.0};
     for (int newton = 0; newton < newton_iterations && std::isfinite(merit_start); ++newton) {
         if (newton > 0) {
@@ -315,7 +315,6 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                                          : std::max(settings_.max_backtracks, kColdHalvings);
                 double step_fraction = 1.0;
                 best_value = iterate_value;
-                best_value.merit = merit_iterate;
                 for (int halving = 0;; ++halving) {
                     v_plus = iterate + step_fraction * w.delta;
                     const Evaluation value = evaluate(v_plus);
@@ -324,7 +323,7 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                         best_fraction = step_fraction;
                     }
                     if (std::isfinite(value.merit) &&
-                        value.merit <= merit_iterate - kArmijo * step_fraction * decrement) {
+                        value.merit <= iterate_value.merit - kArmijo * step_fraction * decrement) {
                         sufficient = true;
                         break;
                     }
@@ -351,7 +350,6 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
             break;  // no lower Phi along a descent direction: at a minimum to precision
         }
         iterate += best_fraction * w.delta;
-        merit_iterate = best_value.merit;
         iterate_value = best_value;
         evaluated_iterate = true;
         // Done when this iteration moved no DoF by more than the tolerance over the step

@@ -53,7 +53,6 @@ struct DeviceRequest {
 struct SceneSize {
     int nodes{0};
     int tetrahedra{0};
-    int bones{0};
     int joints{0};
     int colliders{0};  // object surfaces the skin is tested against
     std::vector<std::string> bone_names;
