@@ -7,7 +7,6 @@
 
 #include "haptic/config/command_line.hpp"
 #include "haptic/config/sim.hpp"
-#include "haptic/process/main_skeleton.hpp"
 #include "sim_app.hpp"
 
 int main(int argc, char** argv) {
@@ -18,28 +17,24 @@ int main(int argc, char** argv) {
     mallopt(M_MMAP_THRESHOLD, 256 << 20);
     mallopt(M_TRIM_THRESHOLD, 512 << 20);
     mallopt(M_TOP_PAD, 64 << 20);
-    CLI::App app{"handsim - hand simulation publishing proxy targets and contact surfaces"};
-    app.set_version_flag("--version", "handsim " HAPTIC_VERSION);
-    haptic::config::CommonOverrides overrides;
-    overrides.config_path = HAPTIC_DEFAULT_CONFIG_DIR "/sim.yaml";
-    haptic::config::addCommonOptions(app, overrides, "sim configuration file");
+    using haptic::config::SimConfig;
     std::string tracking_topic;
-    app.add_option("--tracking-topic", tracking_topic,
-                   "track the hand from this HandPose topic instead of the scene's tracking "
-                   "source (the virtual user of 'hapticemu --user' publishes on tracking/hand)");
-    CLI11_PARSE(app, argc, argv);
-
-    return haptic::process::runMain("handsim", [&] {
-        using haptic::config::SimConfig;
-        if (overrides.check_only) {
-            return haptic::config::checkConfig("handsim", overrides, haptic::config::loadSimConfig);
-        }
-        return haptic::handsim::runSim(haptic::config::startWithConfig<SimConfig>(
-            "handsim", overrides, haptic::config::loadSimConfig, [&](SimConfig& config) {
-                if (!tracking_topic.empty()) {
-                    config.scene.tracking.source = haptic::config::TrackingSource::kTopic;
-                    config.scene.tracking.topic = tracking_topic;
-                }
-            }));
-    });
+    return haptic::config::runConfiguredProgram<SimConfig>(
+        argc, argv,
+        {"handsim", "handsim - hand simulation publishing proxy targets and contact surfaces",
+         HAPTIC_DEFAULT_CONFIG_DIR "/sim.yaml", "sim configuration file"},
+        haptic::config::loadSimConfig,
+        [&](CLI::App& app) {
+            app.add_option("--tracking-topic", tracking_topic,
+                           "track the hand from this HandPose topic instead of the scene's "
+                           "tracking source (the virtual user of 'hapticemu --user' publishes on "
+                           "tracking/hand)");
+        },
+        [&](SimConfig& config) {
+            if (!tracking_topic.empty()) {
+                config.scene.tracking.source = haptic::config::TrackingSource::kTopic;
+                config.scene.tracking.topic = tracking_topic;
+            }
+        },
+        haptic::handsim::runSim);
 }

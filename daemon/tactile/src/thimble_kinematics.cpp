@@ -218,17 +218,30 @@ bool ThimbleKinematics::solveLeg(int leg, const PlatformPose& pose,
     return true;
 }
 
+bool ThimbleKinematics::solveLegs(const PlatformPose& pose, LegSolutions& out,
+                                  int* unreachable_leg) const noexcept {
+    for (int leg = 0; leg < 3; ++leg) {
+        if (!solveLeg(leg, pose, out[static_cast<std::size_t>(leg)])) {
+            if (unreachable_leg != nullptr) {
+                *unreachable_leg = leg;
+            }
+            return false;
+        }
+    }
+    return true;
+}
+
 bool ThimbleKinematics::rawServoAngles(const PlatformDofs& dofs, ServoAngles& out) const noexcept {
     PlatformPose pose;
     if (platformPose(dofs, pose) != KinematicsError::kNone) {
         return false;
     }
-    for (int leg = 0; leg < 3; ++leg) {
-        LegSolution solution;
-        if (!solveLeg(leg, pose, solution)) {
-            return false;
-        }
-        out[static_cast<std::size_t>(leg)] = solution.servo_rad;
+    LegSolutions legs;
+    if (!solveLegs(pose, legs)) {
+        return false;
+    }
+    for (std::size_t i = 0; i < 3; ++i) {
+        out[i] = legs[i].servo_rad;
     }
     return true;
 }
@@ -246,12 +259,12 @@ bool ThimbleKinematics::constraints(const PlatformDofs& dofs, ConstraintValues& 
     values[1] = (dofs.height_m - min_height_m_) / length_scale;
     const double reach_limit = std::cos(kElbowMarginRad);
     const Eigen::Vector3d towards_body = pose.plateNormal();
-    for (int leg = 0; leg < 3; ++leg) {
-        LegSolution s;
-        if (!solveLeg(leg, pose, s)) {
-            return false;
-        }
-        const auto i = static_cast<std::size_t>(leg);
+    LegSolutions legs;
+    if (!solveLegs(pose, legs)) {
+        return false;
+    }
+    for (std::size_t i = 0; i < 3; ++i) {
+        const LegSolution& s = legs[i];
         values[2 + i] = s.servo_rad - config_.servos.min_rad;
         values[5 + i] = config_.servos.max_rad - s.servo_rad;
         values[8 + i] = reach_limit - s.reach_ratio;
@@ -306,12 +319,13 @@ bool ThimbleKinematics::constraintJacobian(const PlatformDofs& dofs, const Platf
     jacobian.row(1) = Eigen::RowVector3d(1.0 / config_.plate_radius_m, 0.0, 0.0);
     const double crank = config_.geometry.crank_length_m;
     const Eigen::Vector3d towards_body = pose.plateNormal();
+    LegSolutions legs;
+    if (!solveLegs(pose, legs)) {
+        return false;
+    }
     for (int leg = 0; leg < 3; ++leg) {
-        LegSolution s;
-        if (!solveLeg(leg, pose, s)) {
-            return false;
-        }
         const auto i = static_cast<std::size_t>(leg);
+        const LegSolution& s = legs[i];
         const Eigen::Vector3d rel = s.joint_m - base_joint_[i];
         const double u = radial_[i].dot(rel);
         const double w = rel.z();
@@ -367,15 +381,13 @@ InverseResult ThimbleKinematics::inverse(const PlatformDofs& dofs,
     if (!out.ok()) {
         return out;
     }
-    std::array<LegSolution, 3> legs;
-    for (int leg = 0; leg < 3; ++leg) {
-        if (!solveLeg(leg, out.pose, legs[static_cast<std::size_t>(leg)])) {
-            out.error = KinematicsError::kLegUnreachable;
-            out.leg = leg;
-            return out;
-        }
-        out.servo_rad[static_cast<std::size_t>(leg)] =
-            legs[static_cast<std::size_t>(leg)].servo_rad;
+    LegSolutions legs;
+    if (!solveLegs(out.pose, legs, &out.leg)) {
+        out.error = KinematicsError::kLegUnreachable;
+        return out;
+    }
+    for (std::size_t i = 0; i < 3; ++i) {
+        out.servo_rad[i] = legs[i].servo_rad;
     }
     if (!check_workspace) {
         return out;

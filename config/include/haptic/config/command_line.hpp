@@ -11,6 +11,7 @@
 #include "haptic/config/common.hpp"
 #include "haptic/config/enums.hpp"
 #include "haptic/process/logging.hpp"
+#include "haptic/process/main_skeleton.hpp"
 #include "haptic/process/shutdown.hpp"
 
 namespace haptic::config {
@@ -92,6 +93,39 @@ template <class Config, class Load, class Adjust>
     process::setupLogging(program, applyCommonOverrides(overrides, options.config));
     process::installShutdownHandlers();
     return options;
+}
+
+// What tells hapticd and handsim apart on the command line.
+struct ProgramIdentity {
+    const char* name;                // "hapticd"
+    const char* description;         // the first line of --help
+    std::string default_config;      // the -c default
+    const char* config_description;  // -c's help text
+};
+
+// The whole main() of hapticd and handsim, so the two cannot drift apart: the common options
+// plus the program's own (`add_own_options(CLI::App&)`), then either --check, or a start as
+// startWithConfig describes (`adjust(Config&)` applies the program's own overrides) and
+// `run(RunOptions<Config>)`, whose status is the exit status. Errors end as process::runMain
+// reports them.
+template <class Config, class Load, class AddOwnOptions, class Adjust, class Run>
+[[nodiscard]] int runConfiguredProgram(int argc, char** argv, const ProgramIdentity& program,
+                                       Load&& load, AddOwnOptions&& add_own_options,
+                                       Adjust&& adjust, Run&& run) {
+    CLI::App app{program.description};
+    app.set_version_flag("--version", std::string(program.name) + " " + HAPTIC_VERSION);
+    CommonOverrides overrides;
+    overrides.config_path = program.default_config;
+    addCommonOptions(app, overrides, program.config_description);
+    add_own_options(app);
+    CLI11_PARSE(app, argc, argv);
+
+    return process::runMain(program.name, [&] {
+        if (overrides.check_only) {
+            return checkConfig(program.name, overrides, load);
+        }
+        return run(startWithConfig<Config>(program.name, overrides, load, adjust));
+    });
 }
 
 }  // namespace haptic::config

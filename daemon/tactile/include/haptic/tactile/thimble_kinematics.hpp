@@ -171,7 +171,12 @@ class ThimbleKinematics {
         Eigen::Vector3d joint_m{Eigen::Vector3d::Zero()};  // spherical joint S_i
         Eigen::Vector3d elbow_m{Eigen::Vector3d::Zero()};  // A_i
     };
+    using LegSolutions = std::array<LegSolution, 3>;
     [[nodiscard]] bool solveLeg(int leg, const PlatformPose& pose, LegSolution& out) const noexcept;
+    // All three legs; false at the first that does not close, whose index goes to
+    // `unreachable_leg` when given.
+    [[nodiscard]] bool solveLegs(const PlatformPose& pose, LegSolutions& out,
+                                 int* unreachable_leg = nullptr) const noexcept;
     [[nodiscard]] bool rawServoAngles(const PlatformDofs& dofs, ServoAngles& out) const noexcept;
     [[nodiscard]] bool isFeasible(const PlatformDofs& dofs) const noexcept;
     void computeWorkspace();
