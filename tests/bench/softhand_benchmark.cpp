@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "benchmark_runner.hpp"
+#include "finger_flex_scene.hpp"
 #include "fingertip_press_scene.hpp"
 #include "haptic/common/statistics.hpp"
 #include "haptic/config/scene.hpp"
@@ -37,6 +38,7 @@ namespace haptic::softhand {
 namespace {
 
 // The fingertip press scene, its constants and helpers are shared with the Bullet comparison.
+using bench::FingerFlex;
 using bench::FingertipPress;
 using bench::handConfig;
 using bench::kCycleSteps;
@@ -60,54 +62,6 @@ void addPercentiles(benchmark::State& state, std::vector<double> us, const char*
     state.counters[std::string(prefix) + "p50_us"] = common::percentile(us, 0.5);
     state.counters[std::string(prefix) + "p99_us"] = common::percentile(us, 0.99);
 }
-
-// One finger flexing all three joints by up to 0.8 rad and back, 1 s period; the fingertip
-// meets the table at the end of the flexion.
-class FingerFlex {
-  public:
-    FingerFlex(int level, int pcg_cap, double pcg_tolerance)
-        : model_(buildHand(handConfig(config::HandModel::kFinger, level),
-                           solverSettings(pcg_cap, pcg_tolerance))),
-          tracking_(model_) {
-        table_ = model_.simulation.addCollider(
-            {HalfSpace{}, Vec3(0.0, 0.0, -0.03), Mat3::Identity(), 0.6});
-        for (const auto& bone : model_.bones) {
-            build_.push_back({model_.simulation.bodyPosition(bone.body),
-                              model_.simulation.bodyRotation(bone.body)});
-        }
-        poses_ = build_;
-    }
-    void setInput(int step) {
-        const double t = (step % kCycleSteps) * kDt;
-        const double angle = 0.8 * std::sin(3.14159265 * t);
-        Vec3 joint = build_[0].position_m + Vec3(0.5 * 0.45 * 0.19, 0.0, 0.0);
-        Mat3 rotation = Mat3::Identity();
-        for (std::size_t k = 1; k < poses_.size(); ++k) {
-            rotation = rotation * Eigen::AngleAxisd(angle / 3.0, Vec3::UnitY()).toRotationMatrix();
-            const double length = model_.bones[k].length_m;
-            poses_[k] = {joint + rotation * Vec3(0.5 * length, 0.0, 0.0), rotation};
-            joint += rotation * Vec3(length, 0.0, 0.0);
-        }
-        tracking_.setTrackedPoses(poses_, nullptr);
-    }
-    StepReport step() {
-        tracking_.update(model_, kDt);
-        return model_.simulation.step(kDt);
-    }
-    [[nodiscard]] Sample sample() const {
-        return {model_.simulation.forceOnCollider(table_).z(),
-                model_.simulation.bodyPosition(model_.bones.back().body)};
-    }
-    [[nodiscard]] const Simulation& simulation() const { return model_.simulation; }
-    [[nodiscard]] SolverSettings& solver() { return model_.simulation.settings(); }
-
-  private:
-    HandModel model_;
-    ElasticTracking tracking_;
-    int table_{0};
-    std::vector<BonePose> build_;
-    std::vector<BonePose> poses_;
-};
 
 template <typename Scene>
 const std::vector<Sample>& reference(int level) {

@@ -36,11 +36,14 @@ class FingertipPress {
   public:
     FingertipPress(int level, int pcg_cap, double pcg_tolerance);
     void setInput(int step);
-    StepReport step() { return model_.simulation.step(kDt); }
+    StepReport step() { return stepBy(kDt); }
+    StepReport stepBy(double dt_s) { return model_.simulation.step(dt_s); }
     [[nodiscard]] Sample sample() const;
     [[nodiscard]] const Simulation& simulation() const { return model_.simulation; }
     [[nodiscard]] SolverSettings& solver() { return model_.simulation.settings(); }
     [[nodiscard]] const HandModel& model() const { return model_; }
+    [[nodiscard]] int table() const { return table_; }
+    [[nodiscard]] int distalBody() const { return bone_; }
 
   private:
     HandModel model_;
