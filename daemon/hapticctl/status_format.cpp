@@ -30,10 +30,8 @@ std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s) 
     // The first 12 hex digits tell configurations apart; the JSON and recordings carry all.
     const std::string_view digest = status.config_digest.view();
     out +=
-        fmt::format("   Version: hapticd {}   configuration {}\n",
-                    status.version.empty() ? std::string_view("(unknown)") : status.version.view(),
-                    digest.empty() ? std::string_view("(unknown)")
-                                   : digest.substr(0, std::min<std::size_t>(digest.size(), 19)));
+        fmt::format("   Version: hapticd {}   configuration {}\n", orUnknown(status.version.view()),
+                    orUnknown(digest.substr(0, std::min<std::size_t>(digest.size(), 19))));
 
     const auto& loop = status.loop;
     out += fmt::format(

@@ -16,4 +16,10 @@ std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s);
 // solver did instead of a plain step (zeroed, substepped) and the tracking inputs it refused.
 std::string formatSimStatus(const msgs::SimStatus& status, double sample_age_s);
 
+// What the status screen and a recording's provenance print for a text hapticd left empty
+// (an older daemon, or none heard): "(unknown)".
+[[nodiscard]] inline std::string_view orUnknown(std::string_view text) noexcept {
+    return text.empty() ? std::string_view("(unknown)") : text;
+}
+
 }  // namespace haptic::ctl

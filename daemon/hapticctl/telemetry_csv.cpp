@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "haptic/msgs/names.hpp"
+#include "status_format.hpp"
 
 namespace haptic::ctl {
 namespace {
@@ -36,11 +37,8 @@ std::string telemetryCsvProvenance(std::string_view hapticctl_version, std::int6
         out += "# hapticd: no status received, version and configuration unknown\n";
         return out;
     }
-    out += fmt::format(
-        "# hapticd {}, configuration {}\n",
-        status->version.empty() ? std::string_view("(unknown)") : status->version.view(),
-        status->config_digest.empty() ? std::string_view("(unknown)")
-                                      : status->config_digest.view());
+    out += fmt::format("# hapticd {}, configuration {}\n", orUnknown(status->version.view()),
+                       orUnknown(status->config_digest.view()));
     std::string devices;
     for (std::size_t i = 0; i < status->devices.size(); ++i) {
         const msgs::DeviceStatus& device = status->devices[i];
