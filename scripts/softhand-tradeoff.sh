@@ -94,34 +94,31 @@ done
     done
 } > "$OUT/pareto.md"
 
-label='(sprintf("L%d N%d c%d %dms", $2, $4, $5, $6))'
-gnuplot <<EOF
-set terminal pngcairo size 1800,620 font ",11"
-set output "$OUT/pareto.png"
-set datafile separator ","
-set multiplot layout 1,3 title "Soft-hand step under handsim's real-time limits: CPU time p99 against error (scripts/softhand-tradeoff.sh; level L, Newton iterations N, PCG cap c, time step)"
-set logscale xy
-set grid
-set key top right
-set xlabel "step CPU time p99 (ms)"
-set ylabel "press-force error, first 0.2 s (%)"
-set title "thimble scene (fingertip press): force"
-plot "$OUT/all-press.csv" using (\$10/1000):(100*\$11) with points pt 7 ps 0.6 lc rgb "#bbbbbb" title "every setting", \
-     "$OUT/front-force.csv" using (\$10/1000):(100*\$11) with linespoints pt 7 ps 1 lc rgb "#1f77b4" title "Pareto front", \
-     "$OUT/front-force.csv" using (\$10/1000):(100*\$11):$label with labels offset 0,1 font ",8" notitle, \
-     "$OUT/shipped-press.csv" using (\$10/1000):(100*\$11) with points pt 9 ps 2 lc rgb "#d62728" title "shipped: thimble\\\\_only.yaml"
-set ylabel "contact-area error (%)"
-set title "thimble scene (fingertip press): contact area"
-plot "$OUT/all-press.csv" using (\$10/1000):(100*\$13) with points pt 7 ps 0.6 lc rgb "#bbbbbb" title "every setting", \
-     "$OUT/front-area.csv" using (\$10/1000):(100*\$13) with linespoints pt 7 ps 1 lc rgb "#1f77b4" title "Pareto front", \
-     "$OUT/front-area.csv" using (\$10/1000):(100*\$13):$label with labels offset 0,1 font ",8" notitle, \
-     "$OUT/shipped-press.csv" using (\$10/1000):(100*\$13) with points pt 9 ps 2 lc rgb "#d62728" title "shipped: thimble\\\\_only.yaml"
-set ylabel "fingertip position error (mm)"
-set title "exoskeleton scene (finger flex): fingertip position"
-plot "$OUT/all-flex.csv" using (\$10/1000):(\$14) with points pt 7 ps 0.6 lc rgb "#bbbbbb" title "every setting", \
-     "$OUT/front-tip.csv" using (\$10/1000):(\$14) with linespoints pt 7 ps 1 lc rgb "#1f77b4" title "Pareto front", \
-     "$OUT/front-tip.csv" using (\$10/1000):(\$14):$label with labels offset 0,1 font ",8" notitle, \
-     "$OUT/shipped-flex.csv" using (\$10/1000):(\$14) with points pt 9 ps 2 lc rgb "#d62728" title "shipped: default.yaml"
-unset multiplot
-EOF
+# panel <front name> <scene> <y expression> <y label> <title> <shipped scene file>: one plot.
+panel() {
+    local x='($10/1000)' label='(sprintf("L%d N%d c%d %dms", $2, $4, $5, $6))'
+    echo "set ylabel \"$4\""
+    echo "set title \"$5\""
+    echo "plot \"$OUT/all-$2.csv\" using $x:$3 with points pt 7 ps 0.6 lc rgb \"#bbbbbb\" title \"every setting\", \\"
+    echo "     \"$OUT/front-$1.csv\" using $x:$3 with linespoints pt 7 ps 1 lc rgb \"#1f77b4\" title \"Pareto front\", \\"
+    echo "     \"$OUT/front-$1.csv\" using $x:$3:$label with labels offset 0,1 font \",8\" notitle, \\"
+    echo "     \"$OUT/shipped-$2.csv\" using $x:$3 with points pt 9 ps 2 lc rgb \"#d62728\" title \"shipped: ${6//_/\\\\_}\""
+}
+{
+    echo 'set terminal pngcairo size 1800,620 font ",11"'
+    echo "set output \"$OUT/pareto.png\""
+    echo 'set datafile separator ","'
+    echo "set multiplot layout 1,3 title \"Soft-hand step under handsim's real-time limits: CPU time p99 against error (scripts/softhand-tradeoff.sh; level L, Newton iterations N, PCG cap c, time step)\""
+    echo 'set logscale xy'
+    echo 'set grid'
+    echo 'set key top right'
+    echo 'set xlabel "step CPU time p99 (ms)"'
+    panel force press '(100*$11)' "press-force error, first 0.2 s (%)" \
+        "thimble scene (fingertip press): force" thimble_only.yaml
+    panel area press '(100*$13)' "contact-area error (%)" \
+        "thimble scene (fingertip press): contact area" thimble_only.yaml
+    panel tip flex '($14)' "fingertip position error (mm)" \
+        "exoskeleton scene (finger flex): fingertip position" default.yaml
+    echo 'unset multiplot'
+} | gnuplot
 echo "softhand-tradeoff.sh: $OUT/tradeoff.csv, $OUT/pareto.md, $OUT/pareto.png"
