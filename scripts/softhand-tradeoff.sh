@@ -48,7 +48,7 @@ SHIPPED_FLEX="flex,1,2,30,10"
 
 # Columns: 1 scene 2 level 3 nodes 4 newton 5 pcg_cap 6 dt_ms 7 p50_us 8 p99_us 9 cpu_p50_us
 # 10 cpu_p99_us 11 press_err 12 force_err 13 area_err 14 tip_err_mm 15 angle_err_deg
-# 16 rescaled 17 zeroed
+# 16 rescaled 17 zeroed 18 solver (pcg, or ldlt with PCG cap 0; older runs have no column 18)
 # The fronts: "<name> <scene> <error column>". A thimble renders a force and a contact
 # surface, so the press scene has a front for each: the coarsest mesh has the least force error
 # of some settings and no contact area to speak of.
@@ -67,7 +67,7 @@ for front in "${FRONTS[@]}"; do
 done
 
 {
-    echo "| scene | level | nodes | Newton | PCG cap | dt (ms) | CPU p50 (ms) | CPU p99 (ms) | wall p99 (ms) | press-force err | force err (cycle) | contact-area err | tip err (mm) | pitch err (deg) | rescaled | on the front of |"
+    echo "| scene | level | nodes | Newton | PCG cap (solver) | dt (ms) | CPU p50 (ms) | CPU p99 (ms) | wall p99 (ms) | press-force err | force err (cycle) | contact-area err | tip err (mm) | pitch err (deg) | rescaled | on the front of |"
     echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     for scene in press flex; do
         shipped=$([[ $scene == press ]] && echo "$SHIPPED_PRESS" || echo "$SHIPPED_FLEX")
@@ -79,7 +79,7 @@ done
         done > "$OUT/marks-$scene.csv"
         awk -F, -v shipped="$shipped" \
             'NR == FNR { key = $1","$2","$4","$5","$6
-                         if (key in fronts) fronts[key] = fronts[key] ", " $18; else fronts[key] = $18
+                         if (key in fronts) fronts[key] = fronts[key] ", " $NF; else fronts[key] = $NF
                          next }
              { key = $1","$2","$4","$5","$6
                if (!(key in fronts) && key != shipped) next
@@ -87,16 +87,18 @@ done
                if (key == shipped) mark = mark " (shipped)"
                # The flexing finger meets the table late: no force to compare in its first 0.2 s.
                press = $1 == "press" ? sprintf("%.1f %%", 100 * $11) : "-"
+               cap = $5 == 0 ? "none: LDLT" : $5
                printf "| %s | %s | %s | %s | %s | %s | %.2f | %.2f | %.2f | %s | %.1f %% | %.1f %% | %.3f | %.2f | %.1f %% | %s |\n",
-                   $1, $2, $3, $4, $5, $6, $9 / 1000, $10 / 1000, $8 / 1000, press, 100 * $12,
+                   $1, $2, $3, $4, cap, $6, $9 / 1000, $10 / 1000, $8 / 1000, press, 100 * $12,
                    100 * $13, $14, $15, 100 * $16, mark }' \
             "$OUT/marks-$scene.csv" <(sort -t, -k10,10g "$OUT/all-$scene.csv")
     done
 } > "$OUT/pareto.md"
 
+# Labels: level L, Newton iterations N, PCG cap c (or LDLT, the direct solver), time step.
 # panel <front name> <scene> <y expression> <y label> <title> <shipped scene file>: one plot.
 panel() {
-    local x='($10/1000)' label='(sprintf("L%d N%d c%d %dms", $2, $4, $5, $6))'
+    local x='($10/1000)' label='(sprintf("L%d N%d %s %dms", $2, $4, $5 == 0 ? "LDLT" : sprintf("c%d", $5), $6))'
     echo "set ylabel \"$4\""
     echo "set title \"$5\""
     echo "plot \"$OUT/all-$2.csv\" using $x:$3 with points pt 7 ps 0.6 lc rgb \"#bbbbbb\" title \"every setting\", \\"
@@ -108,7 +110,7 @@ panel() {
     echo 'set terminal pngcairo size 1800,620 font ",11"'
     echo "set output \"$OUT/pareto.png\""
     echo 'set datafile separator ","'
-    echo "set multiplot layout 1,3 title \"Soft-hand step under handsim's real-time limits: CPU time p99 against error (scripts/softhand-tradeoff.sh; level L, Newton iterations N, PCG cap c, time step)\""
+    echo "set multiplot layout 1,3 title \"Soft-hand step under handsim's real-time limits: CPU time p99 against error (scripts/softhand-tradeoff.sh; level L, Newton iterations N, PCG cap c or LDLT, time step)\""
     echo 'set logscale xy'
     echo 'set grid'
     echo 'set key top right'

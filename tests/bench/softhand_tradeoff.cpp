@@ -6,6 +6,9 @@
 // docs/benchmarks.md.
 //   ninja -C build/release softhand_tradeoff && build/release/tests/bench/softhand_tradeoff
 //
+// A PCG cap of 0 stands for the sparse direct solver (SimplicialLDLT, LinearSolver::kSparseLdlt),
+// so the two solvers are compared side by side at equal error.
+//
 // Scenes (tests/softhand): "press", the thimble scene (the distal phalanx presses 5 mm towards
 // a table, slides 1 cm and lifts); "flex", the exoskeleton's scene (one finger flexes against a
 // table). Two 1 s cycles a row; times over both, errors over the first:
@@ -128,7 +131,7 @@ struct Row {
     const char* scene;
     int level;
     int newton;
-    int pcg_cap;
+    int pcg_cap;  // 0: the sparse direct solver (SimplicialLDLT) instead of PCG
     int dt_ms;
 };
 
@@ -159,6 +162,10 @@ void runRow(const Row& row, const std::vector<Observation>& reference) {
     limits.newton_iterations = row.newton;
     limits.pcg_max_iterations = row.pcg_cap;
     scene.solver() = withRealtimeLimits(scene.solver(), limits);
+    if (row.pcg_cap == 0) {
+        scene.solver().linear_solver = LinearSolver::kSparseLdlt;
+        scene.solver().pcg_max_iterations = 30;  // its fallback, should a factorisation fail
+    }
     const int stride = row.dt_ms / 5;  // reference steps (kDt = 5 ms) per step of this row
     const double dt_s = 1e-3 * row.dt_ms;
     const int cycle_steps = kCycleSteps / stride;
@@ -196,12 +203,13 @@ void runRow(const Row& row, const std::vector<Observation>& reference) {
         angle.add(now.pitch_rad, expected.pitch_rad);
     }
     const auto steps = static_cast<double>(wall_us.size());
-    std::printf("%s,%d,%d,%d,%d,%d,%.1f,%.1f,%.1f,%.1f,%.4f,%.4f,%.4f,%.4f,%.3f,%.4f,%.4f\n",
+    std::printf("%s,%d,%d,%d,%d,%d,%.1f,%.1f,%.1f,%.1f,%.4f,%.4f,%.4f,%.4f,%.3f,%.4f,%.4f,%s\n",
                 row.scene, row.level, scene.simulation().nodeCount(), row.newton, row.pcg_cap,
                 row.dt_ms, common::percentile(wall_us, 0.5), common::percentile(wall_us, 0.99),
                 common::percentile(cpu_us, 0.5), common::percentile(cpu_us, 0.99), press.relative(),
                 force.relative(), area.relative(), 1e3 * tip.absolute(),
-                angle.absolute() * 180.0 / 3.14159265358979, rescaled / steps, zeroed / steps);
+                angle.absolute() * 180.0 / 3.14159265358979, rescaled / steps, zeroed / steps,
+                row.pcg_cap == 0 ? "ldlt" : "pcg");
     std::fflush(stdout);
 }
 
@@ -228,13 +236,15 @@ int main(int argc, char** argv) {
     std::string scenes = "press,flex";
     std::string levels = "0,1,2";
     std::string newtons = "1,2,3";
-    std::string caps = "10,30,100";
+    std::string caps = "0,10,30,100";
     std::string steps_ms = "5,10";
     app.add_option("--scenes", scenes, "press, flex or both")->capture_default_str();
     app.add_option("--levels", levels, "resolution levels (below the reference's)")
         ->capture_default_str();
     app.add_option("--newton", newtons, "Newton iterations per step")->capture_default_str();
-    app.add_option("--pcg-caps", caps, "PCG iteration caps")->capture_default_str();
+    app.add_option("--pcg-caps", caps,
+                   "PCG iteration caps; 0 solves each Newton system with SimplicialLDLT instead")
+        ->capture_default_str();
     app.add_option("--dt-ms", steps_ms, "time steps, multiples of 5 ms")->capture_default_str();
     CLI11_PARSE(app, argc, argv);
     haptic::bench::printProvenance(argc, argv);
@@ -261,7 +271,7 @@ int main(int argc, char** argv) {
     }
     std::printf(
         "scene,level,nodes,newton,pcg_cap,dt_ms,p50_us,p99_us,cpu_p50_us,cpu_p99_us,press_err,"
-        "force_err,area_err,tip_err_mm,angle_err_deg,rescaled,zeroed\n");
+        "force_err,area_err,tip_err_mm,angle_err_deg,rescaled,zeroed,solver\n");
     const auto sweep = [&](const char* name, auto run, const auto& reference) {
         for (const int level : level_list) {
             for (const int newton : newton_list) {

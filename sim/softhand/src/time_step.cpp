@@ -282,7 +282,8 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
         // repeated from zero, whose every PCG iterate descends, and its line search may
         // halve further: the trap this closes was a capped warm-started direction 4x too
         // long that the next step warm-started from again, freezing the fingertip scene.
-        bool warm = newton == 0;
+        const bool direct = settings_.linear_solver == LinearSolver::kSparseLdlt;
+        bool warm = newton == 0 && !direct;
         double decrement = 0.0;
         double best_fraction = 0.0;
         bool sufficient = false;
@@ -293,13 +294,19 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
             } else {
                 w.delta.setZero(n);
             }
-            const PcgResult pcg = solvePcg(w.pattern, w.system, w.rhs, w.free_mask,
-                                           w.preconditioner, settings_.pcg_max_iterations,
-                                           settings_.pcg_relative_tolerance, w.delta, w.pcg);
-            report.pcg_iterations += pcg.iterations;
-            report.pcg_relative_residual = pcg.relative_residual;
-            report.pcg_capped = report.pcg_capped || !pcg.converged;
-            report.clamped = report.clamped || !pcg.converged;
+            if (direct && w.direct.solve(w.pattern, w.system, w.rhs, w.free_mask, w.delta)) {
+                report.pcg_relative_residual = 0.0;
+            } else {
+                // The factorisation fails only on a system that is not positive definite to
+                // roundoff; PCG from zero still returns a descent direction there.
+                const PcgResult pcg = solvePcg(w.pattern, w.system, w.rhs, w.free_mask,
+                                               w.preconditioner, settings_.pcg_max_iterations,
+                                               settings_.pcg_relative_tolerance, w.delta, w.pcg);
+                report.pcg_iterations += pcg.iterations;
+                report.pcg_relative_residual = pcg.relative_residual;
+                report.pcg_capped = report.pcg_capped || !pcg.converged;
+                report.clamped = report.clamped || !pcg.converged;
+            }
             decrement = w.rhs.dot(w.delta);  // -slope of Phi along delta
             const bool descends = w.delta.allFinite() && decrement > 0.0;
             // A direction that moves no DoF by more than this over the step is a correction

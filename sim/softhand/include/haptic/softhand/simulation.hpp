@@ -19,6 +19,7 @@
 #include "haptic/softhand/collider.hpp"
 #include "haptic/softhand/pcg.hpp"
 #include "haptic/softhand/rotation.hpp"
+#include "haptic/softhand/sparse_direct.hpp"
 #include "haptic/softhand/tet_mesh.hpp"
 
 namespace haptic::softhand {
@@ -35,10 +36,17 @@ struct TissueMaterial {
     double strain_limit_stiffness_ratio{100.0};
 };
 
+// How each Newton iteration solves its linear system.
+enum class LinearSolver {
+    kPcg,         // block-Jacobi PCG, capped and warm-started (pcg.hpp)
+    kSparseLdlt,  // Eigen's SimplicialLDLT, exact (sparse_direct.hpp); PCG if it fails
+};
+
 struct SolverSettings {
     Vec3 gravity_m_per_s2{0.0, 0.0, -9.81};
     double mass_damping_per_s{2.0};     // Rayleigh alpha
     double stiffness_damping_s{0.002};  // Rayleigh gamma
+    LinearSolver linear_solver{LinearSolver::kPcg};
     int pcg_max_iterations{200};
     double pcg_relative_tolerance{1e-4};
     int max_newton_iterations{5};  // per step (or substep)
@@ -270,6 +278,7 @@ class Simulation {
         Configuration start, predicted, trial;
         BlockJacobiPreconditioner preconditioner;
         PcgWorkspace pcg;
+        SparseDirectSolver direct;
     };
 
   private:
