@@ -12,7 +12,7 @@
 # neighbours; both are in the CSV.
 #
 #   scripts/softhand-tradeoff.sh [--out DIR] [--csv EXISTING.csv] [-- softhand_tradeoff flags]
-# A few minutes on the 2-core machine (2 min 12 s on 2026-11-27, references included). --csv
+# A few minutes on the 2-core machine (144 settings: 3 min 32 s on 2026-11-27). --csv
 # replots a saved run. Needs a Release build (scripts/test.sh builds one) and gnuplot.
 set -euo pipefail
 
@@ -25,7 +25,7 @@ while [[ $# -gt 0 ]]; do
         --out) OUT="$2"; shift 2 ;;
         --csv) CSV_IN="$2"; shift 2 ;;
         --) shift; break ;;
-        -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
         *) echo "softhand-tradeoff.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
     esac
 done

@@ -93,6 +93,40 @@ TEST(SparseDirectSolver, MatchesADenseSolveOnTheFreeDofs) {
     EXPECT_LT((x - 0.5 * expected).norm(), 1e-10 * expected.norm());
 }
 
+// The pattern grows (a contact coupling a node to a new body does this within a step): the
+// solver must analyse the new structure, not reuse the old ordering on it.
+TEST(SparseDirectSolver, AnalysesAGrownPatternAnew) {
+    BlockSystem system = makeSystem(positiveDefinite());
+    const std::vector<char> free_mask(kDofs, 1);
+    const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(kDofs, 1.0, 2.0);
+    SparseDirectSolver solver;
+    Eigen::VectorXd x;
+    ASSERT_TRUE(solver.solve(system.pattern, system.values, b, free_mask, x));
+
+    // The same BlockPattern object, rebuilt with the two missing blocks, now non-zero.
+    std::vector<std::pair<int, int>> blocks{{0, 3}, {3, 0}};
+    system.pattern.appendBlocks(blocks);
+    system.pattern.build(kBlocks, blocks);
+    Eigen::MatrixXd coupled = system.dense;
+    coupled.block<3, 3>(0, 9) = 0.5 * Eigen::Matrix3d::Identity();
+    coupled.block<3, 3>(9, 0) = 0.5 * Eigen::Matrix3d::Identity();
+    system.values.assign(9 * static_cast<std::size_t>(system.pattern.blockCount()), 0.0);
+    for (int r = 0; r < kBlocks; ++r) {
+        for (int block = system.pattern.rowBegin(r); block < system.pattern.rowEnd(r); ++block) {
+            const int c = system.pattern.column(block);
+            for (int i = 0; i < 3; ++i) {
+                for (int j = 0; j < 3; ++j) {
+                    system.values[9 * static_cast<std::size_t>(block) + 3 * i + j] =
+                        coupled(3 * r + i, 3 * c + j);
+                }
+            }
+        }
+    }
+    ASSERT_TRUE(solver.solve(system.pattern, system.values, b, free_mask, x));
+    const Eigen::VectorXd expected = coupled.ldlt().solve(b);
+    EXPECT_LT((x - expected).norm(), 1e-10 * expected.norm());
+}
+
 TEST(SparseDirectSolver, RefusesAnIndefiniteSystemAndLeavesXAlone) {
     Eigen::MatrixXd indefinite = positiveDefinite();
     indefinite(5, 5) = -1e3;
@@ -100,8 +134,8 @@ TEST(SparseDirectSolver, RefusesAnIndefiniteSystemAndLeavesXAlone) {
     const std::vector<char> free_mask(kDofs, 1);
     Eigen::VectorXd x = Eigen::VectorXd::Constant(kDofs, 3.0);
     SparseDirectSolver solver;
-    EXPECT_FALSE(solver.solve(system.pattern, system.values, Eigen::VectorXd::Ones(kDofs),
-                              free_mask, x));
+    EXPECT_FALSE(
+        solver.solve(system.pattern, system.values, Eigen::VectorXd::Ones(kDofs), free_mask, x));
     EXPECT_EQ(x, Eigen::VectorXd::Constant(kDofs, 3.0));
 }
 
@@ -113,8 +147,8 @@ TEST(SparseDirectSolver, AgreesWithPcgRunToConvergence) {
     preconditioner.compute(system.pattern, system.values, kBlocks, free_mask);
     PcgWorkspace work;
     Eigen::VectorXd pcg_x = Eigen::VectorXd::Zero(kDofs);
-    const PcgResult pcg = solvePcg(system.pattern, system.values, b, free_mask, preconditioner,
-                                   500, 1e-12, pcg_x, work);
+    const PcgResult pcg = solvePcg(system.pattern, system.values, b, free_mask, preconditioner, 500,
+                                   1e-12, pcg_x, work);
     ASSERT_TRUE(pcg.converged);
     SparseDirectSolver solver;
     Eigen::VectorXd direct_x;
@@ -123,8 +157,9 @@ TEST(SparseDirectSolver, AgreesWithPcgRunToConvergence) {
 }
 
 // A fingertip pressed onto a table for 0.1 s: the step with the direct solver ends where the
-// step with PCG run to 1e-10 ends (both solve the same Newton systems), and needs no PCG
-// iteration.
+// step with PCG run to 1e-10 ends (both directions are the Newton direction to roundoff; the
+// PCG run's warm start and extra cold halvings do not change where the iterations converge),
+// and needs no PCG iteration.
 TEST(SparseDirectSolver, StepsAFingertipPressAsConvergedPcgDoes) {
     config::HandConfig hand;
     hand.model = config::HandModel::kFingertip;
@@ -153,8 +188,7 @@ TEST(SparseDirectSolver, StepsAFingertipPressAsConvergedPcgDoes) {
     int pcg_iterations = 0;
     int direct_pcg_iterations = 0;
     const auto [pcg_force, pcg_bone] = run(LinearSolver::kPcg, &pcg_iterations);
-    const auto [direct_force, direct_bone] =
-        run(LinearSolver::kSparseLdlt, &direct_pcg_iterations);
+    const auto [direct_force, direct_bone] = run(LinearSolver::kSparseLdlt, &direct_pcg_iterations);
     EXPECT_GT(pcg_iterations, 0);
     EXPECT_EQ(direct_pcg_iterations, 0);
     ASSERT_LT(pcg_force, -0.05);  // it pressed

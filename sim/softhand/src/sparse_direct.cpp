@@ -1,5 +1,7 @@
 #include "haptic/softhand/sparse_direct.hpp"
 
+#include <utility>
+
 namespace haptic::softhand {
 
 void SparseDirectSolver::assemble(const BlockPattern& pattern, const std::vector<double>& values,

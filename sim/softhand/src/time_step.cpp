@@ -261,6 +261,7 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
     // Phi (and, once evaluated, E) at `iterate`; its merit is the line search's reference.
     bool evaluated_iterate = false;
     Evaluation iterate_value{merit_start, 0.0, 0.0};
+    const bool direct = settings_.linear_solver == LinearSolver::kSparseLdlt;
     for (int newton = 0; newton < newton_iterations && std::isfinite(merit_start); ++newton) {
         if (newton > 0) {
             integrate(q, iterate, h, w.trial);
@@ -282,7 +283,8 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
         // repeated from zero, whose every PCG iterate descends, and its line search may
         // halve further: the trap this closes was a capped warm-started direction 4x too
         // long that the next step warm-started from again, freezing the fingertip scene.
-        const bool direct = settings_.linear_solver == LinearSolver::kSparseLdlt;
+        // The direct solver has no warm start; its direction is exact, so it gets the same
+        // halvings as a warm PCG solve (the extra cold halvings are PCG's trap remedy).
         bool warm = newton == 0 && !direct;
         double decrement = 0.0;
         double best_fraction = 0.0;
@@ -298,7 +300,11 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                 report.pcg_relative_residual = 0.0;
             } else {
                 // The factorisation fails only on a system that is not positive definite to
-                // roundoff; PCG from zero still returns a descent direction there.
+                // roundoff; PCG from zero still returns a descent direction there (its
+                // iterations in the report tell such a fallback).
+                if (direct) {
+                    w.preconditioner.compute(w.pattern, w.system, nodeCount(), w.free_mask);
+                }
                 const PcgResult pcg = solvePcg(w.pattern, w.system, w.rhs, w.free_mask,
                                                w.preconditioner, settings_.pcg_max_iterations,
                                                settings_.pcg_relative_tolerance, w.delta, w.pcg);
@@ -317,7 +323,7 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
             if (descends) {
                 // Armijo backtracking on Phi; when the halvings run out, the lowest Phi
                 // seen, if it is below the iterate's.
-                const int halvings = warm || !significant
+                const int halvings = warm || direct || !significant
                                          ? settings_.max_backtracks
                                          : std::max(settings_.max_backtracks, kColdHalvings);
                 double step_fraction = 1.0;
@@ -457,7 +463,9 @@ void Simulation::buildSystem(const Eigen::VectorXd& iterate, double h, Workspace
     w.pattern.multiply(w.damping_hessian, iterate, w.tissue_trial);
     w.rhs = -h * (w.gradient + alpha * w.mass_trial + gamma * w.tissue_trial);
     w.rhs -= w.mass_trial - w.mass_velocity;
-    w.preconditioner.compute(w.pattern, w.system, nodeCount(), w.free_mask);
+    if (settings_.linear_solver == LinearSolver::kPcg) {
+        w.preconditioner.compute(w.pattern, w.system, nodeCount(), w.free_mask);
+    }
 }
 
 int Simulation::relax(double dt_s, int max_steps, double displacement_tolerance_m) {
