@@ -12,7 +12,7 @@
 # neighbours; both are in the CSV.
 #
 #   scripts/softhand-tradeoff.sh [--out DIR] [--csv EXISTING.csv] [-- softhand_tradeoff flags]
-# A few minutes on the 2-core machine (144 settings: 3 min 32 s on 2026-11-27). --csv
+# A few minutes on the 2-core machine (144 settings: 3 min 28 s on 2026-11-27). --csv
 # replots a saved run. Needs a Release build (scripts/test.sh builds one) and gnuplot.
 set -euo pipefail
 
