@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <cstdlib>
+#include <filesystem>
 #include <regex>
 #include <string>
 #include <thread>
@@ -133,6 +135,59 @@ TEST(DdsSimLink, DaemonAndSimTalkOverDdsOnlyAndAKilledSimGoesStale) {
                                   std::regex(R"(sim link dds: device 'exo': received (\d+))")))
         << daemon_log;
     EXPECT_GT(std::stoul(exo[1]), 0U);
+}
+
+// DDS Security (#19): with the lab's PKI from scripts/dds-security-pki.sh, hapticd
+// (hapticd_secure) takes the sim link from a handsim holding the sim's certificate and from
+// nothing else: a handsim on the shipped, unauthenticated profile publishes all along and
+// reaches nothing.
+TEST(DdsSimLink, ASecuredLinkTakesOnlyTheSimsIdentity) {
+    ASSERT_FALSE(ipc::probeRoudi().reachable)
+        << "an iox-roudi is running; this test proves the DDS link works without one";
+    char pattern[] = "/tmp/haptic-dds-pki.XXXXXX";
+    ASSERT_NE(::mkdtemp(pattern), nullptr);
+    const std::string pki = pattern;
+    ASSERT_EQ(std::system((std::string(HAPTIC_SOURCE_DIR) + "/scripts/dds-security-pki.sh " + pki +
+                           " > /dev/null")
+                              .c_str()),
+              0);
+    const std::string profiles = pki + "/dds_security_profiles.xml";
+    const std::string domain = domainArgument();
+    ChildProcess daemon(
+        {HAPTICD_PATH, "--realtime", "ignore", "--dds-domain", domain, "--sim-link", "dds",
+         "--dds-profiles-file", profiles, "--dds-participant-profile", "hapticd_secure"},
+        "hapticd-secure");
+    {
+        ChildProcess intruder({HANDSIM_PATH, "--dds-domain", domain, "--sim-link", "dds"},
+                              "handsim-unauthenticated");
+        std::this_thread::sleep_for(kSanitized ? 10s : 5s);
+        const std::string status =
+            pollStatus(daemon, 5s, [](const SimLinkLine& link) { return link.found; });
+        const SimLinkLine link = parseSimLink(status);
+        ASSERT_TRUE(link.found) << status;
+        EXPECT_FALSE(link.connected) << status;
+        EXPECT_EQ(link.received, 0U) << status;
+        ASSERT_EQ(intruder.terminate(), std::optional<int>(0)) << intruder.stderrText();
+        std::smatch published;
+        const std::string log = intruder.stderrText();
+        ASSERT_TRUE(std::regex_search(log, published,
+                                      std::regex(R"(device 'exo': published (\d+) targets)")))
+            << log;
+        EXPECT_GT(std::stoul(published[1]), 0U) << "the unauthenticated sim did publish";
+    }
+    ChildProcess sim(
+        {HANDSIM_PATH, "--dds-domain", domain, "--sim-link", "dds", "--dds-profiles-file", profiles,
+         "--dds-participant-profile", "handsim_secure"},
+        "handsim-secure");
+    const std::string status = pollStatus(daemon, 20s, [](const SimLinkLine& link) {
+        return link.found && (link.connected || kSanitized) && link.received > 0;
+    });
+    const SimLinkLine link = parseSimLink(status);
+    EXPECT_TRUE(link.connected || kSanitized) << status;
+    EXPECT_GT(link.received, 0U) << status << sim.stderrText();
+    EXPECT_EQ(sim.terminate(), std::optional<int>(0)) << sim.stderrText();
+    EXPECT_EQ(daemon.terminate(), std::optional<int>(0)) << daemon.stderrText();
+    std::filesystem::remove_all(pki);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include "haptic/config/common.hpp"
@@ -17,12 +18,14 @@
 namespace haptic::config {
 
 struct CommonOverrides {
-    std::string config_path;  // the default is the caller's
-    std::string log_level;    // empty: the file's log_level
-    int dds_domain{-1};       // negative: the file's dds.domain_id
-    std::string sim_link;     // empty: the file's sim_link.transport
-    double duration_s{0.0};   // 0 = run until SIGINT/SIGTERM
-    bool check_only{false};   // --check: validate the files, print a summary, exit
+    std::string config_path;              // the default is the caller's
+    std::string log_level;                // empty: the file's log_level
+    int dds_domain{-1};                   // negative: the file's dds.domain_id
+    std::string dds_profiles_file;        // empty: the file's dds.profiles_file
+    std::string dds_participant_profile;  // empty: the file's dds.participant_profile
+    std::string sim_link;                 // empty: the file's sim_link.transport
+    double duration_s{0.0};               // 0 = run until SIGINT/SIGTERM
+    bool check_only{false};               // --check: validate the files, print a summary, exit
 };
 
 inline void addCommonOptions(CLI::App& app, CommonOverrides& overrides,
@@ -32,6 +35,12 @@ inline void addCommonOptions(CLI::App& app, CommonOverrides& overrides,
         ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
     app.add_option("--dds-domain", overrides.dds_domain, "override dds.domain_id")
         ->check(CLI::Range(0, 232));
+    app.add_option("--dds-profiles-file", overrides.dds_profiles_file,
+                   "override dds.profiles_file (for example the DDS Security profiles that "
+                   "scripts/dds-security-pki.sh writes)")
+        ->check(CLI::ExistingFile);
+    app.add_option("--dds-participant-profile", overrides.dds_participant_profile,
+                   "override dds.participant_profile (hapticd_secure, handsim_secure, ...)");
     app.add_option("--sim-link", overrides.sim_link,
                    "override sim_link.transport: iceoryx (same host) or dds (sim on any host)")
         ->check(CLI::IsMember({"iceoryx", "dds"}));
@@ -56,6 +65,12 @@ template <class Config>
 [[nodiscard]] std::string applyCommonOverrides(const CommonOverrides& overrides, Config& config) {
     if (overrides.dds_domain >= 0) {
         config.dds.domain_id = overrides.dds_domain;
+    }
+    if (!overrides.dds_profiles_file.empty()) {
+        config.dds.profiles_file = std::filesystem::absolute(overrides.dds_profiles_file);
+    }
+    if (!overrides.dds_participant_profile.empty()) {
+        config.dds.participant_profile = overrides.dds_participant_profile;
     }
     if (!overrides.sim_link.empty()) {
         config.sim_link.transport =
