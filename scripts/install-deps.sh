@@ -9,7 +9,7 @@ PACKAGES=(
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libiceoryx-introspection-dev
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libcli11-dev libsystemd-dev libbullet-dev libboost-dev nlohmann-json3-dev libssl-dev
-  can-utils rt-tests gnuplot-nox procps openssl
+  can-utils rt-tests gnuplot-nox procps openssl help2man man-db bsdextrautils
   qemu-system-x86 busybox-static iproute2 xz-utils clang
 )
 
