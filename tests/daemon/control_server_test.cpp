@@ -7,6 +7,8 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
@@ -14,7 +16,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
+#include "haptic/control/log_limit.hpp"
 #include "haptic/msgs/conversions.hpp"
 
 namespace haptic::control {
@@ -179,6 +183,52 @@ TEST_F(ControlServerTest, AMalformedCommandIsAnsweredAndNeverReachesTheRtThread)
     msgs::HapticCommand taken;
     EXPECT_FALSE(channel_.takeCommand(taken));
     ::close(fd);
+}
+
+// A user flooding the socket with malformed commands gets every one answered, and 5 of them
+// in the journal (the rest are summed up once its 10 s are over: PerUidLogLimit below).
+TEST_F(ControlServerTest, AFloodOfBadCommandsIsAnsweredButLoggedFiveTimes) {
+    std::ostringstream journal;
+    const auto previous = spdlog::default_logger();
+    spdlog::set_default_logger(std::make_shared<spdlog::logger>(
+        "capture", std::make_shared<spdlog::sinks::ostream_sink_mt>(journal)));
+    {
+        ControlServer server(socket_, "haptic", channel_);
+        const int fd = connectCaller();
+        int answered = 0;
+        for (int i = 0; i < 20; ++i) {
+            const std::vector<char> answer = exchange(server, fd, {kCommandRequest, 1, 2, 3});
+            answered += !answer.empty() && answer[0] == kErrorAnswer;
+        }
+        EXPECT_EQ(answered, 20);
+        ::close(fd);
+    }
+    spdlog::set_default_logger(previous);
+    const std::string text = journal.str();
+    std::size_t lines = 0;
+    for (std::size_t at = text.find("malformed"); at != std::string::npos;
+         at = text.find("malformed", at + 1)) {
+        ++lines;
+    }
+    EXPECT_EQ(lines, 5U) << text;
+}
+
+TEST(PerUidLogLimit, LogsTheFirstLinesOfAWindowAndSumsUpTheRest) {
+    using Clock = PerUidLogLimit::Clock;
+    PerUidLogLimit limit(3, std::chrono::seconds(10));
+    const Clock::time_point t0{};
+    int logged = 0;
+    for (int i = 0; i < 8; ++i) {
+        logged += limit.admit(1000, t0 + std::chrono::milliseconds(i)) ? 1 : 0;
+    }
+    EXPECT_EQ(logged, 3);
+    EXPECT_TRUE(limit.admit(1001, t0)) << "another user has lines of its own";
+    EXPECT_TRUE(limit.expired(t0 + std::chrono::seconds(9)).empty()) << "the window is not over";
+    const auto summary = limit.expired(t0 + std::chrono::seconds(10));
+    ASSERT_EQ(summary.size(), 1U) << "uid 1001 logged all it had: nothing to sum up";
+    EXPECT_EQ(summary[0].first, 1000U);
+    EXPECT_EQ(summary[0].second, 5U);
+    EXPECT_TRUE(limit.admit(1000, t0 + std::chrono::seconds(11))) << "a new window";
 }
 
 // One user opening connections without end keeps its newest 16; the others are closed.

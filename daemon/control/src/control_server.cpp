@@ -251,14 +251,22 @@ void ControlServer::refuse(const Caller& caller, std::uint64_t request_id,
 void ControlServer::handleCommand(Caller& caller, const char* body, std::size_t size) {
     idl::HapticCommand wire;
     msgs::HapticCommand command;
+    // Refusals only: accepted commands are always logged and use none of the user's lines.
+    const auto log_refusal = [&] {
+        return refusal_log_.admit(caller.peer.uid, std::chrono::steady_clock::now());
+    };
     if (!decode(body, size, wire)) {
-        spdlog::warn("local command from {}: malformed", describe(caller.peer));
+        if (log_refusal()) {
+            spdlog::warn("local command from {}: malformed", describe(caller.peer));
+        }
         send(caller.fd, errorDatagram("malformed command"));
         return;
     }
     if (const auto result = msgs::fromIdl(wire, command); !result.ok()) {
-        spdlog::warn("local command {} from {} rejected: {}", wire.request_id(),
-                     describe(caller.peer), result.error);
+        if (log_refusal()) {
+            spdlog::warn("local command {} from {} rejected: {}", wire.request_id(),
+                         describe(caller.peer), result.error);
+        }
         refuse(caller, wire.request_id(), "malformed command: " + result.error);
         return;
     }
@@ -269,7 +277,10 @@ void ControlServer::handleCommand(Caller& caller, const char* body, std::size_t 
             "'" + (group_gid_ ? "" : " (no such group on this host)") +
             ": only its members may enable, disable, clear and choose the method; anyone may "
             "read the status and send estop";
-        spdlog::warn("local command '{}' from {} refused: {}", kind, describe(caller.peer), reason);
+        if (log_refusal()) {
+            spdlog::warn("local command '{}' from {} refused: {}", kind, describe(caller.peer),
+                         reason);
+        }
         refuse(caller, command.request_id, reason);
         return;
     }
@@ -348,6 +359,12 @@ void ControlServer::expirePending() {
 
 void ControlServer::serve(std::chrono::milliseconds max_wait) {
     expirePending();
+    for (const auto& [uid, count] : refusal_log_.expired(std::chrono::steady_clock::now())) {
+        spdlog::warn(
+            "{} more refused or malformed local commands from uid {} were not logged "
+            "(5 a user per 10 s are)",
+            count, uid);
+    }
     std::vector<pollfd> fds;
     fds.reserve(callers_.size() + 1);
     fds.push_back({listen_fd_, POLLIN, 0});

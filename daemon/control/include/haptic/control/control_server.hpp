@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "haptic/control/control_socket.hpp"
+#include "haptic/control/log_limit.hpp"
 #include "haptic/daemon/command_channel.hpp"
 #include "haptic/msgs/messages.hpp"
 
@@ -96,6 +97,8 @@ class ControlServer {
     std::vector<int> awaiting_status_;
     std::vector<char> buffer_;
     std::uint64_t next_local_id_{0};
+    // Refused and malformed commands: 5 journal lines per uid per 10 s, the rest summed up.
+    PerUidLogLimit refusal_log_{5, std::chrono::seconds(10)};
 };
 
 }  // namespace haptic::control
