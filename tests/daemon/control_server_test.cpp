@@ -189,10 +189,17 @@ TEST_F(ControlServerTest, AMalformedCommandIsAnsweredAndNeverReachesTheRtThread)
 // in the journal (the rest are summed up once its 10 s are over: PerUidLogLimit below).
 TEST_F(ControlServerTest, AFloodOfBadCommandsIsAnsweredButLoggedFiveTimes) {
     std::ostringstream journal;
-    const auto previous = spdlog::default_logger();
-    spdlog::set_default_logger(std::make_shared<spdlog::logger>(
-        "capture", std::make_shared<spdlog::sinks::ostream_sink_mt>(journal)));
+    // The default logger writes into `journal` for this test only, however it ends.
+    struct CaptureLog {
+        std::shared_ptr<spdlog::logger> previous = spdlog::default_logger();
+        explicit CaptureLog(std::ostringstream& to) {
+            spdlog::set_default_logger(std::make_shared<spdlog::logger>(
+                "capture", std::make_shared<spdlog::sinks::ostream_sink_mt>(to)));
+        }
+        ~CaptureLog() { spdlog::set_default_logger(previous); }
+    };
     {
+        const CaptureLog capture(journal);
         ControlServer server(socket_, "haptic", channel_);
         const int fd = connectCaller();
         int answered = 0;
@@ -203,11 +210,10 @@ TEST_F(ControlServerTest, AFloodOfBadCommandsIsAnsweredButLoggedFiveTimes) {
         EXPECT_EQ(answered, 20);
         ::close(fd);
     }
-    spdlog::set_default_logger(previous);
     const std::string text = journal.str();
     std::size_t lines = 0;
-    for (std::size_t at = text.find("malformed"); at != std::string::npos;
-         at = text.find("malformed", at + 1)) {
+    for (std::size_t at = text.find(": malformed"); at != std::string::npos;
+         at = text.find(": malformed", at + 1)) {
         ++lines;
     }
     EXPECT_EQ(lines, 5U) << text;

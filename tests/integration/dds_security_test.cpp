@@ -46,7 +46,7 @@ class DdsSecurity : public ::testing::Test {
     static ipc::DdsSettings secure(const std::string& identity) {
         ipc::DdsSettings settings;
         settings.domain_id = testDomain();
-        settings.profiles_file = pki_dir_ + "/dds_security_profiles.xml";
+        settings.profiles_file = pki_dir_ + "/" + identity + "_profiles.xml";
         settings.participant_profile = identity + "_secure";
         return settings;
     }

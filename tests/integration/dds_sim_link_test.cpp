@@ -151,11 +151,17 @@ TEST(DdsSimLink, ASecuredLinkTakesOnlyTheSimsIdentity) {
                            " > /dev/null")
                               .c_str()),
               0);
-    const std::string profiles = pki + "/dds_security_profiles.xml";
+    // Removed however the test ends: the directory holds private keys.
+    struct RemoveOnExit {
+        std::string dir;
+        ~RemoveOnExit() { std::filesystem::remove_all(dir); }
+    } remove_pki{pki};
+    const std::string daemon_profiles = pki + "/hapticd_profiles.xml";
+    const std::string sim_profiles = pki + "/handsim_profiles.xml";
     const std::string domain = domainArgument();
     ChildProcess daemon(
         {HAPTICD_PATH, "--realtime", "ignore", "--dds-domain", domain, "--sim-link", "dds",
-         "--dds-profiles-file", profiles, "--dds-participant-profile", "hapticd_secure"},
+         "--dds-profiles-file", daemon_profiles, "--dds-participant-profile", "hapticd_secure"},
         "hapticd-secure");
     {
         ChildProcess intruder({HANDSIM_PATH, "--dds-domain", domain, "--sim-link", "dds"},
@@ -176,8 +182,8 @@ TEST(DdsSimLink, ASecuredLinkTakesOnlyTheSimsIdentity) {
         EXPECT_GT(std::stoul(published[1]), 0U) << "the unauthenticated sim did publish";
     }
     ChildProcess sim(
-        {HANDSIM_PATH, "--dds-domain", domain, "--sim-link", "dds", "--dds-profiles-file", profiles,
-         "--dds-participant-profile", "handsim_secure"},
+        {HANDSIM_PATH, "--dds-domain", domain, "--sim-link", "dds", "--dds-profiles-file",
+         sim_profiles, "--dds-participant-profile", "handsim_secure"},
         "handsim-secure");
     const std::string status = pollStatus(daemon, 20s, [](const SimLinkLine& link) {
         return link.found && (link.connected || kSanitized) && link.received > 0;
@@ -187,7 +193,6 @@ TEST(DdsSimLink, ASecuredLinkTakesOnlyTheSimsIdentity) {
     EXPECT_GT(link.received, 0U) << status << sim.stderrText();
     EXPECT_EQ(sim.terminate(), std::optional<int>(0)) << sim.stderrText();
     EXPECT_EQ(daemon.terminate(), std::optional<int>(0)) << daemon.stderrText();
-    std::filesystem::remove_all(pki);
 }
 
 }  // namespace

@@ -287,8 +287,10 @@ void ControlServer::handleCommand(Caller& caller, const char* body, std::size_t 
     const std::uint64_t caller_request_id = command.request_id;
     command.request_id = kLocalRequestBit | ++next_local_id_;
     if (!channel_.submit(command)) {
-        spdlog::warn("local command '{}' from {} refused: the RT loop is not taking commands", kind,
-                     describe(caller.peer));
+        if (log_refusal()) {
+            spdlog::warn("local command '{}' from {} refused: the RT loop is not taking commands",
+                         kind, describe(caller.peer));
+        }
         refuse(caller, caller_request_id, "the RT loop is not taking commands (queue full)");
         return;
     }
@@ -362,8 +364,9 @@ void ControlServer::serve(std::chrono::milliseconds max_wait) {
     for (const auto& [uid, count] : refusal_log_.expired(std::chrono::steady_clock::now())) {
         spdlog::warn(
             "{} more refused or malformed local commands from uid {} were not logged "
-            "(5 a user per 10 s are)",
-            count, uid);
+            "({} a user per {} s are)",
+            count, uid, refusal_log_.linesPerWindow(),
+            std::chrono::duration_cast<std::chrono::seconds>(refusal_log_.window()).count());
     }
     std::vector<pollfd> fds;
     fds.reserve(callers_.size() + 1);

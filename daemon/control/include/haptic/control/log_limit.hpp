@@ -53,6 +53,9 @@ class PerUidLogLimit {
         return out;
     }
 
+    [[nodiscard]] int linesPerWindow() const noexcept { return lines_per_window_; }
+    [[nodiscard]] Clock::duration window() const noexcept { return window_; }
+
   private:
     struct Window {
         Clock::time_point start{};
