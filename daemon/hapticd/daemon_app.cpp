@@ -430,6 +430,9 @@ int runDaemon(const DaemonOptions& options) {
     for (std::size_t i = 0; i < endpoints.size(); ++i) {
         device_states.push_back(std::make_unique<DeviceStateSnapshot>());
     }
+    // The sim link has a participant of its own, apart from status, telemetry and commands
+    // (#19): its discovery, history and resources are not shared with the control topics.
+    std::unique_ptr<ipc::DdsParticipant> link_participant;
     std::unique_ptr<DdsSimLink> dds_sim_link;
     std::unique_ptr<DeviceStatePublisher> device_state_publisher;
     if (dds_sim) {
@@ -439,7 +442,11 @@ int runDaemon(const DaemonOptions& options) {
                                                      ? msgs::DeviceKind::kExoskeleton
                                                      : msgs::DeviceKind::kThimble});
         }
-        dds_sim_link = std::make_unique<DdsSimLink>(participant, std::move(link_devices));
+        link_participant = std::make_unique<ipc::DdsParticipant>(
+            ipc::DdsSettings{static_cast<std::uint32_t>(cfg.dds.domain_id),
+                             cfg.dds.profiles_file.string(), cfg.dds.participant_profile},
+            "hapticd-sim-link");
+        dds_sim_link = std::make_unique<DdsSimLink>(*link_participant, std::move(link_devices));
         dds_sim_link->start();
         spdlog::info("sim link over DDS on domain {} (no RouDi needed)", cfg.dds.domain_id);
     } else {

@@ -98,15 +98,19 @@ int runSim(const SimOptions& options) {
             ipc::deviceService(device.name, ipc::kDeviceStateEvent), subscriber_options);
     }
 
-    ipc::DdsParticipant participant(
-        ipc::DdsSettings{static_cast<std::uint32_t>(cfg.dds.domain_id),
-                         cfg.dds.profiles_file.string(), cfg.dds.participant_profile},
-        "handsim");
+    const ipc::DdsSettings dds_settings{static_cast<std::uint32_t>(cfg.dds.domain_id),
+                                        cfg.dds.profiles_file.string(),
+                                        cfg.dds.participant_profile};
+    ipc::DdsParticipant participant(dds_settings, "handsim");
     auto status_writer = participant.createWriter<idl::SimStatusPubSubType>(
         ipc::kSimStatusTopic, ipc::TopicKind::kLatestState);
+    // The sim link has a participant of its own, apart from status and tracking (#19): its
+    // discovery, history and resources are not shared with them.
+    std::unique_ptr<ipc::DdsParticipant> link_participant;
     std::unique_ptr<SimLinkDds> dds_link;
     if (dds_sim) {
-        dds_link = std::make_unique<SimLinkDds>(participant, cfg.devices);
+        link_participant = std::make_unique<ipc::DdsParticipant>(dds_settings, "handsim-sim-link");
+        dds_link = std::make_unique<SimLinkDds>(*link_participant, cfg.devices);
         spdlog::info("sim link over DDS on domain {} (no RouDi needed)", cfg.dds.domain_id);
     }
     msgs::ConstraintSet dds_constraints;

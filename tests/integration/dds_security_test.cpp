@@ -16,6 +16,7 @@
 
 #include "ConstraintSetPubSubTypes.h"
 #include "HapticCommandPubSubTypes.h"
+#include "HapticStatusPubSubTypes.h"
 #include "haptic/ipc/dds_participant.hpp"
 #include "haptic/ipc/ipc_error.hpp"
 #include "haptic/ipc/topics.hpp"
@@ -121,6 +122,16 @@ TEST_F(DdsSecurity, AnIdentityWritesOnlyWhatItsGrantAllows) {
     EXPECT_THROW(
         sim.createWriter<idl::HapticCommandPubSubType>(ipc::kCommandTopic, ipc::TopicKind::kStream),
         ipc::IpcError);
+    // Only hapticd may write haptic/status.
+    EXPECT_THROW(sim.createWriter<idl::HapticStatusPubSubType>(ipc::kStatusTopic,
+                                                               ipc::TopicKind::kLatestState),
+                 ipc::IpcError);
+    EXPECT_THROW(operator_side.createWriter<idl::HapticStatusPubSubType>(
+                     ipc::kStatusTopic, ipc::TopicKind::kLatestState),
+                 ipc::IpcError);
+    ipc::DdsParticipant daemon(secure("hapticd"), "hapticd");
+    EXPECT_NO_THROW(daemon.createWriter<idl::HapticStatusPubSubType>(ipc::kStatusTopic,
+                                                                     ipc::TopicKind::kLatestState));
 }
 
 }  // namespace
