@@ -12,7 +12,6 @@
 // each row's per-step force and bone position.
 
 #include <malloc.h>
-#include <time.h>
 
 #include <algorithm>
 #include <chrono>
@@ -25,9 +24,11 @@
 #include "fingertip_press_scene.hpp"
 #include "haptic/common/statistics.hpp"
 #include "provenance.hpp"
+#include "thread_cpu_time.hpp"
 
 namespace haptic::softhand::bench {
 namespace {
+using haptic::bench::threadCpuUs;
 
 struct Options {
     std::string reference_cache;
@@ -52,12 +53,6 @@ struct Row {
     double distortion_mm{0.0};  // largest node distance from the bone's rigid motion
     int compared{0};            // samples of the first cycle before any divergence
 };
-
-double threadCpuUs() {
-    timespec ts{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return 1e6 * static_cast<double>(ts.tv_sec) + 1e-3 * static_cast<double>(ts.tv_nsec);
-}
 
 // Steps `scene` (setInput(step) then step()), timing the step call; the first cycle's samples
 // are kept for the error. `finite` ends the run early if the state blew up.

@@ -15,7 +15,6 @@
 
 #include <benchmark/benchmark.h>
 #include <malloc.h>
-#include <time.h>
 
 #include <algorithm>
 #include <chrono>
@@ -33,6 +32,7 @@
 #include "haptic/softhand/elastic_tracking.hpp"
 #include "haptic/softhand/hand_builder.hpp"
 #include "haptic/softhand/scene_simulation.hpp"
+#include "thread_cpu_time.hpp"
 
 namespace haptic::softhand {
 namespace {
@@ -47,15 +47,8 @@ using bench::kPressReferenceLevel;
 using bench::kPressSteps;
 using bench::Sample;
 using bench::solverSettings;
+using haptic::bench::threadCpuUs;
 constexpr int kFlexReferenceLevel = 3;
-
-// CPU time of this thread: on the shared 2-vCPU machine wall time per step is 1.5-3x the
-// CPU time, so percentiles of both are reported.
-double threadCpuUs() {
-    timespec t{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-    return 1e6 * static_cast<double>(t.tv_sec) + 1e-3 * static_cast<double>(t.tv_nsec);
-}
 
 // p50 and p99 of per-step times into the state's counters, with `prefix`.
 void addPercentiles(benchmark::State& state, std::vector<double> us, const char* prefix) {

@@ -26,8 +26,6 @@
 // independent reference is #21's work. Its time step is 5 ms, so rows at 5 ms carry no time
 // discretisation error against it and rows at 10 ms carry theirs.
 
-#include <time.h>
-
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -42,20 +40,14 @@
 #include "haptic/config/scene.hpp"
 #include "haptic/softhand/scene_simulation.hpp"
 #include "provenance.hpp"
+#include "thread_cpu_time.hpp"
 
 namespace haptic::softhand::bench {
 namespace {
+using haptic::bench::threadCpuUs;
 
 constexpr int kPressReference = kPressReferenceLevel;
 constexpr int kFlexReference = 3;
-
-// CPU time of this thread: on a shared 2-vCPU machine the wall time per step is 1.5-3x the
-// CPU time, so both are reported.
-double threadCpuUs() {
-    timespec t{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-    return 1e6 * static_cast<double>(t.tv_sec) + 1e-3 * static_cast<double>(t.tv_nsec);
-}
 
 struct Observation {
     double table_force_n{0.0};
