@@ -54,11 +54,6 @@ constexpr int kExitError = 1;
 constexpr int kExitRefused = 2;
 constexpr int kExitNoDaemon = 3;
 
-haptic::ipc::DdsSettings ddsSettings(const haptic::config::DaemonConfig& cfg) {
-    return {static_cast<std::uint32_t>(cfg.dds.domain_id), cfg.dds.profiles_file.string(),
-            cfg.dds.participant_profile};
-}
-
 std::chrono::milliseconds toMs(double seconds) {
     return std::chrono::milliseconds(static_cast<long>(seconds * 1000.0));
 }
@@ -164,7 +159,7 @@ int printStatus(const haptic::config::DaemonConfig& cfg, double timeout_s, bool 
             return *local;
         }
     }
-    haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
+    haptic::ipc::DdsParticipant participant(haptic::ipc::ddsSettings(cfg.dds), "hapticctl");
     auto reader = participant.createReader<haptic::idl::HapticStatusPubSubType>(
         haptic::ipc::kStatusTopic, haptic::ipc::TopicKind::kLatestState);
     haptic::idl::HapticStatus sample;
@@ -177,7 +172,7 @@ int printStatus(const haptic::config::DaemonConfig& cfg, double timeout_s, bool 
 
 // handsim's status (sim/status, which handsim publishes over DDS whichever sim link it uses).
 int printSimStatus(const haptic::config::DaemonConfig& cfg, double timeout_s, bool json) {
-    haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
+    haptic::ipc::DdsParticipant participant(haptic::ipc::ddsSettings(cfg.dds), "hapticctl");
     auto reader = participant.createReader<haptic::idl::SimStatusPubSubType>(
         haptic::ipc::kSimStatusTopic, haptic::ipc::TopicKind::kLatestState);
     haptic::idl::SimStatus sample;
@@ -206,7 +201,7 @@ int printSimStatus(const haptic::config::DaemonConfig& cfg, double timeout_s, bo
 // scripts). A daemon that goes away is shown as such, and watch keeps waiting for it.
 int watchStatus(const haptic::config::DaemonConfig& cfg, double interval_s, int count) {
     haptic::process::installShutdownHandlers();
-    haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
+    haptic::ipc::DdsParticipant participant(haptic::ipc::ddsSettings(cfg.dds), "hapticctl");
     auto reader = participant.createReader<haptic::idl::HapticStatusPubSubType>(
         haptic::ipc::kStatusTopic, haptic::ipc::TopicKind::kLatestState);
     haptic::idl::HapticStatus sample;
@@ -257,7 +252,7 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
         }
     }
     std::ostream& out = to_stdout ? std::cout : file;
-    haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
+    haptic::ipc::DdsParticipant participant(haptic::ipc::ddsSettings(cfg.dds), "hapticctl");
     auto reader = participant.createReader<haptic::idl::HapticTelemetryPubSubType>(
         haptic::ipc::kTelemetryTopic, haptic::ipc::TopicKind::kStream);
     // The provenance comes from hapticd's status: its version, its configuration digest and
@@ -471,7 +466,7 @@ int sendCommand(const haptic::config::DaemonConfig& cfg, haptic::msgs::CommandKi
         }
     }
 
-    haptic::ipc::DdsParticipant participant(ddsSettings(cfg), "hapticctl");
+    haptic::ipc::DdsParticipant participant(haptic::ipc::ddsSettings(cfg.dds), "hapticctl");
     auto writer = participant.createWriter<haptic::idl::HapticCommandPubSubType>(
         haptic::ipc::kCommandTopic, haptic::ipc::TopicKind::kStream);
     auto reader = participant.createReader<haptic::idl::HapticCommandReplyPubSubType>(

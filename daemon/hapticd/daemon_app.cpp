@@ -375,10 +375,7 @@ int runDaemon(const DaemonOptions& options) {
             ipc::deviceService(device.name, ipc::kDeviceStateEvent), publisher_options);
     }
 
-    ipc::DdsParticipant participant(
-        ipc::DdsSettings{static_cast<std::uint32_t>(cfg.dds.domain_id),
-                         cfg.dds.profiles_file.string(), cfg.dds.participant_profile},
-        "hapticd");
+    ipc::DdsParticipant participant(ipc::ddsSettings(cfg.dds), "hapticd");
     auto status_writer = participant.createWriter<idl::HapticStatusPubSubType>(
         ipc::kStatusTopic, ipc::TopicKind::kLatestState);
 
@@ -442,10 +439,8 @@ int runDaemon(const DaemonOptions& options) {
                                                      ? msgs::DeviceKind::kExoskeleton
                                                      : msgs::DeviceKind::kThimble});
         }
-        link_participant = std::make_unique<ipc::DdsParticipant>(
-            ipc::DdsSettings{static_cast<std::uint32_t>(cfg.dds.domain_id),
-                             cfg.dds.profiles_file.string(), cfg.dds.participant_profile},
-            "hapticd-sim-link");
+        link_participant =
+            std::make_unique<ipc::DdsParticipant>(ipc::ddsSettings(cfg.dds), "hapticd-sim-link");
         dds_sim_link = std::make_unique<DdsSimLink>(*link_participant, std::move(link_devices));
         dds_sim_link->start();
         spdlog::info("sim link over DDS on domain {} (no RouDi needed)", cfg.dds.domain_id);

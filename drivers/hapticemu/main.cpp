@@ -305,11 +305,8 @@ int main(int argc, char** argv) {
         std::unique_ptr<haptic::ipc::DdsParticipant> participant;
         haptic::ipc::DdsWriter<haptic::idl::HandPose> tracker_writer;
         if (user) {
-            const auto& dds = user_config->dds;
             participant = std::make_unique<haptic::ipc::DdsParticipant>(
-                haptic::ipc::DdsSettings{static_cast<std::uint32_t>(dds.domain_id),
-                                         dds.profiles_file.string(), dds.participant_profile},
-                "hapticemu");
+                haptic::ipc::ddsSettings(user_config->dds), "hapticemu");
             tracker_writer = participant->createWriter<haptic::idl::HandPosePubSubType>(
                 user_config->tracker.topic, haptic::ipc::TopicKind::kStream);
         }

@@ -98,9 +98,7 @@ int runSim(const SimOptions& options) {
             ipc::deviceService(device.name, ipc::kDeviceStateEvent), subscriber_options);
     }
 
-    const ipc::DdsSettings dds_settings{static_cast<std::uint32_t>(cfg.dds.domain_id),
-                                        cfg.dds.profiles_file.string(),
-                                        cfg.dds.participant_profile};
+    const ipc::DdsSettings dds_settings = ipc::ddsSettings(cfg.dds);
     ipc::DdsParticipant participant(dds_settings, "handsim");
     auto status_writer = participant.createWriter<idl::SimStatusPubSubType>(
         ipc::kSimStatusTopic, ipc::TopicKind::kLatestState);

@@ -126,10 +126,8 @@ int runSimLinkProbe(const config::DaemonConfig& cfg, ProbeTransport transport, d
             }
         }
     } else {
-        participant = std::make_unique<ipc::DdsParticipant>(
-            ipc::DdsSettings{static_cast<std::uint32_t>(cfg.dds.domain_id),
-                             cfg.dds.profiles_file.string(), cfg.dds.participant_profile},
-            "hapticd_latency_probe");
+        participant = std::make_unique<ipc::DdsParticipant>(ipc::ddsSettings(cfg.dds),
+                                                            "hapticd_latency_probe");
         std::vector<hapticd::SimLinkDevice> devices;
         for (const auto& device : cfg.devices) {
             devices.push_back({device.name, device.isExoskeleton() ? msgs::DeviceKind::kExoskeleton

@@ -16,6 +16,7 @@
 #include <memory>
 #include <string>
 
+#include "haptic/config/common.hpp"
 #include "haptic/ipc/ipc_error.hpp"
 
 namespace haptic::ipc {
@@ -25,6 +26,12 @@ struct DdsSettings {
     std::string profiles_file;  // Fast DDS XML profiles; empty = built-in defaults
     std::string participant_profile{"haptic_participant"};
 };
+
+// The settings a configuration's `dds:` block names (daemon.yaml, sim.yaml, user.yaml).
+[[nodiscard]] inline DdsSettings ddsSettings(const config::DdsConfig& dds) {
+    return {static_cast<std::uint32_t>(dds.domain_id), dds.profiles_file.string(),
+            dds.participant_profile};
+}
 
 // How a topic behaves. kLatestState: reliable, keep-last 1 (status, the sim link: only the
 // newest value matters). kStream: reliable, keep-last 64 (telemetry, commands, replies: no
