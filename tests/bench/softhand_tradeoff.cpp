@@ -205,55 +205,37 @@ void runRow(const Row& row, const std::vector<Observation>& reference) {
     std::fflush(stdout);
 }
 
-std::vector<int> parseList(const std::string& text) {
-    std::vector<int> out;
-    std::size_t start = 0;
-    while (start <= text.size()) {
-        const std::size_t comma = text.find(',', start);
-        out.push_back(std::stoi(text.substr(start, comma - start)));
-        if (comma == std::string::npos) {
-            break;
-        }
-        start = comma + 1;
-    }
-    return out;
-}
-
 }  // namespace
 }  // namespace haptic::softhand::bench
 
 int main(int argc, char** argv) {
     using namespace haptic::softhand::bench;
     CLI::App app{"softhand_tradeoff - the soft hand's step time against its error, per setting"};
-    std::string scenes = "press,flex";
-    std::string levels = "0,1,2";
-    std::string newtons = "1,2,3";
-    std::string caps = "0,10,30,100";
-    std::string steps_ms = "5,10";
-    app.add_option("--scenes", scenes, "press, flex or both")->capture_default_str();
-    app.add_option("--levels", levels, "resolution levels (below the reference's)")
+    std::vector<std::string> scenes{"press", "flex"};
+    std::vector<int> level_list{0, 1, 2};
+    std::vector<int> newton_list{1, 2, 3};
+    std::vector<int> cap_list{0, 10, 30, 100};
+    std::vector<int> dt_list{5, 10};
+    app.add_option("--scenes", scenes, "press, flex or both")
+        ->delimiter(',')
+        ->check(CLI::IsMember({"press", "flex"}))
         ->capture_default_str();
-    app.add_option("--newton", newtons, "Newton iterations per step")->capture_default_str();
-    app.add_option("--pcg-caps", caps,
+    app.add_option("--levels", level_list, "resolution levels (below the reference's)")
+        ->delimiter(',')
+        ->capture_default_str();
+    app.add_option("--newton", newton_list, "Newton iterations per step")
+        ->delimiter(',')
+        ->capture_default_str();
+    app.add_option("--pcg-caps", cap_list,
                    "PCG iteration caps; 0 solves each Newton system with SimplicialLDLT instead")
+        ->delimiter(',')
         ->capture_default_str();
-    app.add_option("--dt-ms", steps_ms, "time steps, multiples of 5 ms")->capture_default_str();
+    app.add_option("--dt-ms", dt_list, "time steps, multiples of 5 ms")
+        ->delimiter(',')
+        ->capture_default_str();
     CLI11_PARSE(app, argc, argv);
     haptic::bench::printProvenance(argc, argv);
 
-    std::vector<int> level_list;
-    std::vector<int> newton_list;
-    std::vector<int> cap_list;
-    std::vector<int> dt_list;
-    try {
-        level_list = parseList(levels);
-        newton_list = parseList(newtons);
-        cap_list = parseList(caps);
-        dt_list = parseList(steps_ms);
-    } catch (const std::exception&) {
-        std::fprintf(stderr, "softhand_tradeoff: lists are comma-separated whole numbers\n");
-        return 2;
-    }
     for (const int dt : dt_list) {
         if (dt <= 0 || dt % 5 != 0 || kCycleSteps % (dt / 5) != 0) {
             std::fprintf(stderr, "softhand_tradeoff: --dt-ms %d is not a divisor of 1 s in 5 ms\n",
@@ -276,7 +258,7 @@ int main(int argc, char** argv) {
         }
     };
     const auto wanted = [&](const std::string& scene) {
-        return ("," + scenes + ",").find("," + scene + ",") != std::string::npos;
+        return std::find(scenes.begin(), scenes.end(), scene) != scenes.end();
     };
     if (wanted("press")) {
         sweep("press", runRow<FingertipPress>, referenceTrace<FingertipPress>(kPressReference));
