@@ -210,6 +210,26 @@ ExoskeletonRenderingConfig readExoRendering(MapReader map) {
                      Real::closed(0.0, 1000.0));
     out.passivity_port_mass_kg = map.optional(
         "passivity_port_mass_kg", defaults.passivity_port_mass_kg, Real::positive(100.0));
+    if (std::optional<MapReader> estimate = map.optionalMap("user_stiffness_estimate")) {
+        UserStiffnessEstimateConfig& out_estimate = out.user_stiffness_estimate;
+        out_estimate.enabled = estimate->required("enabled", spec::Boolean{});
+        out_estimate.probe_amplitude_m = estimate->optional(
+            "probe_amplitude_m", out_estimate.probe_amplitude_m, Real::closed(1e-6, 1e-3));
+        // A tenth of the slowest loop rate (100 Hz) at most; at least a period per second of
+        // the estimator's memory is needed, so 1 Hz and up.
+        out_estimate.probe_frequency_hz = estimate->optional(
+            "probe_frequency_hz", out_estimate.probe_frequency_hz, Real::closed(1.0, 10.0));
+        if (std::optional<Field> probe_time = estimate->take("probe_time_s")) {
+            out_estimate.probe_time_s = Real::closed(0.0, 60.0).parse(*probe_time);
+            // The estimator's window is two periods of the lower tone.
+            if (out_estimate.probe_time_s > 0.0 &&
+                out_estimate.probe_time_s * out_estimate.probe_frequency_hz < 2.0) {
+                probe_time->fail("0 or at least two periods of probe_frequency_hz (" +
+                                 formatNumber(2.0 / out_estimate.probe_frequency_hz) + " s)");
+            }
+        }
+        estimate->finish();
+    }
     map.finish();
     return out;
 }

@@ -320,6 +320,23 @@ TEST(ConfigOutOfRange, NegativeActuatorDamping) {
                  "rendering.actuator_damping_n_s_per_m", "expected a number in [0, 1000], got -5"});
 }
 
+// The estimate's probe must stay well below the loop rate and within its window.
+TEST(ConfigOutOfRange, UserStiffnessProbeTooFast) {
+    const auto file = kDataDir / "devices/probe_too_fast.yaml";
+    expectError(deviceError("probe_too_fast.yaml"),
+                {file.string(), lineOf(file, "probe_frequency_hz"), 25,
+                 "rendering.user_stiffness_estimate.probe_frequency_hz",
+                 "expected a number in [1, 10], got 40"});
+}
+
+TEST(ConfigOutOfRange, UserStiffnessProbeTooShortForItsWindow) {
+    const auto file = kDataDir / "devices/probe_too_short.yaml";
+    expectError(deviceError("probe_too_short.yaml"),
+                {file.string(), lineOf(file, "probe_time_s"), 19,
+                 "rendering.user_stiffness_estimate.probe_time_s",
+                 "expected 0 or at least two periods of probe_frequency_hz (0.5 s), got 0.2"});
+}
+
 // The bit rate is the interface's: the key is refused with where to set it instead.
 TEST(ConfigOutOfRange, BitrateIsNotAHapticdSetting) {
     const auto file = kDataDir / "devices/bad_bitrate.yaml";
@@ -639,9 +656,14 @@ TEST(ConfigCoupling, KeysReplaceTheDefaults) {
     EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_nm_per_rad, 0.9);
     EXPECT_DOUBLE_EQ(exo.rendering.actuator_damping_n_s_per_m, 12.5);
     EXPECT_DOUBLE_EQ(exo.rendering.passivity_port_mass_kg, 0.25);
+    EXPECT_TRUE(exo.rendering.user_stiffness_estimate.enabled);
+    EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_estimate.probe_amplitude_m, 30e-6);
+    EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_estimate.probe_frequency_hz, 4.0);
+    EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_estimate.probe_time_s, 0.0);
     const auto defaults = loadDeviceConfig(kDataDir / "devices/exo_ok.yaml").exoskeleton();
     EXPECT_DOUBLE_EQ(defaults.rendering.tracking_stiffness_nm_per_rad, 2.0);
     EXPECT_DOUBLE_EQ(defaults.rendering.passivity_port_mass_kg, 0.1);
+    EXPECT_FALSE(defaults.rendering.user_stiffness_estimate.enabled);
 }
 
 }  // namespace

@@ -152,6 +152,11 @@ TEST(ShippedConfig, Exoskeleton) {
     EXPECT_DOUBLE_EQ(exo.actuator.damping_n_s_per_m, 10.0);
     EXPECT_DOUBLE_EQ(exo.actuator.force_tolerance_n, 1.0);
     EXPECT_DOUBLE_EQ(exo.rendering.passivity_port_mass_kg, 0.1);
+    // Off while the shipped method does not use rho (config/devices/exoskeleton.yaml says why).
+    EXPECT_FALSE(exo.rendering.user_stiffness_estimate.enabled);
+    EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_estimate.probe_amplitude_m, 25e-6);
+    EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_estimate.probe_frequency_hz, 5.0);
+    EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_estimate.probe_time_s, 1.5);
     EXPECT_THROW((void)cfg.thimble(), std::bad_variant_access);
 }
 

@@ -7,13 +7,18 @@
 #include <string>
 
 #include "allocation_counter.hpp"
+#include "haptic/runtime/exoskeleton_channel.hpp"
 #include "runtime_rig.hpp"
 
 namespace haptic::testing {
 namespace {
 
 TEST(RuntimeAllocation, TenThousandTicksOfBothDevicesAllocateNothing) {
-    RuntimeRig rig;
+    // With every optional stage of the tick on: the user-stiffness estimate too.
+    RuntimeRig rig([](std::vector<config::DeviceConfig>& devices) {
+        std::get<config::ExoskeletonConfig>(devices[kExo].params)
+            .rendering.user_stiffness_estimate.enabled = true;
+    });
     rig.attachEstopRelay();  // its frames, supervision and a press are on the path too
     rig.offerContact();
     rig.ticks(20);
@@ -57,6 +62,9 @@ TEST(RuntimeAllocation, TenThousandTicksOfBothDevicesAllocateNothing) {
     EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U) << "and been cleared";
     EXPECT_GT(peak_force, 1.0) << "the loop must have rendered force, not idled";
     EXPECT_GT(rig.core.deviceReport(kExo).can.rx_frames, 10'000U);
+    const auto& exo = static_cast<runtime::ExoskeletonChannel&>(rig.runtime.channel(kExo));
+    ASSERT_NE(exo.userStiffnessEstimator(), nullptr);
+    EXPECT_GT(exo.userStiffnessEstimator()->contactTime(), 0.5) << "the estimator ran";
 }
 
 }  // namespace

@@ -120,6 +120,14 @@ bool KinestheticRenderer::setTrackingStiffness(double k_a) noexcept {
     return true;
 }
 
+bool KinestheticRenderer::setUserStiffness(double k_u) noexcept {
+    if (!(k_u > 0.0) || !std::isfinite(k_u)) {
+        return false;
+    }
+    parameters_.user_stiffness = k_u;
+    return true;
+}
+
 void KinestheticRenderer::setMethod(RenderingMethod method) noexcept {
     parameters_.method = method;
     reset();

@@ -57,6 +57,19 @@ ExoskeletonChannel::ExoskeletonChannel(const config::DeviceConfig& device, can::
       lag_time_constant_s_(device.exoskeleton().actuator.lag_time_constant_s),
       force_tolerance_n_(device.exoskeleton().actuator.force_tolerance_n),
       actuator_(device.exoskeleton().actuator) {
+    const auto& estimate = device.exoskeleton().rendering.user_stiffness_estimate;
+    if (estimate.enabled) {
+        kinesthetic::UserStiffnessEstimatorConfig config;
+        config.period_s = settings.period_s;
+        config.probe_frequency_hz = estimate.probe_frequency_hz;
+        config.probe_time_s = estimate.probe_time_s;
+        // A user is not 20 times softer or stiffer than the prior a lab configured.
+        const double prior = device.exoskeleton().rendering.user_stiffness_nm_per_rad;
+        config.min_stiffness = prior / 20.0;
+        config.max_stiffness = prior * 20.0;
+        estimator_.emplace(config);
+        probe_amplitude_m_ = estimate.probe_amplitude_m;
+    }
     applied_method_.assign(config::toString(device.exoskeleton().rendering.method));
     report_.kind = msgs::DeviceKind::kExoskeleton;
 }
@@ -185,9 +198,13 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
             const auto used = set->constraints.used();
             constraints = used.first(std::min(used.size(), max_constraints_));
         }
+        const double user_stiffness = estimateUserStiffness(state.actuator.force_n);
         // Between the sim's frames, a contact that moves is approached, not stepped to.
-        renderAndCreditEnvironment(blend_.update(constraints));
+        renderAndCreditEnvironment(blend_.update(constraints), user_stiffness);
         desired_n = out_.actuator_force.size() > 0 ? out_.actuator_force[0] : 0.0;
+        if (estimator_) {
+            desired_n += probeForce();
+        }
         std::uint8_t limits = kinesthetic::kPortOk;
         if (renderer_.parameters().tracking_stiffness < tracking_stiffness_) {
             limits |= kinesthetic::kPortStiffnessLimited;
@@ -245,8 +262,48 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     reportFeltAgainstReference(set, state.actuator.force_n);
 }
 
+double ExoskeletonChannel::probeForce() noexcept {
+    // The probe is a known source, outside the rendering: the work its force did over the last
+    // tick is credited to the passivity budget, so that the controller judges the rendering
+    // alone (the probe's sine would otherwise spend the budget the wall needs, and the wall
+    // would go soft). What the probe gave the finger is kept in probe_energy_j_.
+    const double probe_work_j = probe_force_n_ * (stroke_m_ - probe_stroke_m_);
+    if (probe_force_n_ != 0.0 && std::isfinite(probe_work_j)) {
+        guard_.passivity().creditEnvironmentWork(probe_work_j);
+        probe_energy_j_ += probe_work_j;
+    }
+    probe_stroke_m_ = stroke_m_;
+    // The proxy moved by the probe: its force through the coupling along the actuator. Both
+    // tones together stay within kMaxProbeShare of the rendered force, so that the probe never
+    // reverses the contact force (the wall would pull the finger in) and grows in with it at
+    // contact onset.
+    const double rendered_n = out_.actuator_force.size() > 0 ? out_.actuator_force[0] : 0.0;
+    const double full_n = actuatorStiffness() * probe_amplitude_m_;
+    const double scale =
+        full_n > 0.0 ? std::min(1.0, kMaxProbeShare * std::abs(rendered_n) / (2.0 * full_n)) : 0.0;
+    probe_force_n_ = out_.in_contact ? scale * full_n * estimator_->probe() : 0.0;
+    return probe_force_n_;
+}
+
+double ExoskeletonChannel::estimateUserStiffness(double felt_force_n) noexcept {
+    const double current = renderer_.parameters().user_stiffness;
+    if (!estimator_) {
+        return current;
+    }
+    model_.actuatorCoordinates(q_, ell_);
+    // The contact of the last render: the probe was in the force this state answers.
+    estimator_->update(out_.in_contact, felt_force_n, ell_[0],
+                       felt_actuation_.col(0).squaredNorm());
+    if (!estimator_->valid()) {
+        return current;
+    }
+    const double max_ratio = std::exp(kMaxUserStiffnessRate * settings_.period_s);
+    return std::clamp(estimator_->stiffness(), current / max_ratio, current * max_ratio);
+}
+
 void ExoskeletonChannel::renderAndCreditEnvironment(
-    std::span<const msgs::LinearConstraint> constraints) noexcept {
+    std::span<const msgs::LinearConstraint> constraints, double user_stiffness) noexcept {
+    const bool stiffness_changes = user_stiffness != renderer_.parameters().user_stiffness;
     const bool moved =
         constraints.size() != rendered_constraints_.size() ||
         !std::equal(constraints.begin(), constraints.end(), rendered_constraints_.begin());
@@ -267,15 +324,18 @@ void ExoskeletonChannel::renderAndCreditEnvironment(
     };
     // No constraints: no spring force. A render that failed gives NaN, and no credit.
     double force_before_n = 0.0;
-    if (moved && !rendered_constraints_.empty()) {
+    if ((moved || stiffness_changes) && !rendered_constraints_.empty()) {
         renderer_.tick(q_, q_dot_, rendered_constraints_.used(), previous_environment_out_);
         force_before_n = spring_force(previous_environment_out_);
+    }
+    if (stiffness_changes) {
+        (void)renderer_.setUserStiffness(user_stiffness);
     }
     renderer_.tick(q_, q_dot_, constraints, out_);
     if (credit_stored_energy_) {
         guard_.creditStoredEnergy(spring_force(out_), stiffness);
         credit_stored_energy_ = false;
-    } else if (moved) {
+    } else if (moved || stiffness_changes) {
         guard_.creditEnvironmentMotion(force_before_n, spring_force(out_), stiffness);
     }
     if (!moved) {

@@ -136,7 +136,24 @@ struct LinkageConfig {
     Vec2 distal_coupling_m_per_rad{};
 };
 
-// YAML: rendering: {method, max_constraints}
+// YAML: rendering.user_stiffness_estimate: {enabled, probe_amplitude_m, probe_frequency_hz,
+// probe_time_s}.
+// The online estimate of k_u (docs/kinesthetic.md, "User stiffness"): while in contact the
+// proxy is moved along the actuator by two sines of probe_amplitude_m each, at
+// probe_frequency_hz and twice it, for the first probe_time_s of each contact (0: all of it);
+// the finger's answer gives k_u (kinesthetic::
+// UserStiffnessEstimator), and anisotropic's closed-form rho* follows it (rate-limited, and
+// booked with the passivity controller like a moving wall, as is the probe itself). The user
+// feels the probe as a ripple of k_u / |B|^2 times the finger's excursion: 0.2-0.5 N per tone
+// at the shipped values on config/user.yaml's finger (docs/kinesthetic.md).
+struct UserStiffnessEstimateConfig {
+    bool enabled{false};
+    double probe_amplitude_m{25e-6};
+    double probe_frequency_hz{5.0};
+    double probe_time_s{1.5};
+};
+
+// YAML: rendering: {method, max_constraints, ...}
 struct ExoskeletonRenderingConfig {
     RenderingMethod method{RenderingMethod::kLinearizedSubspace};
     int max_constraints{8};  // linearised constraints used per tick (<= msgs kMaxConstraints)
@@ -149,6 +166,7 @@ struct ExoskeletonRenderingConfig {
     // A lower bound on the mass the actuator moves with a finger in the device (reflected to
     // the stroke): the passivity controller's worst case for how far its force carries it.
     double passivity_port_mass_kg{0.1};
+    UserStiffnessEstimateConfig user_stiffness_estimate;
 };
 
 struct ExoskeletonConfig {

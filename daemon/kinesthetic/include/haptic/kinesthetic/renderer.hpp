@@ -93,6 +93,9 @@ class KinestheticRenderer {
     // RT: k_a for the next ticks (a device's stiffness clamp lowers it as its linkage
     // stiffens); false, and nothing changes, unless finite and > 0.
     bool setTrackingStiffness(double k_a) noexcept;
+    // RT: k_u for the next ticks (the online estimate, UserStiffnessEstimator); false, and
+    // nothing changes, unless finite and > 0.
+    bool setUserStiffness(double k_u) noexcept;
 
     void tick(const ConfigVector& q, const ConfigVector& q_dot, const ConstraintMatrix& C,
               const ConstraintVector& d, RenderOutput& out) noexcept;

@@ -15,18 +15,31 @@
 // min(safety.max_force_n, actuator.max_force_n), safety.max_force_rate_n_per_s and
 // safety.fade_out_ms.
 //
+// With rendering.user_stiffness_estimate enabled, the proxy is moved by the probe (a sine of
+// probe_amplitude_m along the actuator, added as k_a / |B|^2 times it to the force) while in
+// contact, and kinesthetic::UserStiffnessEstimator reads k_u off the finger's answer. The
+// renderer's k_u follows the estimate at most by a factor e^(kMaxUserStiffnessRate dt) per
+// tick, and each change is booked with the passivity controller like a moved wall: the spring
+// force at the same q under the old k_u and the new. The probe itself is a known source
+// outside the rendering: its work is credited to the passivity budget tick by tick (so the
+// controller judges the rendering alone) and summed in probeEnergy(); it is bounded by the
+// probe's amplitude and probe_time_s. Its peak is at most kMaxProbeShare of the rendered
+// force, so it never reverses the contact force and grows in with it at contact onset.
+//
 // A method switch (allowed while RENDERING) is bumpless: for kMethodTransitionTicks after it,
 // the new strategy's force may move from the force last sent by at most the rate limit per
 // tick in either direction. (Otherwise the guard lets a force drop to zero at once, the safe
 // direction; a switch must not make the finger feel a step either way.)
 
 #include <cstdint>
+#include <optional>
 
 #include "haptic/devices/exoskeleton_driver.hpp"
 #include "haptic/kinesthetic/constraint_blend.hpp"
 #include "haptic/kinesthetic/device_model.hpp"
 #include "haptic/kinesthetic/port_safety.hpp"
 #include "haptic/kinesthetic/renderer.hpp"
+#include "haptic/kinesthetic/user_stiffness_estimator.hpp"
 #include "haptic/runtime/device_channel.hpp"
 
 namespace haptic::runtime {
@@ -59,6 +72,18 @@ class ExoskeletonChannel final
     // (N/m), and the rod velocity B^T q_dot the velocity limit judged (m/s).
     [[nodiscard]] double actuatorStiffness() const noexcept { return actuator_stiffness_; }
     [[nodiscard]] double rodVelocity() const noexcept { return rod_velocity_; }
+    // The online estimate of k_u; nullptr unless rendering.user_stiffness_estimate is enabled.
+    [[nodiscard]] const kinesthetic::UserStiffnessEstimator* userStiffnessEstimator()
+        const noexcept {
+        return estimator_ ? &*estimator_ : nullptr;
+    }
+    // Work the probe's force has done on the finger since start (J): energy the passivity
+    // controller was told not to count against the rendering.
+    [[nodiscard]] double probeEnergy() const noexcept { return probe_energy_j_; }
+    // The k_u the renderer uses (the configured one until an estimate is valid).
+    [[nodiscard]] double userStiffness() const noexcept {
+        return renderer_.parameters().user_stiffness;
+    }
 
   protected:
     [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
@@ -76,10 +101,19 @@ class ExoskeletonChannel final
     }
 
     static constexpr int kMethodTransitionTicks = 200;
+    // |d ln k_u / dt| of the renderer's k_u as it follows the estimate (1/s): rho* moves by at
+    // most a factor 2 in 0.35 s.
+    static constexpr double kMaxUserStiffnessRate = 2.0;
+    // The probe's peak (both tones) as a share of the rendered force at most.
+    static constexpr double kMaxProbeShare = 0.5;
 
   private:
     void followMethod(const msgs::DeviceId& method) noexcept;
     void measure() noexcept;
+    // The estimator's tick and the k_u the renderer is to use next (rate-limited).
+    [[nodiscard]] double estimateUserStiffness(double felt_force_n) noexcept;
+    // The probe's force for this tick; books the last tick's probe work (see the .cpp).
+    [[nodiscard]] double probeForce() noexcept;
     // Telemetry's yardstick: the sim's fully actuated reference torque, and the felt torque
     // B(q) F of the force the actuator reports, split into its part along the reference and
     // the rest, the ghost torque (docs/hapticd.md, "Reference and ghost torque").
@@ -89,7 +123,9 @@ class ExoskeletonChannel final
     // coupling (ActuatorPortGuard::creditEnvironmentMotion): the spring force under the old
     // constraints and under the new, both at this q, so the port's own motion is not counted
     // twice. The first render of a passivity interval credits what the spring holds.
-    void renderAndCreditEnvironment(std::span<const msgs::LinearConstraint> constraints) noexcept;
+    // A change of k_u (user_stiffness) is credited the same way.
+    void renderAndCreditEnvironment(std::span<const msgs::LinearConstraint> constraints,
+                                    double user_stiffness) noexcept;
 
     kinesthetic::ExoskeletonDevice model_;  // before renderer_, which keeps a reference
     kinesthetic::KinestheticRenderer renderer_;
@@ -116,6 +152,12 @@ class ExoskeletonChannel final
     double max_velocity_m_per_s_;
     double actuator_stiffness_{0.0};
     double rod_velocity_{0.0};
+    std::optional<kinesthetic::UserStiffnessEstimator> estimator_;
+    double probe_amplitude_m_{0.0};
+    double probe_force_n_{0.0};        // the probe's part of the last force
+    double probe_stroke_m_{0.0};       // the stroke that force was applied from
+    double probe_energy_j_{0.0};       // what the probe's force gave the finger, in all
+    kinesthetic::ActuatorVector ell_;  // sigma(q), scratch
     std::int64_t enable_mismatch_since_ns_{-1};
     // The commanded force through the actuator's first-order lag: what the device should
     // measure. Compared with what it does (actuator.force_tolerance_n + 20 %).
