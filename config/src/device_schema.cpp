@@ -194,7 +194,7 @@ LinkageConfig readLinkage(MapReader map) {
     return out;
 }
 
-ExoskeletonRenderingConfig readExoRendering(MapReader map) {
+ExoskeletonRenderingConfig readExoRendering(MapReader map, std::optional<int> control_rate_hz) {
     ExoskeletonRenderingConfig out;
     out.method = map.required("method", spec::Enum<RenderingMethod>{});
     out.max_constraints =
@@ -213,18 +213,25 @@ ExoskeletonRenderingConfig readExoRendering(MapReader map) {
     if (std::optional<MapReader> estimate = map.optionalMap("user_stiffness_estimate")) {
         UserStiffnessEstimateConfig& out_estimate = out.user_stiffness_estimate;
         out_estimate.enabled = estimate->required("enabled", spec::Boolean{});
+        // Below 10 um the finger's answer sinks into the encoders' resolution (about 1 um
+        // along the actuator) and no estimate would ever come.
         out_estimate.probe_amplitude_m = estimate->optional(
-            "probe_amplitude_m", out_estimate.probe_amplitude_m, Real::closed(1e-6, 1e-3));
-        // A tenth of the slowest loop rate (100 Hz) at most; at least a period per second of
-        // the estimator's memory is needed, so 1 Hz and up.
-        out_estimate.probe_frequency_hz = estimate->optional(
-            "probe_frequency_hz", out_estimate.probe_frequency_hz, Real::closed(1.0, 10.0));
+            "probe_amplitude_m", out_estimate.probe_amplitude_m, Real::closed(10e-6, 1e-3));
+        if (std::optional<Field> frequency = estimate->take("probe_frequency_hz")) {
+            out_estimate.probe_frequency_hz = Real::closed(1.0, 10.0).parse(*frequency);
+            // The upper tone (twice this) at most a twentieth of the loop rate: the estimator's
+            // phase steps stay fine enough to read both tones.
+            if (control_rate_hz &&
+                2.0 * out_estimate.probe_frequency_hz > *control_rate_hz / 20.0) {
+                frequency->fail("at most loop.rate_hz / 40 (" +
+                                formatNumber(*control_rate_hz / 40.0) + ")");
+            }
+        }
         if (std::optional<Field> probe_time = estimate->take("probe_time_s")) {
-            out_estimate.probe_time_s = Real::closed(0.0, 60.0).parse(*probe_time);
+            out_estimate.probe_time_s = Real::closed(0.1, 60.0).parse(*probe_time);
             // The estimator's window is two periods of the lower tone.
-            if (out_estimate.probe_time_s > 0.0 &&
-                out_estimate.probe_time_s * out_estimate.probe_frequency_hz < 2.0) {
-                probe_time->fail("0 or at least two periods of probe_frequency_hz (" +
+            if (out_estimate.probe_time_s * out_estimate.probe_frequency_hz < 2.0) {
+                probe_time->fail("at least two periods of probe_frequency_hz (" +
                                  formatNumber(2.0 / out_estimate.probe_frequency_hz) + " s)");
             }
         }
@@ -240,7 +247,7 @@ ExoskeletonConfig readExoskeleton(MapReader& root, const Safety& safety,
     out.actuator = readActuator(root.requiredMap("actuator"));
     out.finger = readFinger(root.requiredMap("finger"));
     out.linkage = readLinkage(root.requiredMap("linkage"));
-    out.rendering = readExoRendering(root.requiredMap("rendering"));
+    out.rendering = readExoRendering(root.requiredMap("rendering"), control_rate_hz);
     // The safety limit is a promise the actuator must be able to keep.
     if (safety.limits.max_force_n > out.actuator.max_force_n) {
         safety.max_force_field->fail("a number no greater than actuator.max_force_n (" +

@@ -329,12 +329,22 @@ TEST(ConfigOutOfRange, UserStiffnessProbeTooFast) {
                  "expected a number in [1, 10], got 40"});
 }
 
+// The daemon's loop rate bounds the probe: its upper tone at most a twentieth of it.
+TEST(ConfigOutOfRange, UserStiffnessProbeTooFastForTheLoopRate) {
+    const auto device = kDataDir / "devices/exo_probe_5hz.yaml";
+    expectError(daemonError("probe_at_low_rate.yaml"),
+                {device.string(), lineOf(device, "probe_frequency_hz"), 25,
+                 "rendering.user_stiffness_estimate.probe_frequency_hz",
+                 "expected at most loop.rate_hz / 40 (3.75), got 5"});
+    EXPECT_NO_THROW((void)loadDeviceConfig(device)) << "alone, no loop rate to judge it by";
+}
+
 TEST(ConfigOutOfRange, UserStiffnessProbeTooShortForItsWindow) {
     const auto file = kDataDir / "devices/probe_too_short.yaml";
     expectError(deviceError("probe_too_short.yaml"),
                 {file.string(), lineOf(file, "probe_time_s"), 19,
                  "rendering.user_stiffness_estimate.probe_time_s",
-                 "expected 0 or at least two periods of probe_frequency_hz (0.5 s), got 0.2"});
+                 "expected at least two periods of probe_frequency_hz (0.5 s), got 0.2"});
 }
 
 // The bit rate is the interface's: the key is refused with where to set it instead.
@@ -659,7 +669,7 @@ TEST(ConfigCoupling, KeysReplaceTheDefaults) {
     EXPECT_TRUE(exo.rendering.user_stiffness_estimate.enabled);
     EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_estimate.probe_amplitude_m, 30e-6);
     EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_estimate.probe_frequency_hz, 4.0);
-    EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_estimate.probe_time_s, 0.0);
+    EXPECT_DOUBLE_EQ(exo.rendering.user_stiffness_estimate.probe_time_s, 3.0);
     const auto defaults = loadDeviceConfig(kDataDir / "devices/exo_ok.yaml").exoskeleton();
     EXPECT_DOUBLE_EQ(defaults.rendering.tracking_stiffness_nm_per_rad, 2.0);
     EXPECT_DOUBLE_EQ(defaults.rendering.passivity_port_mass_kg, 0.1);

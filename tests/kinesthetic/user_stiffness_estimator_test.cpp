@@ -101,14 +101,54 @@ TEST(UserStiffnessEstimator, ProbesOnlyInContactAndRestartsWhenItEnds) {
     ASSERT_TRUE(r.valid);
     EXPECT_GT(r.largest_probe, 1.0) << "two tones of unit amplitude";
     EXPECT_LE(r.largest_probe, 2.0);
-    estimator.update(false, 0.0, 0.0, kGram);
-    EXPECT_EQ(estimator.probe(), 0.0);
+    // Lost for longer than the debounce: the probe ends, the estimate stays.
+    for (int i = 0; i < 60; ++i) {
+        estimator.update(false, 0.0, 0.0, kGram);
+        EXPECT_EQ(estimator.probe(), 0.0);
+    }
     EXPECT_FALSE(estimator.valid());
+    EXPECT_FALSE(estimator.probing());
     EXPECT_DOUBLE_EQ(estimator.stiffness(), r.stiffness) << "the last estimate is kept";
-    // A new contact needs a full window again before it reports.
+    // The cooldown: a new contact within a second of the last probe is not probed.
+    for (int i = 0; i < 900; ++i) {
+        estimator.update(true, 1.0, 0.0, kGram);
+        ASSERT_FALSE(estimator.probing()) << i;
+    }
+    for (int i = 0; i < 100; ++i) {
+        estimator.update(true, 1.0, 0.0, kGram);
+    }
+    EXPECT_TRUE(estimator.probing()) << "probed again after the cooldown";
+    EXPECT_FALSE(estimator.valid()) << "a new probe needs a full window again";
+}
+
+TEST(UserStiffnessEstimator, ABriefLossOfContactPausesTheProbe) {
+    UserStiffnessEstimator estimator(shippedLike());
+    const PressResult r = press(estimator, Finger{}, 0.8);
+    ASSERT_TRUE(r.valid);
+    for (int i = 0; i < 30; ++i) {  // 30 ms, within the 50 ms debounce
+        estimator.update(false, 0.0, 0.0, kGram);
+        EXPECT_EQ(estimator.probe(), 0.0) << "paused";
+    }
+    EXPECT_TRUE(estimator.valid());
     estimator.update(true, 0.0, 0.0, kGram);
-    EXPECT_FALSE(estimator.valid());
-    EXPECT_EQ(estimator.contactTime(), kDt);
+    EXPECT_TRUE(estimator.probing()) << "and resumed";
+}
+
+TEST(UserStiffnessEstimator, TheProbeEndsOnWholePeriodsAndTheEstimateHolds) {
+    UserStiffnessEstimatorConfig config = shippedLike();
+    config.probe_time_s = 1.45;  // rounded up to 1.6 s: 8 periods of 5 Hz
+    UserStiffnessEstimator estimator(config);
+    const PressResult r = press(estimator, Finger{}, 1.6 + 1e-4);
+    ASSERT_TRUE(r.valid);
+    EXPECT_FALSE(estimator.probing());
+    EXPECT_EQ(estimator.probe(), 0.0);
+    UserStiffnessEstimator longer(config);
+    (void)press(longer, Finger{}, 1.599);
+    EXPECT_TRUE(longer.probing());
+    EXPECT_LT(std::abs(longer.probe()), 0.13) << "the tones end near a common zero";
+    const PressResult held = press(estimator, Finger{}, 0.5);  // more contact, no probe
+    EXPECT_EQ(held.largest_probe, 0.0);
+    EXPECT_DOUBLE_EQ(held.stiffness, r.stiffness);
 }
 
 TEST(UserStiffnessEstimator, NonFiniteInputEndsTheContact) {
@@ -118,7 +158,7 @@ TEST(UserStiffnessEstimator, NonFiniteInputEndsTheContact) {
     estimator.update(true, nan, 0.0, kGram);
     EXPECT_FALSE(estimator.valid());
     EXPECT_EQ(estimator.probe(), 0.0);
-    ASSERT_TRUE(press(estimator, Finger{}, 1.0).valid);
+    ASSERT_TRUE(press(estimator, Finger{}, 2.0).valid) << "after the 1 s cooldown";
     estimator.update(true, 1.0, 0.0, std::numeric_limits<double>::infinity());
     EXPECT_FALSE(estimator.valid());
 }
@@ -134,13 +174,16 @@ TEST(UserStiffnessEstimator, TheEstimateIsBounded) {
 }
 
 TEST(UserStiffnessEstimator, NoProbeResponseNoEstimate) {
-    // A finger that does not move (at a joint stop): nothing above the quantiser to read.
+    // A finger that does not answer the probe (at a joint stop) but moves with the user's
+    // intent, 100 um at 1 Hz: nothing at the probe's tones above the threshold.
     UserStiffnessEstimator estimator(shippedLike());
     for (int i = 0; i < 2000; ++i) {
-        estimator.update(true, 2.0 + 0.1 * estimator.probe(), 0.0, kGram);
+        const double intent_m = 1e-4 * std::sin(2.0 * std::numbers::pi * i * kDt);
+        estimator.update(true, 2.0 + 0.1 * estimator.probe() + 9000.0 * intent_m, intent_m, kGram);
     }
     EXPECT_FALSE(estimator.valid());
     EXPECT_LT(estimator.responseAmplitude(), shippedLike().min_response_m);
+    EXPECT_GT(estimator.responseAmplitude(), 0.0);
 }
 
 TEST(UserStiffnessEstimator, RefusesABadConfigurationNamingTheField) {
@@ -161,6 +204,12 @@ TEST(UserStiffnessEstimator, RefusesABadConfigurationNamingTheField) {
     EXPECT_NE(reason([](auto& c) { c.max_stiffness = c.min_stiffness; }).find("max_stiffness"),
               std::string::npos);
     EXPECT_NE(reason([](auto& c) { c.period_s = 0.0; }).find("period_s"), std::string::npos);
+    EXPECT_NE(reason([](auto& c) { c.probe_time_s = 0.2; }).find("probe_time_s"),
+              std::string::npos);
+    EXPECT_NE(reason([](auto& c) { c.min_response_m = 0.0; }).find("min_response_m"),
+              std::string::npos);
+    EXPECT_NE(reason([](auto& c) { c.probe_cooldown_s = -1.0; }).find("probe_cooldown_s"),
+              std::string::npos);
     EXPECT_EQ(reason([](auto&) {}), "accepted");
 }
 

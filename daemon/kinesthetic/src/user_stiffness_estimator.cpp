@@ -46,6 +46,8 @@ void UserStiffnessEstimator::Tone::advance() noexcept {
 
 UserStiffnessEstimator::UserStiffnessEstimator(const UserStiffnessEstimatorConfig& config)
     : config_(config),
+      probe_ticks_(std::lround(std::ceil(config.probe_time_s * config.probe_frequency_hz - 1e-9) /
+                               (config.probe_frequency_hz * config.period_s))),
       stiffness_(std::numeric_limits<double>::quiet_NaN()),
       actuator_stiffness_(std::numeric_limits<double>::quiet_NaN()),
       actuator_damping_(std::numeric_limits<double>::quiet_NaN()),
@@ -56,10 +58,13 @@ UserStiffnessEstimator::UserStiffnessEstimator(const UserStiffnessEstimatorConfi
             "probe_frequency_hz", "must be > 0 and twice it at most a twentieth of the loop rate");
     require(config.window_periods >= 1.0 && config.window_periods <= 10.0, "window_periods",
             "must be in [1, 10]");
-    require(config.probe_time_s == 0.0 ||
-                (config.probe_time_s * config.probe_frequency_hz >= config.window_periods &&
-                 std::isfinite(config.probe_time_s)),
-            "probe_time_s", "must be 0 (the whole contact) or fill the window at least once");
+    require(config.probe_time_s * config.probe_frequency_hz >= config.window_periods &&
+                std::isfinite(config.probe_time_s),
+            "probe_time_s", "must fill the window at least once");
+    require(config.contact_debounce_s >= 0.0 && config.contact_debounce_s <= 1.0,
+            "contact_debounce_s", "must be in [0, 1]");
+    require(config.probe_cooldown_s >= 0.0 && std::isfinite(config.probe_cooldown_s),
+            "probe_cooldown_s", "must be >= 0");
     require(config.min_stiffness > 0.0 && config.max_stiffness > config.min_stiffness &&
                 std::isfinite(config.max_stiffness),
             "min_stiffness/max_stiffness", "must satisfy 0 < min < max < inf");
@@ -88,13 +93,18 @@ UserStiffnessEstimator::UserStiffnessEstimator(const UserStiffnessEstimatorConfi
 }
 
 void UserStiffnessEstimator::restart() noexcept {
+    if (probing_) {
+        cooldown_s_ = config_.probe_cooldown_s;
+    }
     probing_ = false;
     valid_ = false;
-    contact_s_ = 0.0;
+    paused_s_ = 0.0;
+    contact_ticks_ = 0;
     response_m_ = 0.0;
     next_ = 0;
     count_ = 0;
     sums_.fill(0.0);
+    shadow_.fill(0.0);
     for (Tone& tone : tones_) {
         tone.sin = 0.0;
         tone.cos = 1.0;
@@ -112,14 +122,29 @@ void UserStiffnessEstimator::startContact(double force_n, double ell_m) noexcept
 
 void UserStiffnessEstimator::update(bool in_contact, double force_n, double ell_m,
                                     double actuation_gram) noexcept {
-    if (!in_contact || !std::isfinite(force_n) || !std::isfinite(ell_m) ||
-        !(actuation_gram > 0.0) || !std::isfinite(actuation_gram)) {
+    const bool finite_input = std::isfinite(force_n) && std::isfinite(ell_m) &&
+                              actuation_gram > 0.0 && std::isfinite(actuation_gram);
+    if (!finite_input) {
+        restart();
+        return;
+    }
+    if (!in_contact) {
         if (probing_) {
-            restart();
+            paused_s_ += config_.period_s;
+            if (paused_s_ > config_.contact_debounce_s || probeTimeOver()) {
+                restart();
+            }
+        } else {
+            cooldown_s_ = std::max(0.0, cooldown_s_ - config_.period_s);
         }
         return;
     }
+    paused_s_ = 0.0;
     if (!probing_) {
+        if (cooldown_s_ > 0.0) {
+            cooldown_s_ = std::max(0.0, cooldown_s_ - config_.period_s);
+            return;
+        }
         startContact(force_n, ell_m);
     }
     if (probeTimeOver()) {
@@ -142,24 +167,21 @@ void UserStiffnessEstimator::update(bool in_contact, double force_n, double ell_
     const bool full = count_ == window_.size();
     for (std::size_t j = 0; j < products.size(); ++j) {
         sums_[j] += products[j] - (full ? slot[j] : 0.0);
+        shadow_[j] += products[j];
     }
     slot = products;
     next_ = next_ + 1 == window_.size() ? 0 : next_ + 1;
     count_ = full ? count_ : count_ + 1;
-    if (next_ == 0 && full) {
-        sums_.fill(0.0);
-        for (const Products& p : window_) {
-            for (std::size_t j = 0; j < sums_.size(); ++j) {
-                sums_[j] += p[j];
-            }
-        }
+    if (next_ == 0) {
+        sums_ = shadow_;  // exactly the window's products, freshly summed
+        shadow_.fill(0.0);
     }
-    contact_s_ += config_.period_s;
+    ++contact_ticks_;
     solve(actuation_gram);
 }
 
 void UserStiffnessEstimator::solve(double actuation_gram) noexcept {
-    valid_ = false;
+    // A solve that fails keeps this contact's last good estimate (and valid_).
     // A tone's cos and sin each average 1/2 over a period: an amplitude is twice the
     // correlation per sample.
     response_m_ = std::numeric_limits<double>::infinity();

@@ -69,6 +69,7 @@ ExoskeletonChannel::ExoskeletonChannel(const config::DeviceConfig& device, can::
         config.max_stiffness = prior * 20.0;
         estimator_.emplace(config);
         probe_amplitude_m_ = estimate.probe_amplitude_m;
+        user_stiffness_target_ = prior;
     }
     applied_method_.assign(config::toString(device.exoskeleton().rendering.method));
     report_.kind = msgs::DeviceKind::kExoskeleton;
@@ -151,6 +152,9 @@ void ExoskeletonChannel::followMethod(const msgs::DeviceId& method) noexcept {
     if (const auto parsed = config::enumFromString<config::RenderingMethod>(method.view())) {
         renderer_.setMethod(*parsed);
         applied_method_ = method;
+        if (estimator_) {
+            estimator_->restart();  // a probe serves the method that uses k_u only
+        }
         transition_ticks_left_ = kMethodTransitionTicks;
     }
 }
@@ -237,6 +241,18 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     port_flags_ = static_cast<std::uint8_t>(port.flags | channel_flags);
     command_.force_n = force_n;
     command_.enable = gain > 0.0;
+    if (estimator_) {
+        // The share of the probe the guard let through (rate limit, passivity, fades, gain).
+        probe_applied_n_ = desired_n != 0.0 && std::isfinite(force_n / desired_n)
+                               ? probe_force_n_ * std::clamp(force_n / desired_n, 0.0, 1.0)
+                               : 0.0;
+        // The estimate reads the finger only while the probe really reaches it: in contact,
+        // the port enabled at full gain, the probe at a quarter of its size or more, and only
+        // for the method that uses k_u.
+        probe_live_ = state_fresh && out_.in_contact && gain >= 1.0 && !heldSafe() &&
+                      probe_scale_ >= kMinProbeScale &&
+                      renderer_.parameters().method == config::RenderingMethod::kAnisotropic;
+    }
     // A disabled port is disconnected from the virtual environment and stores nothing: the
     // next enable starts a new passivity interval. Without this, energy the observer booked
     // against a force the device never applied (it went limp on its own command timeout, a
@@ -244,6 +260,7 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     if (!command_.enable && force_n == 0.0) {
         guard_.passivity().reset();
         credit_stored_energy_ = true;
+        probe_applied_n_ = 0.0;
     }
 
     fillLinkReport(core.state(), gain, now_ns);
@@ -264,11 +281,12 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
 
 double ExoskeletonChannel::probeForce() noexcept {
     // The probe is a known source, outside the rendering: the work its force did over the last
-    // tick is credited to the passivity budget, so that the controller judges the rendering
-    // alone (the probe's sine would otherwise spend the budget the wall needs, and the wall
-    // would go soft). What the probe gave the finger is kept in probe_energy_j_.
-    const double probe_work_j = probe_force_n_ * (stroke_m_ - probe_stroke_m_);
-    if (probe_force_n_ != 0.0 && std::isfinite(probe_work_j)) {
+    // tick (the part of it the port guard let through) is credited to the passivity budget, so
+    // that the controller judges the rendering alone (the probe's sine would otherwise spend
+    // the budget the wall needs, and the wall would go soft). What the probe gave the finger is
+    // kept in probe_energy_j_.
+    const double probe_work_j = probe_applied_n_ * (stroke_m_ - probe_stroke_m_);
+    if (probe_applied_n_ != 0.0 && std::isfinite(probe_work_j)) {
         guard_.passivity().creditEnvironmentWork(probe_work_j);
         probe_energy_j_ += probe_work_j;
     }
@@ -279,9 +297,10 @@ double ExoskeletonChannel::probeForce() noexcept {
     // contact onset.
     const double rendered_n = out_.actuator_force.size() > 0 ? out_.actuator_force[0] : 0.0;
     const double full_n = actuatorStiffness() * probe_amplitude_m_;
-    const double scale =
-        full_n > 0.0 ? std::min(1.0, kMaxProbeShare * std::abs(rendered_n) / (2.0 * full_n)) : 0.0;
-    probe_force_n_ = out_.in_contact ? scale * full_n * estimator_->probe() : 0.0;
+    probe_scale_ = full_n > 0.0 && std::isfinite(rendered_n)
+                       ? std::min(1.0, kMaxProbeShare * std::abs(rendered_n) / (2.0 * full_n))
+                       : 0.0;
+    probe_force_n_ = out_.in_contact ? probe_scale_ * full_n * estimator_->probe() : 0.0;
     return probe_force_n_;
 }
 
@@ -291,14 +310,21 @@ double ExoskeletonChannel::estimateUserStiffness(double felt_force_n) noexcept {
         return current;
     }
     model_.actuatorCoordinates(q_, ell_);
-    // The contact of the last render: the probe was in the force this state answers.
-    estimator_->update(out_.in_contact, felt_force_n, ell_[0],
-                       felt_actuation_.col(0).squaredNorm());
-    if (!estimator_->valid()) {
-        return current;
+    // Whether last tick's probe reached a finger in contact (probe_live_, set in compute()).
+    estimator_->update(probe_live_, felt_force_n, ell_[0], felt_actuation_.col(0).squaredNorm());
+    // The renderer keeps its k_u while the probe runs: a rendering that changed under it
+    // would move the force by more than the probe does and spoil the window. The estimate
+    // takes over when the probe ends (or the contact does, once an estimate was had).
+    if (estimator_->valid()) {
+        pending_user_stiffness_ = estimator_->stiffness();
     }
+    if (!estimator_->probing() && std::isfinite(pending_user_stiffness_)) {
+        user_stiffness_target_ = pending_user_stiffness_;
+        pending_user_stiffness_ = std::numeric_limits<double>::quiet_NaN();
+    }
+    // The renderer's k_u follows the last estimate, also once the contact has ended.
     const double max_ratio = std::exp(kMaxUserStiffnessRate * settings_.period_s);
-    return std::clamp(estimator_->stiffness(), current / max_ratio, current * max_ratio);
+    return std::clamp(user_stiffness_target_, current / max_ratio, current * max_ratio);
 }
 
 void ExoskeletonChannel::renderAndCreditEnvironment(

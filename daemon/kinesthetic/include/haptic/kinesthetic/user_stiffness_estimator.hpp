@@ -28,8 +28,7 @@
 // K_u = k_u I, the actuator sees k = k_u / |B|^2, so k_u = |B|^2 k. It is bounded to
 // [min_stiffness, max_stiffness] and only reported once the window is full and the response
 // at both tones is above min_response_m. Contract: the constructor allocates the window;
-// update() is noexcept, allocation-free, lock-free and O(1) amortised (the sums are rebuilt
-// from the window once per window, so that rounding cannot accumulate).
+// update() is noexcept, allocation-free, lock-free and O(1).
 
 #include <array>
 #include <cstddef>
@@ -41,9 +40,15 @@ struct UserStiffnessEstimatorConfig {
     double period_s{0.001};
     double probe_frequency_hz{5.0};
     double window_periods{2.0};  // the window, in periods of probe_frequency_hz (rounded)
-    // How long each contact is probed; the estimate then holds until the next contact.
-    // 0: the whole contact.
+    // How long each contact is probed, rounded up to whole periods of the lower tone (both
+    // tones then end at a zero: no step); the estimate then holds until the next contact.
     double probe_time_s{1.5};
+    // Contact lost for less than this pauses the probe instead of ending it (a wall the finger
+    // grazes flickers in and out).
+    double contact_debounce_s{0.05};
+    // After a probe ends, the next starts no sooner than this: a finger tapping a surface does
+    // not feel a ripple all the time.
+    double probe_cooldown_s{1.0};
     double min_stiffness{0.02};  // bounds of the estimate (N m/rad)
     double max_stiffness{5.0};
     double min_response_m{2e-6};  // smaller probe responses than this are not trusted
@@ -58,7 +63,7 @@ class UserStiffnessEstimator {
     // while in contact, 0 otherwise. The caller scales it (each tone's amplitude along the
     // actuator).
     [[nodiscard]] double probe() const noexcept {
-        return probing_ && !probeTimeOver() ? tones_[0].sin + tones_[1].sin : 0.0;
+        return probing() && paused_s_ == 0.0 ? tones_[0].sin + tones_[1].sin : 0.0;
     }
 
     // One tick, after the device state was read: whether the rendering is in contact, the
@@ -67,10 +72,12 @@ class UserStiffnessEstimator {
     // Advances the probe's phase.
     void update(bool in_contact, double force_n, double ell_m, double actuation_gram) noexcept;
 
-    // Forget everything but the last estimate (kept as the prior for the next contact).
+    // End the probe and forget its sums; the last estimate stays. The cooldown starts.
     void restart() noexcept;
 
+    // Whether this contact's probe has produced an estimate (it holds once it has).
     [[nodiscard]] bool valid() const noexcept { return valid_; }
+    [[nodiscard]] bool probing() const noexcept { return probing_ && !probeTimeOver(); }
     // k_u (N m/rad), bounded; the last valid value, or NaN if there never was one.
     [[nodiscard]] double stiffness() const noexcept { return stiffness_; }
     // Of the last solve, along the actuator: k (N/m), the damping b (N s/m) and the mass m (kg).
@@ -79,7 +86,9 @@ class UserStiffnessEstimator {
     [[nodiscard]] double actuatorMass() const noexcept { return actuator_mass_; }
     // Amplitude of the actuator's response to the weaker-answered tone (m) in the sums.
     [[nodiscard]] double responseAmplitude() const noexcept { return response_m_; }
-    [[nodiscard]] double contactTime() const noexcept { return contact_s_; }
+    [[nodiscard]] double contactTime() const noexcept {
+        return static_cast<double>(contact_ticks_) * config_.period_s;
+    }
 
     [[nodiscard]] const UserStiffnessEstimatorConfig& config() const noexcept { return config_; }
 
@@ -105,23 +114,27 @@ class UserStiffnessEstimator {
     // Per tone: u and ell times exp(-i phase), real and imaginary parts.
     using Products = std::array<double, 8>;
 
-    [[nodiscard]] bool probeTimeOver() const noexcept {
-        return config_.probe_time_s > 0.0 && contact_s_ >= config_.probe_time_s;
-    }
+    [[nodiscard]] bool probeTimeOver() const noexcept { return contact_ticks_ >= probe_ticks_; }
     void startContact(double force_n, double ell_m) noexcept;
     void solve(double actuation_gram) noexcept;
 
     UserStiffnessEstimatorConfig config_;
+    long probe_ticks_;              // whole periods of the lower tone
     std::vector<Products> window_;  // ring of the last window_.size() samples' products
     std::size_t next_{0};
     std::size_t count_{0};  // samples in the window
     Products sums_{};
+    // The products since the ring last wrapped: when it wraps again they are exactly the
+    // window, and replace sums_ (rounding cannot accumulate; O(1) per tick).
+    Products shadow_{};
     // Fourth-order high-pass: two biquads per signal.
     std::array<Biquad, 2> force_filter_;
     std::array<Biquad, 2> ell_filter_;
     std::array<Tone, 2> tones_;
     bool probing_{false};
-    double contact_s_{0.0};
+    long contact_ticks_{0};
+    double paused_s_{0.0};    // contact lost for this long, within the debounce
+    double cooldown_s_{0.0};  // left before the next probe may start
     bool valid_{false};
     double stiffness_;
     double actuator_stiffness_;

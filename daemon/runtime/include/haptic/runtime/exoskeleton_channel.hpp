@@ -15,9 +15,10 @@
 // min(safety.max_force_n, actuator.max_force_n), safety.max_force_rate_n_per_s and
 // safety.fade_out_ms.
 //
-// With rendering.user_stiffness_estimate enabled, the proxy is moved by the probe (a sine of
-// probe_amplitude_m along the actuator, added as k_a / |B|^2 times it to the force) while in
-// contact, and kinesthetic::UserStiffnessEstimator reads k_u off the finger's answer. The
+// With rendering.user_stiffness_estimate enabled and the method anisotropic (the one that
+// uses k_u), the proxy is moved by the probe (two sines of probe_amplitude_m along the
+// actuator, added as k_a / |B|^2 times them to the force) while in contact with the port at
+// full gain, and kinesthetic::UserStiffnessEstimator reads k_u off the finger's answer. The
 // renderer's k_u follows the estimate at most by a factor e^(kMaxUserStiffnessRate dt) per
 // tick, and each change is booked with the passivity controller like a moved wall: the spring
 // force at the same q under the old k_u and the new. The probe itself is a known source
@@ -32,6 +33,7 @@
 // direction; a switch must not make the finger feel a step either way.)
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 
 #include "haptic/devices/exoskeleton_driver.hpp"
@@ -106,6 +108,8 @@ class ExoskeletonChannel final
     static constexpr double kMaxUserStiffnessRate = 2.0;
     // The probe's peak (both tones) as a share of the rendered force at most.
     static constexpr double kMaxProbeShare = 0.5;
+    // Below this share of its full size the probe is too weak to read: no estimate.
+    static constexpr double kMinProbeScale = 0.25;
 
   private:
     void followMethod(const msgs::DeviceId& method) noexcept;
@@ -154,7 +158,12 @@ class ExoskeletonChannel final
     double rod_velocity_{0.0};
     std::optional<kinesthetic::UserStiffnessEstimator> estimator_;
     double probe_amplitude_m_{0.0};
-    double probe_force_n_{0.0};        // the probe's part of the last force
+    double probe_force_n_{0.0};          // the probe's part of the last desired force
+    double probe_applied_n_{0.0};        // the share of it the guard let through
+    double probe_scale_{0.0};            // of the full probe, by kMaxProbeShare
+    bool probe_live_{false};             // the last probe reached a finger in contact
+    double user_stiffness_target_{0.0};  // the last estimate (the prior before any)
+    double pending_user_stiffness_{std::numeric_limits<double>::quiet_NaN()};  // while probing
     double probe_stroke_m_{0.0};       // the stroke that force was applied from
     double probe_energy_j_{0.0};       // what the probe's force gave the finger, in all
     kinesthetic::ActuatorVector ell_;  // sigma(q), scratch
