@@ -67,6 +67,36 @@ TEST(KinestheticAllocation, RenderingTickAndPortGuardAllocateNothing) {
     }
     EXPECT_EQ(allocations, 0U);
     EXPECT_EQ(ticks, 3 * 6 * 60);
+
+    // Rows that carry their contact: subspace solves each along the actuator (bounded Newton),
+    // linearized_subspace re-linearises it; every method evaluates them.
+    for (std::size_t j = 0; j < 4; ++j) {
+        msgs::ContactKinematics& c = constraints[j].contact;
+        c.joints = 3;
+        c.gap_m = -0.002 * static_cast<double>(j + 1);
+        c.normal = {normals[j][0], normals[j][1], 0.3};
+        for (std::size_t k = 0; k < 3; ++k) {
+            c.q_ref_rad[k] = q[static_cast<Eigen::Index>(k)];
+            c.axis[k] = {0.0, 0.0, 1.0};
+            c.lever_m[k] = {0.02 * static_cast<double>(3 - k), 0.01, 0.0};
+        }
+    }
+    int contact_ticks = 0;
+    {
+        testing::ScopedAllocationCounter counter;
+        for (const auto method : methods) {
+            renderer.setMethod(method);
+            for (int k = 0; k < 60; ++k) {
+                q[1] += (k % 2 == 0 ? 1e-4 : -1e-4);
+                renderer.tick(q, q_dot, constraints, out);
+                ++contact_ticks;
+            }
+        }
+        allocations = counter.allocations();
+    }
+    EXPECT_EQ(allocations, 0U);
+    EXPECT_EQ(contact_ticks, 6 * 60);
+    EXPECT_TRUE(out.actuator_force.allFinite());
     EXPECT_TRUE(out.actuator_force.allFinite());
 }
 

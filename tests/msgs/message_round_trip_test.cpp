@@ -55,6 +55,11 @@ class Filler {
             return;
         v = static_cast<std::uint16_t>(rng_());
     }
+    void fill(std::int16_t& v) {
+        if (measure(2))
+            return;
+        v = static_cast<std::int16_t>(rng_());
+    }
     void fill(std::uint32_t& v) {
         if (measure(4))
             return;
@@ -124,9 +129,18 @@ class Filler {
         fill(p.p99);
         fill(p.max);
     }
+    void fill(ContactKinematics& k) {
+        fill(k.joints);
+        fill(k.gap_m);
+        fill(k.normal);
+        fill(k.q_ref_rad);
+        fill(k.axis);
+        fill(k.lever_m);
+    }
     void fill(LinearConstraint& c) {
         fill(c.a);
         fill(c.b);
+        fill(c.contact);
     }
     void fill(ConstraintSet& m) {
         fill(m.header);

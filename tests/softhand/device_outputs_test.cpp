@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "haptic/daemon/sim_input_validation.hpp"
+#include "haptic/kinesthetic/contact_gap.hpp"
 
 namespace haptic::softhand {
 namespace {
@@ -138,6 +139,49 @@ TEST_F(KinestheticOutputTest, ConstraintPredictsTheGapAfterASmallFlexion) {
     const double actual = planeGap(model.simulation, bone(model, "index_distal"), normal, point);
     EXPECT_LT(actual, 0.001 - 5e-4);  // the flexion really moved the pad towards the plane
     EXPECT_NEAR(predicted, actual, 2e-5);
+}
+
+// The row's contact (msgs::ContactKinematics) is the same constraint before linearisation:
+// its gap and gradient at q_sim are the row's, and after a flexion far beyond the linear
+// range it predicts where that skin point is on the plane, which the row no longer does.
+TEST_F(KinestheticOutputTest, TheRowsContactPredictsTheGapBeyondTheLinearRange) {
+    msgs::ConstraintSet set;
+    output.fill(model.simulation, set);
+    ASSERT_EQ(set.constraints.size(), 1U);
+    const auto& c = set.constraints[0];
+    ASSERT_EQ(c.contact.joints, 3) << "a distal contact rides on all three joints";
+    ASSERT_TRUE(kinesthetic::usableContact(c.contact, 3));
+    kinesthetic::ConfigVector q_sim(3);
+    q_sim << set.q_sim_rad[0], set.q_sim_rad[1], set.q_sim_rad[2];
+    kinesthetic::ConfigVector gradient;
+    const double gap = kinesthetic::contactGap(c.contact, q_sim, &gradient);
+    EXPECT_NEAR(gap, c.a[0] * q_sim[0] + c.a[1] * q_sim[1] + c.a[2] * q_sim[2] - c.b, 1e-12);
+    for (std::size_t j = 0; j < 3; ++j) {
+        EXPECT_NEAR(gradient[static_cast<Eigen::Index>(j)], c.a[j], 1e-12) << "joint " << j;
+    }
+    // The skin point the row stands for: the distal node nearest the plane.
+    const Simulation& sim = model.simulation;
+    const BoneInfo& distal = bone(model, "index_distal");
+    int closest = -1;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int node : sim.skinNodes()) {
+        if (node >= distal.first_node && node < distal.first_node + distal.node_count &&
+            normal.dot(sim.nodePosition(node) - point) < nearest) {
+            nearest = normal.dot(sim.nodePosition(node) - point);
+            closest = node;
+        }
+    }
+    const std::array<double, 3> dq{0.15, 0.25, 0.3};
+    std::vector<BonePose> poses;
+    kinematics.forward(kinematics.buildPose(0), dq, poses);
+    placeRigidly(model, poses);
+    const double actual = normal.dot(model.simulation.nodePosition(closest) - point);
+    kinesthetic::ConfigVector q(3);
+    q << dq[0], dq[1], dq[2];
+    const double nonlinear = kinesthetic::contactGap(c.contact, q);
+    const double linear = c.a[0] * dq[0] + c.a[1] * dq[1] + c.a[2] * dq[2] - c.b;
+    EXPECT_NEAR(nonlinear, actual, 1e-9);
+    EXPECT_GT(std::abs(linear - actual), 1e-3) << "the row alone is off by millimetres here";
 }
 
 TEST_F(KinestheticOutputTest, FarPlaneGivesNoConstraint) {

@@ -93,6 +93,23 @@ std::span<const msgs::LinearConstraint> ConstraintBlend::update(
             c.a[i] = start.a[i] + s * (c.a[i] - start.a[i]);
         }
         c.b = start.b + s * (c.b - start.b);
+        // The contact behind the row moves with it (relative vectors: they interpolate whole).
+        if (c.contact.joints > 0 && c.contact.joints == start.contact.joints) {
+            auto lerp = [s](double from, double to) { return from + s * (to - from); };
+            msgs::ContactKinematics& k = c.contact;
+            const msgs::ContactKinematics& k0 = start.contact;
+            k.gap_m = lerp(k0.gap_m, k.gap_m);
+            for (std::size_t i = 0; i < 3; ++i) {
+                k.normal[i] = lerp(k0.normal[i], k.normal[i]);
+            }
+            for (std::size_t j = 0; j < msgs::kMaxContactJoints; ++j) {
+                k.q_ref_rad[j] = lerp(k0.q_ref_rad[j], k.q_ref_rad[j]);
+                for (std::size_t i = 0; i < 3; ++i) {
+                    k.axis[j][i] = lerp(k0.axis[j][i], k.axis[j][i]);
+                    k.lever_m[j][i] = lerp(k0.lever_m[j][i], k.lever_m[j][i]);
+                }
+            }
+        }
         blended_.push_back(c);
     }
     return blended_.used();

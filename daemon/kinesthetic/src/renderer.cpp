@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "haptic/kinesthetic/anisotropic.hpp"
+#include "haptic/kinesthetic/contact_gap.hpp"
 
 namespace haptic::kinesthetic {
 
@@ -13,6 +14,57 @@ namespace {
 
 // Below this share of a constraint normal in range(B) the actuators cannot push it out.
 constexpr double kActuatedShareEpsilon = 1e-9;
+// The nonlinear subspace root: iterations at most, and how close to the surface is on it.
+constexpr int kMaxRootIterations = 40;
+constexpr double kRootToleranceM = 1e-12;
+
+struct ActuatedRoot {
+    double alpha{0.0};
+    int iterations{0};
+    bool reached{true};  // false: the actuator's range ends before the surface
+};
+
+// The alpha in [0, bound] (either sign) nearest 0 with g(q + direction alpha) = 0, given
+// g < 0 at alpha = 0 and g's slope along `direction` pointing towards `bound`. Safeguarded
+// Newton: a step that leaves the bracket is replaced by bisection. Returns the bracket's
+// feasible end, so that the proxy is never left inside.
+ActuatedRoot solveAlongActuator(const msgs::ContactKinematics& contact, const ConfigVector& q,
+                                const ConfigVector& direction, double bound, double g0,
+                                double slope) noexcept {
+    ActuatedRoot root;
+    ConfigVector gradient;
+    ConfigVector q_p = q + direction * bound;
+    if (contactGap(contact, q_p) < 0.0) {
+        root.alpha = bound;
+        root.reached = false;
+        return root;
+    }
+    double inside = 0.0;     // g < 0
+    double outside = bound;  // g >= 0
+    double alpha = std::clamp(-g0 / slope, std::min(0.0, bound), std::max(0.0, bound));
+    for (root.iterations = 1; root.iterations <= kMaxRootIterations; ++root.iterations) {
+        q_p = q + direction * alpha;
+        const double g = contactGap(contact, q_p, &gradient);
+        if (g >= 0.0) {
+            outside = alpha;
+            if (g <= kRootToleranceM) {
+                break;
+            }
+        } else {
+            inside = alpha;
+        }
+        if (std::abs(outside - inside) <= 1e-15 * (1.0 + std::abs(bound))) {
+            break;
+        }
+        const double along = gradient.dot(direction);
+        const double newton = along != 0.0 ? alpha - g / along : inside;
+        const bool in_bracket = (newton - inside) * (newton - outside) < 0.0;
+        alpha = in_bracket ? newton : 0.5 * (inside + outside);
+    }
+    root.iterations = std::min(root.iterations, kMaxRootIterations);
+    root.alpha = outside;
+    return root;
+}
 
 bool isSymmetricPositiveDefinite(const ConfigMatrix& M) noexcept {
     if (!M.allFinite() ||
@@ -163,14 +215,28 @@ void KinestheticRenderer::tick(const ConfigVector& q, const ConfigVector& q_dot,
     const int count = static_cast<int>(constraints.size());
     C_scratch_.resize(n, count);
     d_scratch_.resize(count);
+    const bool state_ok = q.size() == n && q.allFinite();
+    bool all_contacts = count > 0;
+    ConfigVector gradient;
     for (int j = 0; j < count; ++j) {
         const auto& constraint = constraints[static_cast<std::size_t>(j)];
+        const bool usable = state_ok && usableContact(constraint.contact, n);
+        all_contacts = all_contacts && usable;
+        if (usable && parameters_.method == RenderingMethod::kLinearizedSubspace) {
+            // The contact's linearisation at this q, not at the sim's q_ref.
+            const double g = contactGap(constraint.contact, q, &gradient);
+            C_scratch_.col(j) = gradient;
+            d_scratch_[j] = gradient.dot(q) - g;
+            continue;
+        }
         for (int i = 0; i < n; ++i) {
             C_scratch_(i, j) = constraint.a[static_cast<std::size_t>(i)];
         }
         d_scratch_[j] = constraint.b;
     }
+    contacts_ = all_contacts ? constraints : std::span<const msgs::LinearConstraint>{};
     tick(q, q_dot, C_scratch_, d_scratch_, out);
+    contacts_ = {};
 }
 
 void KinestheticRenderer::tick(const ConfigVector& q, const ConfigVector& q_dot,
@@ -319,8 +385,71 @@ void KinestheticRenderer::redistributeInNullspace(const ConfigVector& q,
     }
 }
 
+void KinestheticRenderer::renderNonlinearSubspace(const ConfigVector& q,
+                                                  RenderOutput& out) noexcept {
+    const double k_a = parameters_.tracking_stiffness;
+    out.rho = kMaxRho;
+    const ConfigVector direction = B_.col(0) / k_a;  // q_p(alpha) = q + direction alpha
+    // The actuator's own range: the proxy's stroke stays within the actuator's.
+    ActuatorVector ell;
+    device_.actuatorCoordinates(q, ell);
+    const ActuatorLimits limits = device_.actuatorLimits(0);
+    const double gram = gram_(0, 0);
+    const double alpha_max = std::max(0.0, (limits.stroke_max - ell[0]) * k_a / gram);
+    const double alpha_min = std::min(0.0, (limits.stroke_min - ell[0]) * k_a / gram);
+    double push_up = 0.0;
+    double push_down = 0.0;
+    bool unreachable = false;
+    int active = 0;
+    int iterations = 0;
+    ConfigVector gradient;
+    for (const msgs::LinearConstraint& row : contacts_) {
+        const double g0 = contactGap(row.contact, q, &gradient);
+        if (g0 >= 0.0) {
+            continue;
+        }
+        ++active;
+        const double slope = gradient.dot(direction);
+        if (std::abs(slope) * k_a <= kActuatedShareEpsilon * std::sqrt(gram) * gradient.norm()) {
+            out.fault = RenderFault::kNotRenderable;  // no actuated share: cannot push it out
+            continue;
+        }
+        const ActuatedRoot root = solveAlongActuator(
+            row.contact, q, direction, slope > 0.0 ? alpha_max : alpha_min, g0, slope);
+        iterations = std::max(iterations, root.iterations);
+        unreachable = unreachable || !root.reached;
+        if (root.alpha > 0.0) {
+            push_up = std::max(push_up, root.alpha);
+        } else {
+            push_down = std::min(push_down, root.alpha);
+        }
+    }
+    double alpha = push_up > 0.0 ? push_up : push_down;
+    if (push_up > 0.0 && push_down < 0.0) {
+        // Contacts on both sides of the one actuated direction: no alpha satisfies both.
+        alpha = push_up >= -push_down ? push_up : push_down;
+        out.fault = RenderFault::kInfeasibleConstraints;
+        out.solve_status = SolveStatus::kInfeasible;
+    } else if (unreachable) {
+        out.fault = RenderFault::kInfeasibleConstraints;  // beyond the actuator's stroke
+        out.solve_status = SolveStatus::kInfeasible;
+    }
+    const double max_force = device_.actuatorLimits(0).max_force_n;
+    out.actuator_force.resize(1);
+    out.actuator_force[0] = std::clamp(alpha, -max_force, max_force);
+    out.iterations = iterations;
+    out.active_constraints = active;
+    out.in_contact = active > 0;
+    out.proxy = q + direction * out.actuator_force[0];
+    out.coupling_force.noalias() = B_ * out.actuator_force;
+}
+
 void KinestheticRenderer::renderSubspace(const ConfigVector& q, const ConstraintMatrix& C,
                                          const ConstraintVector& d, RenderOutput& out) noexcept {
+    if (device_.actuators() == 1 && !contacts_.empty()) {
+        renderNonlinearSubspace(q, out);
+        return;
+    }
     const int m = device_.actuators();
     const int count = static_cast<int>(C.cols());
     const double k_a = parameters_.tracking_stiffness;

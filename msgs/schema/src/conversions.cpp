@@ -15,6 +15,10 @@ constexpr std::size_t kArraySize = std::tuple_size_v<T>;
 
 static_assert(kArraySize<Member<decltype(idl::ConstraintSet{}.q_sim_rad())>> == kMaxJointDofs);
 static_assert(kArraySize<Member<decltype(idl::LinearConstraint{}.a())>> == kMaxJointDofs);
+static_assert(kArraySize<Member<decltype(idl::ContactKinematics{}.q_ref_rad())>> ==
+              kMaxContactJoints);
+static_assert(kArraySize<Member<decltype(idl::ContactKinematics{}.axis())>> ==
+              3 * kMaxContactJoints);
 static_assert(kArraySize<Member<decltype(idl::DeviceState{}.joint_position_rad())>> ==
               kMaxJointDofs);
 static_assert(kArraySize<Member<decltype(idl::DeviceState{}.actuator_force())>> == kMaxActuators);
@@ -161,6 +165,18 @@ idl::ConstraintSet toIdl(const ConstraintSet& in) {
         idl::LinearConstraint item;
         item.a(c.a);
         item.b(c.b);
+        idl::ContactKinematics contact;
+        contact.joints(c.contact.joints);
+        contact.gap_m(c.contact.gap_m);
+        contact.normal(c.contact.normal);
+        contact.q_ref_rad(c.contact.q_ref_rad);
+        for (std::size_t j = 0; j < kMaxContactJoints; ++j) {
+            for (std::size_t k = 0; k < 3; ++k) {
+                contact.axis()[3 * j + k] = c.contact.axis[j][k];
+                contact.lever_m()[3 * j + k] = c.contact.lever_m[j][k];
+            }
+        }
+        item.contact(contact);
         out.constraints().push_back(item);
     }
     out.reference_torque_nm(in.reference_torque_nm);
@@ -179,7 +195,19 @@ ConversionResult fromIdl(const idl::ConstraintSet& in, ConstraintSet& out) {
     out.q_sim_rad = in.q_sim_rad();
     out.constraints.clear();
     for (const auto& c : in.constraints()) {
-        out.constraints.push_back(LinearConstraint{c.a(), c.b()});
+        LinearConstraint row{c.a(), c.b(), {}};
+        const idl::ContactKinematics& contact = c.contact();
+        row.contact.joints = contact.joints();
+        row.contact.gap_m = contact.gap_m();
+        row.contact.normal = contact.normal();
+        row.contact.q_ref_rad = contact.q_ref_rad();
+        for (std::size_t j = 0; j < kMaxContactJoints; ++j) {
+            for (std::size_t k = 0; k < 3; ++k) {
+                row.contact.axis[j][k] = contact.axis()[3 * j + k];
+                row.contact.lever_m[j][k] = contact.lever_m()[3 * j + k];
+            }
+        }
+        out.constraints.push_back(row);
     }
     out.reference_torque_nm = in.reference_torque_nm();
     out.tracking = fromIdl(in.tracking());

@@ -170,6 +170,18 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) {
             }
             last_normal = normal;
             constraint.b = b;
+            // The same contact for hapticd's evaluation on the finger's kinematics: the point
+            // rides on joints 0..s, the row above is its linearisation at q.
+            msgs::ContactKinematics& contact = constraint.contact;
+            contact.joints = static_cast<std::int16_t>(s + 1);
+            contact.gap_m = nearest.phi_m;
+            contact.normal = {normal.x(), normal.y(), normal.z()};
+            for (std::size_t j = 0; j <= s; ++j) {
+                const Vec3 lever = point - anchors[j];
+                contact.q_ref_rad[j] = q[j];
+                contact.axis[j] = {axes[j].x(), axes[j].y(), axes[j].z()};
+                contact.lever_m[j] = {lever.x(), lever.y(), lever.z()};
+            }
             out.constraints.push_back(constraint);
         }
     }

@@ -8,6 +8,9 @@
 // from what was rendered when it arrived, over the interval at which frames have been arriving.
 // A set that changes structure (a contact appears or goes) is rendered at once: a new contact is
 // never delayed. The cost is up to one sim frame of extra latency on a contact that moves.
+// A row's contact (msgs::ContactKinematics: gap, normal, axes, levers, reference angles) is
+// blended with it when both frames carry one over the same joints; the interpolated normal
+// and axes are normalised where they are used (contact_gap.hpp).
 //
 // RT: noexcept, no allocation, O(number of constraints) per tick.
 

@@ -18,11 +18,16 @@
 //                        spans the joint torques that produce no contact-point force; lambda
 //                        minimises |P_u tau|^2 + eps |lambda|^2, then u = B^+ tau. On the point
 //                        device (J = I) N = 0 and it reduces to naive.
-//   subspace             §5.4: q_p = q + B alpha / k_a, alpha = argmin 1/2 alpha^T (B^T B / k_a)
-//                        alpha over all constraints (exact QP), u = alpha. rho -> infinity.
+//   subspace             §5.4: q_p = q + B alpha / k_a. With one actuator and constraints that
+//                        carry their contact (msgs::ContactKinematics): each violated contact's
+//                        g(chi(q + B alpha / k_a)) = 0 solved along the actuated direction
+//                        (safeguarded Newton in a bracket), within the actuator's stroke, the
+//                        largest push needed. Otherwise alpha = argmin 1/2 alpha^T (B^T B / k_a)
+//                        alpha over the linear rows (exact QP). u = alpha. rho -> infinity.
 //   linearized_subspace  §5.5: one Kaczmarz sweep over the violated constraints, each corrected
-//                        along its actuated direction; for one actuator it is the max-over-
-//                        constraints rule of §5.5. O(number of constraints).
+//                        along its actuated direction; rows that carry their contact are first
+//                        linearised at the current q (so this is subspace's linearisation).
+//                        For one actuator it is the max-over-constraints rule of §5.5.
 //   anisotropic          §6.5: K = k_a (P_a + rho P_u), K-metric proxy, u = B^+ K (q_p - q),
 //                        rho from the closed form, the numeric search or a manual override.
 //
@@ -117,6 +122,8 @@ class KinestheticRenderer {
                      const ConstraintVector& d, RenderOutput& out) noexcept;
     void renderSubspace(const ConfigVector& q, const ConstraintMatrix& C, const ConstraintVector& d,
                         RenderOutput& out) noexcept;
+    // §5.4 on the contacts themselves (contacts_), one actuator.
+    void renderNonlinearSubspace(const ConfigVector& q, RenderOutput& out) noexcept;
     void renderLinearizedSubspace(const ConfigVector& q, const ConstraintMatrix& C,
                                   const ConstraintVector& d, RenderOutput& out) noexcept;
     void redistributeInNullspace(const ConfigVector& q, RenderOutput& out) noexcept;
@@ -134,6 +141,8 @@ class KinestheticRenderer {
     ConfigMatrix P_a_;
     ConstraintMatrix C_scratch_;
     ConstraintVector d_scratch_;
+    // The rows of the current tick when they all carry a usable contact (else empty).
+    std::span<const msgs::LinearConstraint> contacts_;
 };
 
 }  // namespace haptic::kinesthetic

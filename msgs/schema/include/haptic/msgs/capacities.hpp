@@ -15,6 +15,7 @@ inline constexpr std::size_t kMaxJointDofs = 8;
 inline constexpr std::size_t kMaxActuators = 4;
 inline constexpr std::size_t kThimbleServos = 3;  // the 3-RRS platform
 inline constexpr std::size_t kMaxConstraints = 16;
+inline constexpr std::size_t kMaxContactJoints = 4;  // joints behind one contact (a finger's)
 inline constexpr std::size_t kMaxContactSamples = 128;
 inline constexpr std::size_t kMaxHandJointAngles = 32;
 inline constexpr std::size_t kMaxStatusDevices = 4;

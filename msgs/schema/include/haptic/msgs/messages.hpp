@@ -44,10 +44,30 @@ struct Percentiles {
 
 // ---- sim -> daemon -------------------------------------------------------------------
 
+// The contact behind a constraint row, so that hapticd can evaluate the row on the finger's
+// kinematics instead of its linearisation (subspace, docs/algorithms.md §5.4). Vectors are in
+// any one frame, relative to the contact point p at q_ref_rad: the point is carried by joints
+// 0..joints-1, joint j turning about axis[j] through p - lever_m[j], so that with
+//   x(q) = the point moved by the joints from q_ref_rad to q   (x(q_ref_rad) = p)
+//   g(q) = normal . (x(q) - p) + gap_m
+// the row is g's linearisation at q_ref_rad: a_j = normal . (axis[j] x lever_m[j]),
+// b = a . q_ref_rad - gap_m. Relative vectors keep a row whole under the blend between frames.
+// joints = 0: no contact is known, the row is all there is.
+struct ContactKinematics {
+    std::int16_t joints{0};
+    double gap_m{0.0};  // g(q_ref_rad): the point's signed distance, negative inside
+    std::array<double, 3> normal{};
+    std::array<double, kMaxContactJoints> q_ref_rad{};
+    std::array<std::array<double, 3>, kMaxContactJoints> axis{};
+    std::array<std::array<double, 3>, kMaxContactJoints> lever_m{};
+    friend bool operator==(const ContactKinematics&, const ContactKinematics&) = default;
+};
+
 // One linearised constraint a^T q >= b in device joint space.
 struct LinearConstraint {
     std::array<double, kMaxJointDofs> a{};
     double b{0.0};
+    ContactKinematics contact{};
     friend bool operator==(const LinearConstraint&, const LinearConstraint&) = default;
 };
 
