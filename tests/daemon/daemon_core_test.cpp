@@ -698,6 +698,40 @@ TEST_F(DaemonCoreTest, RejectsNonFiniteAndWrongDeviceInputAndCountsThem) {
     EXPECT_FALSE(status.sim_link.connected);
 }
 
+// The contact behind a constraint row (msgs::ContactKinematics) is checked like the row.
+TEST_F(DaemonCoreTest, RejectsABadContactBehindAConstraintRow) {
+    auto withContact = [] {
+        auto set = validConstraintSet("exo_index");
+        msgs::ContactKinematics& c = set.constraints[0].contact;
+        c.joints = 3;
+        c.gap_m = -0.001;
+        c.normal = {0.0, 0.0, 1.0};
+        for (std::size_t j = 0; j < 3; ++j) {
+            c.axis[j] = {0.0, 1.0, 0.0};
+            c.lever_m[j] = {0.02, 0.0, -0.01};
+        }
+        return set;
+    };
+    EXPECT_THAT(sut.offerConstraintSet(0, withContact(), 0), Eq(InputRejection::kNone));
+    auto nan_lever = withContact();
+    nan_lever.constraints[0].contact.lever_m[2][1] = std::nan("");
+    EXPECT_THAT(sut.offerConstraintSet(0, nan_lever, 0), Eq(InputRejection::kNonFinite));
+    auto too_many_joints = withContact();
+    too_many_joints.constraints[0].contact.joints = 4;  // the exoskeleton has 3
+    EXPECT_THAT(sut.offerConstraintSet(0, too_many_joints, 0),
+                Eq(InputRejection::kCountOverCapacity));
+    auto negative_joints = withContact();
+    negative_joints.constraints[0].contact.joints = -2;
+    EXPECT_THAT(sut.offerConstraintSet(0, negative_joints, 0),
+                Eq(InputRejection::kCountOverCapacity));
+    auto long_axis = withContact();
+    long_axis.constraints[0].contact.axis[1] = {0.0, 2.0, 0.0};
+    EXPECT_THAT(sut.offerConstraintSet(0, long_axis, 0), Eq(InputRejection::kBadNormal));
+    auto zero_normal = withContact();
+    zero_normal.constraints[0].contact.normal = {0.0, 0.0, 0.0};
+    EXPECT_THAT(sut.offerConstraintSet(0, zero_normal, 0), Eq(InputRejection::kBadNormal));
+}
+
 TEST_F(DaemonCoreTest, StatusReportsDevicesLinkRateAndLoopWindow) {
     std::int64_t t = 0;
     for (int i = 0; i < 1000; ++i) {

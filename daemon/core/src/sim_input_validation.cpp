@@ -36,7 +36,7 @@ std::string_view describe(InputRejection reason) noexcept {
         case InputRejection::kDegenerateConstraint:
             return "constraint normal has zero length";
         case InputRejection::kBadNormal:
-            return "contact normal is not unit length";
+            return "contact normal or joint axis is not unit length";
         case InputRejection::kNotNewer:
             return "seq does not advance and is no restart (a replay or a duplicate)";
         case InputRejection::kDelayed:
@@ -53,6 +53,40 @@ std::string_view describe(InputRejection reason) noexcept {
     }
     return "unknown";
 }
+
+namespace {
+
+// The contact behind a row (msgs::ContactKinematics): joints within the device's and the
+// array's, every used value finite, a unit normal and unit axes (within 1e-3; the blend
+// between frames interpolates them, the renderer normalises).
+InputRejection validateContact(const msgs::ContactKinematics& contact, std::uint16_t dof) noexcept {
+    if (contact.joints == 0) {
+        return InputRejection::kNone;  // no contact known: the row is all there is
+    }
+    if (contact.joints < 0 || static_cast<std::size_t>(contact.joints) > msgs::kMaxContactJoints ||
+        contact.joints > dof) {
+        return InputRejection::kCountOverCapacity;
+    }
+    const auto joints = static_cast<std::size_t>(contact.joints);
+    if (!finite(contact.gap_m) || !allFinite(contact.normal) ||
+        !allFinite(contact.q_ref_rad, joints)) {
+        return InputRejection::kNonFinite;
+    }
+    auto unit = [](const std::array<double, 3>& v) {
+        return std::abs(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] - 1.0) < 1e-3;
+    };
+    for (std::size_t j = 0; j < joints; ++j) {
+        if (!allFinite(contact.axis[j]) || !allFinite(contact.lever_m[j])) {
+            return InputRejection::kNonFinite;
+        }
+        if (!unit(contact.axis[j])) {
+            return InputRejection::kBadNormal;
+        }
+    }
+    return unit(contact.normal) ? InputRejection::kNone : InputRejection::kBadNormal;
+}
+
+}  // namespace
 
 InputRejection validate(const msgs::ConstraintSet& message, std::string_view device_id,
                         std::uint16_t joint_count) noexcept {
@@ -79,6 +113,10 @@ InputRejection validate(const msgs::ConstraintSet& message, std::string_view dev
         }
         if (!(norm_squared > 1e-24)) {
             return InputRejection::kDegenerateConstraint;
+        }
+        if (const InputRejection contact = validateContact(constraint.contact, message.dof);
+            contact != InputRejection::kNone) {
+            return contact;
         }
     }
     return InputRejection::kNone;
