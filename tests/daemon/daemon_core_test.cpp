@@ -730,6 +730,16 @@ TEST_F(DaemonCoreTest, RejectsABadContactBehindAConstraintRow) {
     auto zero_normal = withContact();
     zero_normal.constraints[0].contact.normal = {0.0, 0.0, 0.0};
     EXPECT_THAT(sut.offerConstraintSet(0, zero_normal, 0), Eq(InputRejection::kBadNormal));
+    auto far_lever = withContact();
+    far_lever.constraints[0].contact.lever_m[0] = {1e300, 0.0, 0.0};  // finite, no hand
+    EXPECT_THAT(sut.offerConstraintSet(0, far_lever, 0), Eq(InputRejection::kDegenerateConstraint));
+    // Unused slots must be finite too: a NaN there makes every frame differ from the last.
+    auto nan_unused_slot = withContact();
+    nan_unused_slot.constraints[0].contact.axis[3][0] = std::nan("");
+    EXPECT_THAT(sut.offerConstraintSet(0, nan_unused_slot, 0), Eq(InputRejection::kNonFinite));
+    auto nan_unused_a = withContact();
+    nan_unused_a.constraints[0].a[7] = std::nan("");
+    EXPECT_THAT(sut.offerConstraintSet(0, nan_unused_a, 0), Eq(InputRejection::kNonFinite));
 }
 
 TEST_F(DaemonCoreTest, StatusReportsDevicesLinkRateAndLoopWindow) {

@@ -34,7 +34,7 @@ std::string_view describe(InputRejection reason) noexcept {
         case InputRejection::kCountOverCapacity:
             return "count exceeds the array capacity";
         case InputRejection::kDegenerateConstraint:
-            return "constraint normal has zero length";
+            return "constraint normal has zero length, or its contact lies beyond a hand's reach";
         case InputRejection::kBadNormal:
             return "contact normal or joint axis is not unit length";
         case InputRejection::kNotNewer:
@@ -57,27 +57,38 @@ std::string_view describe(InputRejection reason) noexcept {
 namespace {
 
 // The contact behind a row (msgs::ContactKinematics): joints within the device's and the
-// array's, every used value finite, a unit normal and unit axes (within 1e-3; the blend
-// between frames interpolates them, the renderer normalises).
+// array's, every slot finite (unused ones too: a NaN there would make every frame differ
+// from the last), lengths and angles of a hand (gap and levers within 1 m, reference angles
+// within 10 rad), a unit normal and unit axes (within 1e-3; the blend between frames
+// interpolates them, the renderer normalises).
 InputRejection validateContact(const msgs::ContactKinematics& contact, std::uint16_t dof) noexcept {
-    if (contact.joints == 0) {
-        return InputRejection::kNone;  // no contact known: the row is all there is
-    }
     if (contact.joints < 0 || static_cast<std::size_t>(contact.joints) > msgs::kMaxContactJoints ||
         contact.joints > dof) {
         return InputRejection::kCountOverCapacity;
     }
-    const auto joints = static_cast<std::size_t>(contact.joints);
-    if (!finite(contact.gap_m) || !allFinite(contact.normal) ||
-        !allFinite(contact.q_ref_rad, joints)) {
+    if (!finite(contact.gap_m) || !allFinite(contact.normal) || !allFinite(contact.q_ref_rad)) {
         return InputRejection::kNonFinite;
+    }
+    for (std::size_t j = 0; j < msgs::kMaxContactJoints; ++j) {
+        if (!allFinite(contact.axis[j]) || !allFinite(contact.lever_m[j])) {
+            return InputRejection::kNonFinite;
+        }
+    }
+    if (contact.joints == 0) {
+        return InputRejection::kNone;  // no contact known: the row is all there is
     }
     auto unit = [](const std::array<double, 3>& v) {
         return std::abs(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] - 1.0) < 1e-3;
     };
+    if (!(std::abs(contact.gap_m) <= 1.0)) {
+        return InputRejection::kDegenerateConstraint;
+    }
+    const auto joints = static_cast<std::size_t>(contact.joints);
     for (std::size_t j = 0; j < joints; ++j) {
-        if (!allFinite(contact.axis[j]) || !allFinite(contact.lever_m[j])) {
-            return InputRejection::kNonFinite;
+        const auto& lever = contact.lever_m[j];
+        if (!(std::abs(contact.q_ref_rad[j]) <= 10.0) ||
+            !(lever[0] * lever[0] + lever[1] * lever[1] + lever[2] * lever[2] <= 1.0)) {
+            return InputRejection::kDegenerateConstraint;
         }
         if (!unit(contact.axis[j])) {
             return InputRejection::kBadNormal;
@@ -104,7 +115,8 @@ InputRejection validate(const msgs::ConstraintSet& message, std::string_view dev
         return InputRejection::kNonFinite;
     }
     for (const auto& constraint : message.constraints) {
-        if (!allFinite(constraint.a, message.dof) || !finite(constraint.b)) {
+        // Every entry of a, the unused ones too (a NaN there would make every frame differ).
+        if (!allFinite(constraint.a) || !finite(constraint.b)) {
             return InputRejection::kNonFinite;
         }
         double norm_squared = 0.0;

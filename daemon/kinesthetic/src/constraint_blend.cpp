@@ -39,6 +39,10 @@ bool ConstraintBlend::sameStructure(std::span<const msgs::LinearConstraint> newe
         return false;
     }
     for (std::size_t j = 0; j < newest.size(); ++j) {
+        // A contact that moved to another phalanx (other joints) is a new contact.
+        if (newest[j].contact.joints != blended_[j].contact.joints) {
+            return false;
+        }
         const auto& a = newest[j].a;
         const auto& b = blended_[j].a;
         double dot = 0.0;
@@ -94,7 +98,7 @@ std::span<const msgs::LinearConstraint> ConstraintBlend::update(
         }
         c.b = start.b + s * (c.b - start.b);
         // The contact behind the row moves with it (relative vectors: they interpolate whole).
-        if (c.contact.joints > 0 && c.contact.joints == start.contact.joints) {
+        if (c.contact.joints > 0) {  // the same joints as start: sameStructure()
             auto lerp = [s](double from, double to) { return from + s * (to - from); };
             msgs::ContactKinematics& k = c.contact;
             const msgs::ContactKinematics& k0 = start.contact;

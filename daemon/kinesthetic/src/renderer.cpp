@@ -14,37 +14,56 @@ namespace {
 
 // Below this share of a constraint normal in range(B) the actuators cannot push it out.
 constexpr double kActuatedShareEpsilon = 1e-9;
-// The nonlinear subspace root: iterations at most, and how close to the surface is on it.
+// The nonlinear subspace root: evaluations of g at most per contact (bracketing takes at most
+// half), and how close to the surface is on it.
 constexpr int kMaxRootIterations = 40;
 constexpr double kRootToleranceM = 1e-12;
 
 struct ActuatedRoot {
     double alpha{0.0};
-    int iterations{0};
-    bool reached{true};  // false: the actuator's range ends before the surface
+    int evaluations{0};
+    bool reached{true};  // false: no surface crossing within the bound
 };
 
-// The alpha in [0, bound] (either sign) nearest 0 with g(q + direction alpha) = 0, given
-// g < 0 at alpha = 0 and g's slope along `direction` pointing towards `bound`. Safeguarded
-// Newton: a step that leaves the bracket is replaced by bisection. Returns the bracket's
-// feasible end, so that the proxy is never left inside.
+// The alpha between 0 and `bound` (either sign) nearest 0 with g(q + direction alpha) = 0,
+// given g(0) = g0 < 0 and g's slope along `direction` pointing towards `bound`. First the
+// crossing is bracketed by stepping out from the linear estimate, doubling each time (g is
+// not monotone over a long way: the point moves on arcs), then a safeguarded Newton iteration
+// in the bracket (a step that leaves it is a bisection). Returns the bracket's feasible end,
+// so the proxy is never left inside this contact. At most kMaxRootIterations evaluations of g.
 ActuatedRoot solveAlongActuator(const msgs::ContactKinematics& contact, const ConfigVector& q,
                                 const ConfigVector& direction, double bound, double g0,
                                 double slope) noexcept {
     ActuatedRoot root;
     ConfigVector gradient;
-    ConfigVector q_p = q + direction * bound;
-    if (contactGap(contact, q_p) < 0.0) {
-        root.alpha = bound;
+    auto gap = [&](double alpha, ConfigVector* grad) {
+        ++root.evaluations;
+        const ConfigVector q_p = q + direction * alpha;
+        return contactGap(contact, q_p, grad);
+    };
+    double inside = 0.0;  // g < 0 here
+    double outside = std::nan("");
+    double step = std::min(std::abs(g0 / slope), std::abs(bound));
+    while (root.evaluations < kMaxRootIterations / 2) {
+        const double alpha = std::copysign(std::min(step, std::abs(bound)), bound);
+        if (gap(alpha, nullptr) >= 0.0) {
+            outside = alpha;
+            break;
+        }
+        inside = alpha;
+        if (std::abs(alpha) >= std::abs(bound)) {
+            break;
+        }
+        step *= 2.0;
+    }
+    if (std::isnan(outside)) {
+        root.alpha = inside;  // the bound: out of reach within it
         root.reached = false;
         return root;
     }
-    double inside = 0.0;     // g < 0
-    double outside = bound;  // g >= 0
-    double alpha = std::clamp(-g0 / slope, std::min(0.0, bound), std::max(0.0, bound));
-    for (root.iterations = 1; root.iterations <= kMaxRootIterations; ++root.iterations) {
-        q_p = q + direction * alpha;
-        const double g = contactGap(contact, q_p, &gradient);
+    double alpha = outside;
+    while (root.evaluations < kMaxRootIterations) {
+        const double g = gap(alpha, &gradient);
         if (g >= 0.0) {
             outside = alpha;
             if (g <= kRootToleranceM) {
@@ -61,7 +80,6 @@ ActuatedRoot solveAlongActuator(const msgs::ContactKinematics& contact, const Co
         const bool in_bracket = (newton - inside) * (newton - outside) < 0.0;
         alpha = in_bracket ? newton : 0.5 * (inside + outside);
     }
-    root.iterations = std::min(root.iterations, kMaxRootIterations);
     root.alpha = outside;
     return root;
 }
@@ -200,6 +218,7 @@ void KinestheticRenderer::clearOutput(const ConfigVector& q, RenderFault fault,
     out.iterations = 0;
     out.active_constraints = 0;
     out.in_contact = false;
+    out.limited = false;
     out.solve_status = SolveStatus::kInvalidInput;
     reset();
 }
@@ -266,6 +285,7 @@ void KinestheticRenderer::tick(const ConfigVector& q, const ConfigVector& q_dot,
     out.solve_status = SolveStatus::kOptimal;
     out.iterations = 0;
     out.rho = 1.0;
+    out.limited = false;
     switch (parameters_.method) {
         case RenderingMethod::kStandard:
         case RenderingMethod::kNaive:
@@ -390,21 +410,28 @@ void KinestheticRenderer::renderNonlinearSubspace(const ConfigVector& q,
     const double k_a = parameters_.tracking_stiffness;
     out.rho = kMaxRho;
     const ConfigVector direction = B_.col(0) / k_a;  // q_p(alpha) = q + direction alpha
-    // The actuator's own range: the proxy's stroke stays within the actuator's.
+    // alpha within the force limit, and the proxy within the actuator's stroke (the
+    // stroke's room on either side of the current stroke, none beyond a limit).
+    const ActuatorLimits limits = device_.actuatorLimits(0);
     ActuatorVector ell;
     device_.actuatorCoordinates(q, ell);
-    const ActuatorLimits limits = device_.actuatorLimits(0);
     const double gram = gram_(0, 0);
-    const double alpha_max = std::max(0.0, (limits.stroke_max - ell[0]) * k_a / gram);
-    const double alpha_min = std::min(0.0, (limits.stroke_min - ell[0]) * k_a / gram);
+    const double stroke_up = std::max(0.0, (limits.stroke_max - ell[0]) * k_a / gram);
+    const double stroke_down = std::min(0.0, (limits.stroke_min - ell[0]) * k_a / gram);
+    const double alpha_max = std::min(limits.max_force_n, stroke_up);
+    const double alpha_min = std::max(-limits.max_force_n, stroke_down);
     double push_up = 0.0;
     double push_down = 0.0;
-    bool unreachable = false;
+    bool out_of_reach = false;
     int active = 0;
-    int iterations = 0;
+    int evaluations = 0;
     ConfigVector gradient;
     for (const msgs::LinearConstraint& row : contacts_) {
         const double g0 = contactGap(row.contact, q, &gradient);
+        if (!std::isfinite(g0) || !gradient.allFinite()) {
+            clearOutput(q, RenderFault::kInvalidConstraints, out);
+            return;
+        }
         if (g0 >= 0.0) {
             continue;
         }
@@ -416,8 +443,8 @@ void KinestheticRenderer::renderNonlinearSubspace(const ConfigVector& q,
         }
         const ActuatedRoot root = solveAlongActuator(
             row.contact, q, direction, slope > 0.0 ? alpha_max : alpha_min, g0, slope);
-        iterations = std::max(iterations, root.iterations);
-        unreachable = unreachable || !root.reached;
+        evaluations += root.evaluations;
+        out_of_reach = out_of_reach || !root.reached;
         if (root.alpha > 0.0) {
             push_up = std::max(push_up, root.alpha);
         } else {
@@ -425,22 +452,31 @@ void KinestheticRenderer::renderNonlinearSubspace(const ConfigVector& q,
         }
     }
     double alpha = push_up > 0.0 ? push_up : push_down;
-    if (push_up > 0.0 && push_down < 0.0) {
-        // Contacts on both sides of the one actuated direction: no alpha satisfies both.
-        alpha = push_up >= -push_down ? push_up : push_down;
+    bool infeasible = push_up > 0.0 && push_down < 0.0;  // contacts on both sides
+    if (infeasible) {
+        alpha = push_up >= -push_down ? push_up : push_down;  // the larger push wins
+    }
+    // Every contact at the chosen alpha: one that was clear may have been pushed into. (Out
+    // of reach, the unreached contact is inside by design: reported as limited instead.)
+    if (alpha != 0.0 && !out_of_reach) {
+        const ConfigVector q_p = q + direction * alpha;
+        for (const msgs::LinearConstraint& row : contacts_) {
+            infeasible = infeasible || contactGap(row.contact, q_p) < -kRootToleranceM;
+        }
+    }
+    if (infeasible) {
         out.fault = RenderFault::kInfeasibleConstraints;
         out.solve_status = SolveStatus::kInfeasible;
-    } else if (unreachable) {
-        out.fault = RenderFault::kInfeasibleConstraints;  // beyond the actuator's stroke
-        out.solve_status = SolveStatus::kInfeasible;
     }
-    const double max_force = device_.actuatorLimits(0).max_force_n;
+    // Out of reach within the force limit or the stroke: the limit is rendered; the proxy
+    // stays inside. Not a fault (the device does what it can), but reported.
+    out.limited = out_of_reach;
     out.actuator_force.resize(1);
-    out.actuator_force[0] = std::clamp(alpha, -max_force, max_force);
-    out.iterations = iterations;
+    out.actuator_force[0] = alpha;
+    out.iterations = evaluations;
     out.active_constraints = active;
     out.in_contact = active > 0;
-    out.proxy = q + direction * out.actuator_force[0];
+    out.proxy = q + direction * alpha;
     out.coupling_force.noalias() = B_ * out.actuator_force;
 }
 

@@ -19,6 +19,9 @@ static_assert(kArraySize<Member<decltype(idl::ContactKinematics{}.q_ref_rad())>>
               kMaxContactJoints);
 static_assert(kArraySize<Member<decltype(idl::ContactKinematics{}.axis())>> ==
               3 * kMaxContactJoints);
+static_assert(kArraySize<Member<decltype(idl::ContactKinematics{}.lever_m())>> ==
+              3 * kMaxContactJoints);
+static_assert(kArraySize<Member<decltype(idl::ContactKinematics{}.normal())>> == 3);
 static_assert(kArraySize<Member<decltype(idl::DeviceState{}.joint_position_rad())>> ==
               kMaxJointDofs);
 static_assert(kArraySize<Member<decltype(idl::DeviceState{}.actuator_force())>> == kMaxActuators);

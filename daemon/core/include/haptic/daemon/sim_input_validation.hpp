@@ -15,7 +15,7 @@ enum class InputRejection : std::uint8_t {
     kDofMismatch,           // dof differs from the device's joint count
     kNonFinite,             // NaN or Inf anywhere
     kCountOverCapacity,     // a count larger than its array (corrupt shared memory)
-    kDegenerateConstraint,  // a constraint normal of zero length
+    kDegenerateConstraint,  // a constraint normal of zero length, or a contact beyond 1 m / 10 rad
     kBadNormal,             // a contact normal that is not unit length
     kNegativeWeight,
     kNotNewer,    // its header.seq does not advance (and it is no restart): a replay or duplicate

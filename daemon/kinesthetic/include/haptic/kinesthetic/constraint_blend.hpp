@@ -4,13 +4,14 @@
 // and hapticd renders at 1 kHz; a constraint that moves by a little from one frame to the next
 // (the tracker's noise, the soft finger settling) would step the force at the sim's rate, which
 // the finger feels as a buzz. So a constraint set that keeps its structure (the same number of
-// constraints, each normal within kSameNormalCosine of its predecessor) is approached linearly,
+// constraints, each normal within kSameNormalCosine of its predecessor, each contact on the same
+// joints) is approached linearly,
 // from what was rendered when it arrived, over the interval at which frames have been arriving.
 // A set that changes structure (a contact appears or goes) is rendered at once: a new contact is
 // never delayed. The cost is up to one sim frame of extra latency on a contact that moves.
 // A row's contact (msgs::ContactKinematics: gap, normal, axes, levers, reference angles) is
-// blended with it when both frames carry one over the same joints; the interpolated normal
-// and axes are normalised where they are used (contact_gap.hpp).
+// blended with it; the interpolated normal and axes are normalised where they are used
+// (contact_gap.hpp).
 //
 // RT: noexcept, no allocation, O(number of constraints) per tick.
 

@@ -21,9 +21,11 @@
 //   subspace             §5.4: q_p = q + B alpha / k_a. With one actuator and constraints that
 //                        carry their contact (msgs::ContactKinematics): each violated contact's
 //                        g(chi(q + B alpha / k_a)) = 0 solved along the actuated direction
-//                        (safeguarded Newton in a bracket), within the actuator's stroke, the
-//                        largest push needed. Otherwise alpha = argmin 1/2 alpha^T (B^T B / k_a)
-//                        alpha over the linear rows (exact QP). u = alpha. rho -> infinity.
+//                        (bracketed, then safeguarded Newton; <= 40 evaluations per contact),
+//                        within the force limit and the actuator's stroke; the largest push
+//                        needed; every contact checked at the result. Otherwise alpha = argmin 1/2
+//                        alpha^T (B^T B / k_a) alpha over the linear rows (exact QP). u = alpha.
+//                        rho -> infinity.
 //   linearized_subspace  §5.5: one Kaczmarz sweep over the violated constraints, each corrected
 //                        along its actuated direction; rows that carry their contact are first
 //                        linearised at the current q (so this is subspace's linearisation).
@@ -84,6 +86,9 @@ struct RenderOutput {
     int iterations{0};
     int active_constraints{0};
     bool in_contact{false};
+    // subspace on contacts: a contact out of reach within the force limit or the actuator's
+    // stroke; the limit is rendered (not a fault).
+    bool limited{false};
 };
 
 class KinestheticRenderer {
