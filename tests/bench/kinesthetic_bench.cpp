@@ -1,4 +1,7 @@
-// Cost of one rendering tick per strategy on the exoskeleton model with 4 active constraints.
+// Cost of one rendering tick per strategy on the exoskeleton model with 4 active constraints,
+// as linear rows and, for the subspace methods, as rows that carry their contact (the
+// fingertip on 4 surfaces, evaluated on the finger's kinematics); and of one update of the
+// user-stiffness estimator.
 // Reproduce (Release build):
 //   ninja -C build/release kinesthetic_bench && build/release/tests/bench/kinesthetic_bench
 // Each benchmark reports median and p99 of the per-tick time (ns) as counters; the target is
@@ -9,19 +12,59 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <string>
 #include <vector>
 
 #include "haptic/common/statistics.hpp"
 #include "haptic/config/device.hpp"
+#include "haptic/kinesthetic/contact_gap.hpp"
 #include "haptic/kinesthetic/port_safety.hpp"
 #include "haptic/kinesthetic/renderer.hpp"
+#include "haptic/kinesthetic/user_stiffness_estimator.hpp"
 
 namespace {
 
 using namespace haptic::kinesthetic;
 
-void renderingTick(benchmark::State& state, RenderingMethod method, RhoMode rho_mode) {
+// The fingertip of the device's planar finger at q, `depth_m` into a surface whose normal
+// makes `angle` with the finger's x axis: the row and its contact.
+haptic::msgs::LinearConstraint fingertipContact(const haptic::config::ExoskeletonConfig& exo,
+                                                const ConfigVector& q, double depth_m,
+                                                double angle) {
+    haptic::msgs::LinearConstraint row;
+    haptic::msgs::ContactKinematics& c = row.contact;
+    c.joints = 3;
+    c.gap_m = -depth_m;
+    c.normal = {std::cos(angle), std::sin(angle), 0.0};
+    std::array<double, 3> x{};
+    std::array<double, 3> y{};
+    double tip_x = 0.0;
+    double tip_y = 0.0;
+    double phi = 0.0;
+    for (std::size_t k = 0; k < 3; ++k) {
+        x[k] = tip_x;
+        y[k] = tip_y;
+        phi += q[static_cast<Eigen::Index>(k)];
+        tip_x += exo.finger.phalanx_lengths_m[k] * std::cos(phi);
+        tip_y += exo.finger.phalanx_lengths_m[k] * std::sin(phi);
+    }
+    for (std::size_t j = 0; j < 3; ++j) {
+        c.q_ref_rad[j] = q[static_cast<Eigen::Index>(j)];
+        c.axis[j] = {0.0, 0.0, 1.0};
+        c.lever_m[j] = {tip_x - x[j], tip_y - y[j], 0.0};
+    }
+    ConfigVector gradient;
+    const double g = contactGap(c, q, &gradient);
+    for (std::size_t i = 0; i < 3; ++i) {
+        row.a[i] = gradient[static_cast<Eigen::Index>(i)];
+    }
+    row.b = gradient.dot(q) - g;
+    return row;
+}
+
+void renderingTick(benchmark::State& state, RenderingMethod method, RhoMode rho_mode,
+                   bool on_contacts = false) {
     const auto exo_config = haptic::config::loadDeviceConfig(std::string(HAPTIC_CONFIG_DIR) +
                                                              "/devices/exoskeleton.yaml");
     const ExoskeletonDevice exo(exo_config.exoskeleton());
@@ -45,6 +88,14 @@ void renderingTick(benchmark::State& state, RenderingMethod method, RhoMode rho_
             dot += normals[j][i] * q[static_cast<Eigen::Index>(i)];
         }
         constraints[j].b = dot + 0.02;  // all four violated at q
+    }
+    if (on_contacts) {
+        // Four surfaces around the pad, 1-4 mm deep, all pushed out the same way.
+        for (std::size_t j = 0; j < 4; ++j) {
+            constraints[j] =
+                fingertipContact(exo_config.exoskeleton(), q, 0.001 * static_cast<double>(j + 1),
+                                 2.3 + 0.2 * static_cast<double>(j));
+        }
     }
     ConfigVector q_dot(3);
     q_dot << 0.1, -0.2, 0.05;
@@ -74,6 +125,7 @@ void renderingTick(benchmark::State& state, RenderingMethod method, RhoMode rho_
         state.counters["p99_ns"] = summary.p99;
         state.counters["max_ns"] = summary.max;
         state.counters["active"] = out.active_constraints;
+        state.counters["iterations"] = out.iterations;
         state.counters["fault"] = static_cast<double>(out.fault);
     }
 }
@@ -89,6 +141,12 @@ BENCHMARK_CAPTURE(renderingTick, subspace, RenderingMethod::kSubspace, RhoMode::
 BENCHMARK_CAPTURE(renderingTick, linearized_subspace, RenderingMethod::kLinearizedSubspace,
                   RhoMode::kClosedForm)
     ->UseManualTime();
+BENCHMARK_CAPTURE(renderingTick, subspace_on_contacts, RenderingMethod::kSubspace,
+                  RhoMode::kClosedForm, true)
+    ->UseManualTime();
+BENCHMARK_CAPTURE(renderingTick, linearized_subspace_on_contacts,
+                  RenderingMethod::kLinearizedSubspace, RhoMode::kClosedForm, true)
+    ->UseManualTime();
 BENCHMARK_CAPTURE(renderingTick, anisotropic_closed_form, RenderingMethod::kAnisotropic,
                   RhoMode::kClosedForm)
     ->UseManualTime();
@@ -98,5 +156,35 @@ BENCHMARK_CAPTURE(renderingTick, anisotropic_numeric_search, RenderingMethod::kA
 BENCHMARK_CAPTURE(renderingTick, anisotropic_manual, RenderingMethod::kAnisotropic,
                   RhoMode::kManual)
     ->UseManualTime();
+
+// One tick of the user-stiffness estimator while it probes (the window full, a solve).
+void userStiffnessUpdate(benchmark::State& state) {
+    UserStiffnessEstimatorConfig config;
+    config.probe_time_s = 60.0;
+    UserStiffnessEstimator estimator(config);
+    double t = 0.0;
+    std::vector<double> samples_ns;
+    samples_ns.reserve(1 << 20);
+    for (auto _ : state) {
+        t += 1e-3;
+        const double ell = 1e-3 + 20e-6 * estimator.probe() + 1e-4 * std::sin(3.0 * t);
+        const auto start = std::chrono::steady_clock::now();
+        estimator.update(true, 2.0 + 9000.0 * (ell - 1e-3), ell, 1.1e-4);
+        const auto stop = std::chrono::steady_clock::now();
+        benchmark::DoNotOptimize(estimator.stiffness());
+        const double ns = std::chrono::duration<double, std::nano>(stop - start).count();
+        state.SetIterationTime(ns * 1e-9);
+        if (samples_ns.size() < samples_ns.capacity()) {
+            samples_ns.push_back(ns);
+        }
+    }
+    if (!samples_ns.empty()) {
+        const haptic::common::PercentileSummary summary = haptic::common::summarize(samples_ns);
+        state.counters["median_ns"] = summary.p50;
+        state.counters["p99_ns"] = summary.p99;
+        state.counters["max_ns"] = summary.max;
+    }
+}
+BENCHMARK(userStiffnessUpdate)->UseManualTime();
 
 }  // namespace

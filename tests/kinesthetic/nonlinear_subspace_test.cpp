@@ -168,10 +168,10 @@ TEST(NonlinearSubspace, MatchesABisectionAlongTheActuatedDirection) {
             EXPECT_FALSE(out.limited);
             EXPECT_TRUE(out.in_contact);
             const double reference = bisectAlongActuator(exo, row, q, side);
-            EXPECT_NEAR(alpha, reference, 1e-9 * std::abs(reference))
+            EXPECT_NEAR(alpha, reference, 1e-6 * std::abs(reference))
                 << "depth " << depth << " side " << side;
             EXPECT_GE(contactGap(row.contact, out.proxy), 0.0) << "the proxy is on the surface";
-            EXPECT_LT(contactGap(row.contact, out.proxy), 1e-9);
+            EXPECT_LT(contactGap(row.contact, out.proxy), 1e-9) << "within 1 nm";
         }
     }
 }

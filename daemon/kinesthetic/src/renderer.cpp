@@ -17,7 +17,7 @@ constexpr double kActuatedShareEpsilon = 1e-9;
 // The nonlinear subspace root: evaluations of g at most per contact (bracketing takes at most
 // half), and how close to the surface is on it.
 constexpr int kMaxRootIterations = 40;
-constexpr double kRootToleranceM = 1e-12;
+constexpr double kRootToleranceM = 1e-9;  // 1 nm: far below any encoder
 
 struct ActuatedRoot {
     double alpha{0.0};
@@ -26,44 +26,26 @@ struct ActuatedRoot {
 };
 
 // The alpha between 0 and `bound` (either sign) nearest 0 with g(q + direction alpha) = 0,
-// given g(0) = g0 < 0 and g's slope along `direction` pointing towards `bound`. First the
-// crossing is bracketed by stepping out from the linear estimate, doubling each time (g is
-// not monotone over a long way: the point moves on arcs), then a safeguarded Newton iteration
-// in the bracket (a step that leaves it is a bisection). Returns the bracket's feasible end,
-// so the proxy is never left inside this contact. At most kMaxRootIterations evaluations of g.
+// given g(0) = g0 < 0 and g's slope along `direction` pointing towards `bound`. From the
+// linear estimate, Newton steps that lead outwards (or doublings where Newton does not) until
+// g >= 0 brackets the crossing (g is not monotone over a long way: the point moves on arcs),
+// then a safeguarded Newton iteration in the bracket (a step that leaves it is a bisection).
+// Returns the bracket's feasible end, so the proxy is never left inside this contact. At most
+// kMaxRootIterations evaluations of g.
 ActuatedRoot solveAlongActuator(const msgs::ContactKinematics& contact, const ConfigVector& q,
                                 const ConfigVector& direction, double bound, double g0,
                                 double slope) noexcept {
     ActuatedRoot root;
     ConfigVector gradient;
-    auto gap = [&](double alpha, ConfigVector* grad) {
+    const double reach = std::abs(bound);
+    double inside = 0.0;  // g < 0 here
+    double outside = std::numeric_limits<double>::quiet_NaN();
+    double alpha = std::copysign(std::min(std::abs(g0 / slope), reach), bound);
+    while (root.evaluations < kMaxRootIterations) {
         ++root.evaluations;
         const ConfigVector q_p = q + direction * alpha;
-        return contactGap(contact, q_p, grad);
-    };
-    double inside = 0.0;  // g < 0 here
-    double outside = std::nan("");
-    double step = std::min(std::abs(g0 / slope), std::abs(bound));
-    while (root.evaluations < kMaxRootIterations / 2) {
-        const double alpha = std::copysign(std::min(step, std::abs(bound)), bound);
-        if (gap(alpha, nullptr) >= 0.0) {
-            outside = alpha;
-            break;
-        }
-        inside = alpha;
-        if (std::abs(alpha) >= std::abs(bound)) {
-            break;
-        }
-        step *= 2.0;
-    }
-    if (std::isnan(outside)) {
-        root.alpha = inside;  // the bound: out of reach within it
-        root.reached = false;
-        return root;
-    }
-    double alpha = outside;
-    while (root.evaluations < kMaxRootIterations) {
-        const double g = gap(alpha, &gradient);
+        const double g = contactGap(contact, q_p, &gradient);
+        const double along = gradient.dot(direction);
         if (g >= 0.0) {
             outside = alpha;
             if (g <= kRootToleranceM) {
@@ -72,13 +54,27 @@ ActuatedRoot solveAlongActuator(const msgs::ContactKinematics& contact, const Co
         } else {
             inside = alpha;
         }
-        if (std::abs(outside - inside) <= 1e-15 * (1.0 + std::abs(bound))) {
+        const double newton = along != 0.0 ? alpha - g / along : std::nan("");
+        if (std::isnan(outside)) {
+            // Not bracketed yet: further out, by Newton if it leads out, else doubling.
+            if (std::abs(alpha) >= reach) {
+                break;
+            }
+            const bool outwards = std::abs(newton) > std::abs(alpha) && newton * bound > 0.0;
+            alpha = std::copysign(
+                std::min(outwards ? std::abs(newton) : 2.0 * std::abs(alpha), reach), bound);
+            continue;
+        }
+        if (std::abs(outside - inside) <= 1e-15 * (1.0 + reach)) {
             break;
         }
-        const double along = gradient.dot(direction);
-        const double newton = along != 0.0 ? alpha - g / along : inside;
         const bool in_bracket = (newton - inside) * (newton - outside) < 0.0;
         alpha = in_bracket ? newton : 0.5 * (inside + outside);
+    }
+    if (std::isnan(outside)) {
+        root.alpha = inside;  // the bound: out of reach within it
+        root.reached = false;
+        return root;
     }
     root.alpha = outside;
     return root;
