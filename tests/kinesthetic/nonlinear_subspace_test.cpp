@@ -27,6 +27,13 @@ config::ExoskeletonConfig shippedExoskeleton() {
 
 constexpr double kTrackingStiffness = 2.0;  // k_a, the shipped value (N m/rad)
 
+// The shipped device with its force clamp out of the way, so that alpha itself shows.
+ExoskeletonDevice unclampedExoskeleton() {
+    config::ExoskeletonConfig strong = shippedExoskeleton();
+    strong.actuator.max_force_n = 1e6;
+    return ExoskeletonDevice(strong);
+}
+
 // The fingertip of the device's planar finger at q pressed `depth_m` into a plane whose
 // normal (in the finger's plane) makes `normal_angle_rad` with the x axis.
 msgs::LinearConstraint fingertipContact(const config::ExoskeletonConfig& exo, const ConfigVector& q,
@@ -152,9 +159,7 @@ TEST(NonlinearSubspace, TheContactRowIsTheLinearisationOfItsGap) {
 
 TEST(NonlinearSubspace, MatchesABisectionAlongTheActuatedDirection) {
     const auto config = shippedExoskeleton();
-    config::ExoskeletonConfig strong = config;
-    strong.actuator.max_force_n = 1e6;  // the force clamp out of the way: alpha itself
-    const ExoskeletonDevice exo(strong);
+    const ExoskeletonDevice exo = unclampedExoskeleton();
     const ConfigVector q = pose();
     // This surface is left by flexing the finger (a positive actuator force); the mirrored
     // one by extending it. The side is the geometry's, not read off the renderer.
@@ -181,9 +186,7 @@ TEST(NonlinearSubspace, MatchesABisectionAlongTheActuatedDirection) {
 // fingertip's arc leaves the tangent line.
 TEST(NonlinearSubspace, LinearizedSubspaceIsItsFirstOrder) {
     const auto config = shippedExoskeleton();
-    config::ExoskeletonConfig strong = config;
-    strong.actuator.max_force_n = 1e6;
-    const ExoskeletonDevice exo(strong);
+    const ExoskeletonDevice exo = unclampedExoskeleton();
     const ConfigVector q = pose();
     auto difference = [&](double depth) {
         const msgs::LinearConstraint row = fingertipContact(config, q, depth, kNormalAngle);
@@ -210,9 +213,7 @@ TEST(NonlinearSubspace, LinearizedSubspaceIsItsFirstOrder) {
 // limit on the side the push needs, nothing is pushed.
 TEST(NonlinearSubspace, TheProxyStaysWithinTheActuatorsStroke) {
     const auto config = shippedExoskeleton();
-    config::ExoskeletonConfig strong = config;
-    strong.actuator.max_force_n = 1e6;
-    const ExoskeletonDevice exo(strong);
+    const ExoskeletonDevice exo = unclampedExoskeleton();
     const ConfigVector q = pose();
     const msgs::LinearConstraint row = fingertipContact(config, q, 0.2, kNormalAngle);
     RenderOutput out;
@@ -228,7 +229,8 @@ TEST(NonlinearSubspace, TheProxyStaysWithinTheActuatorsStroke) {
                 config.actuator.stroke_max_m, 1e-12);
     EXPECT_LT(contactGap(row.contact, out.proxy), 0.0) << "still inside: out of reach";
 
-    config::ExoskeletonConfig past = strong;
+    config::ExoskeletonConfig past = config;
+    past.actuator.max_force_n = 1e6;
     past.actuator.stroke_max_m = ell[0] - 0.001;  // the stroke already 1 mm past its maximum
     const ExoskeletonDevice at_stop(past);
     const msgs::LinearConstraint shallow = fingertipContact(config, q, 0.001, kNormalAngle);
@@ -382,9 +384,7 @@ TEST(NonlinearSubspace, TheGapFollowsAChainWithTiltedAxes) {
 // sim's row.
 TEST(NonlinearSubspace, LinearizedSubspaceLinearisesAtTheCurrentConfiguration) {
     const auto config = shippedExoskeleton();
-    config::ExoskeletonConfig strong = config;
-    strong.actuator.max_force_n = 1e6;
-    const ExoskeletonDevice exo(strong);
+    const ExoskeletonDevice exo = unclampedExoskeleton();
     const ConfigVector q_ref = pose();
     msgs::LinearConstraint row = fingertipContact(config, q_ref, 0.001, kNormalAngle);
     ConfigVector q = q_ref;

@@ -73,6 +73,21 @@ class KinestheticOutputTest : public ::testing::Test {
         model.simulation.addCollider({HalfSpace{}, point, plane_rotation, 0.5});
     }
 
+    // The distal skin node nearest the plane, and its distance to it.
+    std::pair<int, double> closestDistalNode() const {
+        const Simulation& sim = model.simulation;
+        const BoneInfo& distal = bone(model, "index_distal");
+        std::pair<int, double> closest{-1, std::numeric_limits<double>::infinity()};
+        for (int node : sim.skinNodes()) {
+            const double gap = normal.dot(sim.nodePosition(node) - point);
+            if (node >= distal.first_node && node < distal.first_node + distal.node_count &&
+                gap < closest.second) {
+                closest = {node, gap};
+            }
+        }
+        return closest;
+    }
+
     HandModel model = buildHand(handConfig(config::HandModel::kFinger), SolverSettings{});
     HandKinematics kinematics{model};
     KinestheticOutput output{model, kinematics, config::Finger::kIndex};
@@ -92,16 +107,7 @@ TEST_F(KinestheticOutputTest, StraightFingerOverTiltedPlaneGivesOneHandComputedC
     // Closest distal skin node and the joint anchors of the straight finger (MCP at the front
     // of the palm, then the phalanx lengths along x), flexion axis +y.
     const Simulation& sim = model.simulation;
-    const BoneInfo& distal = bone(model, "index_distal");
-    int closest = -1;
-    double gap = std::numeric_limits<double>::infinity();
-    for (int node : sim.skinNodes()) {
-        if (node >= distal.first_node && node < distal.first_node + distal.node_count &&
-            normal.dot(sim.nodePosition(node) - point) < gap) {
-            gap = normal.dot(sim.nodePosition(node) - point);
-            closest = node;
-        }
-    }
+    const auto [closest, gap] = closestDistalNode();
     EXPECT_NEAR(gap, 0.001, 1e-12);
     const auto lengths = phalanxLengths(config::Finger::kIndex, 0.19);
     const double mcp_x = 0.5 * 0.45 * 0.19;
@@ -160,17 +166,7 @@ TEST_F(KinestheticOutputTest, TheRowsContactPredictsTheGapBeyondTheLinearRange) 
         EXPECT_NEAR(gradient[static_cast<Eigen::Index>(j)], c.a[j], 1e-12) << "joint " << j;
     }
     // The skin point the row stands for: the distal node nearest the plane.
-    const Simulation& sim = model.simulation;
-    const BoneInfo& distal = bone(model, "index_distal");
-    int closest = -1;
-    double nearest = std::numeric_limits<double>::infinity();
-    for (int node : sim.skinNodes()) {
-        if (node >= distal.first_node && node < distal.first_node + distal.node_count &&
-            normal.dot(sim.nodePosition(node) - point) < nearest) {
-            nearest = normal.dot(sim.nodePosition(node) - point);
-            closest = node;
-        }
-    }
+    const int closest = closestDistalNode().first;
     const std::array<double, 3> dq{0.15, 0.25, 0.3};
     std::vector<BonePose> poses;
     kinematics.forward(kinematics.buildPose(0), dq, poses);
