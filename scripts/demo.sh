@@ -16,6 +16,8 @@
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+# shellcheck source=scripts/iceoryx-paths.sh
+source "$ROOT/scripts/iceoryx-paths.sh"
 DURATION=0
 REALTIME=ignore   # this VM has no PREEMPT_RT kernel; use 'enforce' on a lab PC
 RECORD=15         # seconds of telemetry in the PNG: two and a half loops of the script
@@ -83,8 +85,8 @@ cleanup() {
   [[ -n "${EMU_PID:-}" ]] && stop "$EMU_PID" hapticemu
   [[ -n "${ROUDI_PID:-}" ]] && stop "$ROUDI_PID" iox-roudi
   local stale
-  stale=$(ls /dev/shm/iceoryx_mgmt /dev/shm/"$(id -gn)" /tmp/roudi /tmp/roudi.lock \
-    /tmp/iox-unique-roudi.lock /tmp/hapticd /tmp/hapticd.lock /tmp/handsim /tmp/handsim.lock 2>/dev/null || true)
+  # shellcheck disable=SC2046  # one path per line, none with spaces
+  stale=$(ls $(iceoryx_paths "$(id -gn)") 2>/dev/null || true)
   # Fast DDS segments (data sharing, SHM transport ports) created during this run count too.
   stale+=" $(find /dev/shm -maxdepth 1 -name 'fast*' -newer "$LOGS" 2>/dev/null || true)"
   if [[ -n "${stale// /}" ]]; then

@@ -28,8 +28,10 @@ chmod +x "$demo"
 # reports stale iceoryx files; they are cleaned below.
 "$demo" --duration 12 --record 6 >"$work/demo.log" 2>&1 || true
 pkill -9 -x iox-roudi 2>/dev/null || true  # only the traced one: none ran before
-rm -f /dev/shm/iceoryx_mgmt /tmp/roudi /tmp/roudi.lock /tmp/iox-unique-roudi.lock \
-      /tmp/hapticd /tmp/hapticd.lock /tmp/handsim /tmp/handsim.lock "/dev/shm/$(id -gn)"
+# shellcheck source=scripts/iceoryx-paths.sh
+source "$ROOT/scripts/iceoryx-paths.sh"
+# shellcheck disable=SC2046  # one path per line, none with spaces
+rm -f $(iceoryx_paths "$(id -gn)")
 fastdds shm clean >/dev/null 2>&1 || true
 
 expand() {  # a systemd syscall set, recursively

@@ -10,6 +10,7 @@
 // database, as haptic.sysusers.conf makes it (systemd_sysusers_dry_run checks).
 
 #include <sys/stat.h>
+#include <sstream>
 #include <unistd.h>
 
 #include "device_safety_rig.hpp"
@@ -43,19 +44,25 @@ std::pair<long, long> idsOf(pid_t pid) {
     return {uid, gid};
 }
 
-// iceoryx's fixed paths. After an unclean exit they stay owned by the user who ran RouDi or
-// the client; with fs.protected_regular=2 (Debian 12's default) another user, root included,
+// iceoryx's fixed paths (scripts/iceoryx-paths.sh, the one list), RouDi's group being
+// nogroup here. After an unclean exit they stay owned by the user who ran RouDi or the
+// client; with fs.protected_regular=2 (Debian 12's default) another user, root included,
 // then cannot open them in /tmp. Removed before and after this test, while no RouDi runs.
 void removeIceoryxLeftovers() {
     if (ipc::probeRoudi().reachable) {
         return;
     }
-    for (const char* path : {"/tmp/roudi", "/tmp/roudi.lock", "/tmp/iox-unique-roudi.lock",
-                             "/tmp/hapticd", "/tmp/hapticd.lock", "/tmp/handsim",
-                             "/tmp/handsim.lock", "/dev/shm/iceoryx_mgmt", "/dev/shm/nogroup"}) {
+    const CommandResult paths =
+        runCommand({"/bin/bash", HAPTIC_SOURCE_DIR "/scripts/iceoryx-paths.sh", "nogroup"}, 10s);
+    ASSERT_EQ(paths.exit_code, 0) << paths.err;
+    std::istringstream lines(paths.out);
+    int removable = 0;
+    for (std::string path; std::getline(lines, path);) {
         std::error_code ignored;
         fs::remove(path, ignored);
+        ++removable;
     }
+    EXPECT_GE(removable, 9) << "scripts/iceoryx-paths.sh listed: " << paths.out;
 }
 
 class ServiceUsersTest : public DeviceSafetyTest {
