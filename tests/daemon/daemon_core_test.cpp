@@ -698,6 +698,16 @@ TEST_F(DaemonCoreTest, RejectsNonFiniteAndWrongDeviceInputAndCountsThem) {
     EXPECT_FALSE(status.sim_link.connected);
 }
 
+// A sample's normal follows the same length rule as a row's contact (docs/hapticd.md).
+TEST_F(DaemonCoreTest, TakesASampleNormalWithinTheLengthRuleOnly) {
+    auto long_normal = validContactSurface("thimble_index");
+    long_normal.samples[0].normal_device = {0.0, 0.0, 1.0011};
+    EXPECT_THAT(sut.offerContactSurface(1, long_normal, 0), Eq(InputRejection::kBadNormal));
+    auto nearly_unit = validContactSurface("thimble_index");
+    nearly_unit.samples[0].normal_device = {0.0, 0.0, 1.0009};
+    EXPECT_THAT(sut.offerContactSurface(1, nearly_unit, 0), Eq(InputRejection::kNone));
+}
+
 // The contact behind a constraint row (msgs::ContactKinematics) is checked like the row.
 TEST_F(DaemonCoreTest, RejectsABadContactBehindAConstraintRow) {
     auto withContact = [] {
@@ -730,6 +740,13 @@ TEST_F(DaemonCoreTest, RejectsABadContactBehindAConstraintRow) {
     auto zero_normal = withContact();
     zero_normal.constraints[0].contact.normal = {0.0, 0.0, 0.0};
     EXPECT_THAT(sut.offerConstraintSet(0, zero_normal, 0), Eq(InputRejection::kBadNormal));
+    // One length rule for every direction (docs/hapticd.md): within 1e-3 of 1 passes.
+    auto nearly_unit_axis = withContact();
+    nearly_unit_axis.constraints[0].contact.axis[1] = {0.0, 1.0009, 0.0};
+    EXPECT_THAT(sut.offerConstraintSet(0, nearly_unit_axis, 0), Eq(InputRejection::kNone));
+    auto short_normal = withContact();
+    short_normal.constraints[0].contact.normal = {0.0, 0.0, 0.9989};
+    EXPECT_THAT(sut.offerConstraintSet(0, short_normal, 0), Eq(InputRejection::kBadNormal));
     auto far_lever = withContact();
     far_lever.constraints[0].contact.lever_m[0] = {1e300, 0.0, 0.0};  // finite, no hand
     EXPECT_THAT(sut.offerConstraintSet(0, far_lever, 0), Eq(InputRejection::kDegenerateConstraint));

@@ -19,6 +19,13 @@ bool allFinite(const std::array<double, N>& values, std::size_t used = N) noexce
     return true;
 }
 
+// One rule for every direction the sim sends (sample normals, contact normals, joint axes):
+// its length within 1e-3 of 1 (docs/hapticd.md). The sim normalises them; what comes through
+// is normalised again where it is used.
+bool unitLength(const std::array<double, 3>& v) noexcept {
+    return std::abs(std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) - 1.0) <= 1e-3;
+}
+
 }  // namespace
 
 std::string_view describe(InputRejection reason) noexcept {
@@ -77,9 +84,6 @@ InputRejection validateContact(const msgs::ContactKinematics& contact, std::uint
     if (contact.joints == 0) {
         return InputRejection::kNone;  // no contact known: the row is all there is
     }
-    auto unit = [](const std::array<double, 3>& v) {
-        return std::abs(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] - 1.0) < 1e-3;
-    };
     if (!(std::abs(contact.gap_m) <= 1.0)) {
         return InputRejection::kDegenerateConstraint;
     }
@@ -90,11 +94,11 @@ InputRejection validateContact(const msgs::ContactKinematics& contact, std::uint
             !(lever[0] * lever[0] + lever[1] * lever[1] + lever[2] * lever[2] <= 1.0)) {
             return InputRejection::kDegenerateConstraint;
         }
-        if (!unit(contact.axis[j])) {
+        if (!unitLength(contact.axis[j])) {
             return InputRejection::kBadNormal;
         }
     }
-    return unit(contact.normal) ? InputRejection::kNone : InputRejection::kBadNormal;
+    return unitLength(contact.normal) ? InputRejection::kNone : InputRejection::kBadNormal;
 }
 
 }  // namespace
@@ -150,10 +154,7 @@ InputRejection validate(const msgs::ContactSurface& message, std::string_view de
             !finite(sample.signed_distance_m) || !finite(sample.weight)) {
             return InputRejection::kNonFinite;
         }
-        const double norm = std::sqrt(sample.normal_device[0] * sample.normal_device[0] +
-                                      sample.normal_device[1] * sample.normal_device[1] +
-                                      sample.normal_device[2] * sample.normal_device[2]);
-        if (std::abs(norm - 1.0) > 1e-3) {
+        if (!unitLength(sample.normal_device)) {
             return InputRejection::kBadNormal;
         }
         if (sample.weight < 0.0) {
