@@ -10,8 +10,9 @@
 // database, as haptic.sysusers.conf makes it (systemd_sysusers_dry_run checks).
 
 #include <sys/stat.h>
-#include <sstream>
 #include <unistd.h>
+
+#include <sstream>
 
 #include "device_safety_rig.hpp"
 
