@@ -1,6 +1,7 @@
 // Cost of one rendering tick per strategy on the exoskeleton model with 4 active constraints,
 // as linear rows and, for the subspace methods, as rows that carry their contact (the
-// fingertip on 4 surfaces, evaluated on the finger's kinematics); and of one update of the
+// fingertip on 4 surfaces, evaluated on the finger's kinematics); nullspace and naive with two
+// contacts on one face (where nullspace redistributes); and of one update of the
 // user-stiffness estimator.
 // Reproduce (Release build):
 //   ninja -C build/release kinesthetic_bench && build/release/tests/bench/kinesthetic_bench
@@ -13,12 +14,13 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "contact_rows.hpp"
 #include "haptic/common/statistics.hpp"
 #include "haptic/config/device.hpp"
-#include "haptic/kinesthetic/contact_gap.hpp"
 #include "haptic/kinesthetic/port_safety.hpp"
 #include "haptic/kinesthetic/renderer.hpp"
 #include "haptic/kinesthetic/user_stiffness_estimator.hpp"
@@ -26,42 +28,6 @@
 namespace {
 
 using namespace haptic::kinesthetic;
-
-// The fingertip of the device's planar finger at q, `depth_m` into a surface whose normal
-// makes `angle` with the finger's x axis: the row and its contact.
-haptic::msgs::LinearConstraint fingertipContact(const haptic::config::ExoskeletonConfig& exo,
-                                                const ConfigVector& q, double depth_m,
-                                                double angle) {
-    haptic::msgs::LinearConstraint row;
-    haptic::msgs::ContactKinematics& c = row.contact;
-    c.joints = 3;
-    c.gap_m = -depth_m;
-    c.normal = {std::cos(angle), std::sin(angle), 0.0};
-    std::array<double, 3> x{};
-    std::array<double, 3> y{};
-    double tip_x = 0.0;
-    double tip_y = 0.0;
-    double phi = 0.0;
-    for (std::size_t k = 0; k < 3; ++k) {
-        x[k] = tip_x;
-        y[k] = tip_y;
-        phi += q[static_cast<Eigen::Index>(k)];
-        tip_x += exo.finger.phalanx_lengths_m[k] * std::cos(phi);
-        tip_y += exo.finger.phalanx_lengths_m[k] * std::sin(phi);
-    }
-    for (std::size_t j = 0; j < 3; ++j) {
-        c.q_ref_rad[j] = q[static_cast<Eigen::Index>(j)];
-        c.axis[j] = {0.0, 0.0, 1.0};
-        c.lever_m[j] = {tip_x - x[j], tip_y - y[j], 0.0};
-    }
-    ConfigVector gradient;
-    const double g = contactGap(c, q, &gradient);
-    for (std::size_t i = 0; i < 3; ++i) {
-        row.a[i] = gradient[static_cast<Eigen::Index>(i)];
-    }
-    row.b = gradient.dot(q) - g;
-    return row;
-}
 
 using Clock = std::chrono::steady_clock;
 
@@ -83,8 +49,12 @@ void reportPercentiles(benchmark::State& state, std::vector<double>& samples_ns)
     state.counters["max_ns"] = summary.max;
 }
 
+// The rows a tick renders: 4 linear rows; the fingertip on 4 surfaces (rows that carry their
+// contact); or the middle phalanx and the fingertip on one face, where nullspace redistributes.
+enum class Rows { kLinear, kContacts, kOneFace };
+
 void renderingTick(benchmark::State& state, RenderingMethod method, RhoMode rho_mode,
-                   bool on_contacts = false) {
+                   Rows rows = Rows::kLinear) {
     const auto exo_config = haptic::config::loadDeviceConfig(std::string(HAPTIC_CONFIG_DIR) +
                                                              "/devices/exoskeleton.yaml");
     const ExoskeletonDevice exo(exo_config.exoskeleton());
@@ -109,13 +79,22 @@ void renderingTick(benchmark::State& state, RenderingMethod method, RhoMode rho_
         }
         constraints[j].b = dot + 0.02;  // all four violated at q
     }
-    if (on_contacts) {
+    std::span<const haptic::msgs::LinearConstraint> rendered = constraints;
+    if (rows == Rows::kContacts) {
         // Four surfaces around the pad, 1-4 mm deep, all pushed out the same way.
         for (std::size_t j = 0; j < 4; ++j) {
-            constraints[j] =
-                fingertipContact(exo_config.exoskeleton(), q, 0.001 * static_cast<double>(j + 1),
-                                 2.3 + 0.2 * static_cast<double>(j));
+            constraints[j] = haptic::testing::fingertipContact(exo_config.exoskeleton(), q,
+                                                               0.001 * static_cast<double>(j + 1),
+                                                               2.3 + 0.2 * static_cast<double>(j));
         }
+    } else if (rows == Rows::kOneFace) {
+        // Both active at the naive proxy (renderer_test.cpp, NullspaceRendering).
+        q << 0.5, 0.7, 0.4;
+        constraints[0] =
+            haptic::testing::phalanxContact(exo_config.exoskeleton(), q, 1, 0.6, 0.0018, 2.6);
+        constraints[1] =
+            haptic::testing::phalanxContact(exo_config.exoskeleton(), q, 2, 1.0, 0.003, 2.6);
+        rendered = rendered.first(2);
     }
     ConfigVector q_dot(3);
     q_dot << 0.1, -0.2, 0.05;
@@ -128,7 +107,7 @@ void renderingTick(benchmark::State& state, RenderingMethod method, RhoMode rho_
         // A small jitter in the pose, as from encoders; keeps the warm start realistic.
         q[1] += (k++ % 2 == 0) ? 1e-5 : -1e-5;
         const auto start = Clock::now();
-        renderer.tick(q, q_dot, constraints, out);
+        renderer.tick(q, q_dot, rendered, out);
         exo.actuatorCoordinates(q, ell);
         const PortCommand command = guard.apply(out.actuator_force[0], ell[0], true);
         const auto stop = Clock::now();
@@ -154,11 +133,17 @@ BENCHMARK_CAPTURE(renderingTick, subspace, RenderingMethod::kSubspace, RhoMode::
 BENCHMARK_CAPTURE(renderingTick, linearized_subspace, RenderingMethod::kLinearizedSubspace,
                   RhoMode::kClosedForm)
     ->UseManualTime();
+BENCHMARK_CAPTURE(renderingTick, nullspace_on_one_face, RenderingMethod::kNullspace,
+                  RhoMode::kClosedForm, Rows::kOneFace)
+    ->UseManualTime();
+BENCHMARK_CAPTURE(renderingTick, naive_on_one_face, RenderingMethod::kNaive, RhoMode::kClosedForm,
+                  Rows::kOneFace)
+    ->UseManualTime();
 BENCHMARK_CAPTURE(renderingTick, subspace_on_contacts, RenderingMethod::kSubspace,
-                  RhoMode::kClosedForm, true)
+                  RhoMode::kClosedForm, Rows::kContacts)
     ->UseManualTime();
 BENCHMARK_CAPTURE(renderingTick, linearized_subspace_on_contacts,
-                  RenderingMethod::kLinearizedSubspace, RhoMode::kClosedForm, true)
+                  RenderingMethod::kLinearizedSubspace, RhoMode::kClosedForm, Rows::kContacts)
     ->UseManualTime();
 BENCHMARK_CAPTURE(renderingTick, anisotropic_closed_form, RenderingMethod::kAnisotropic,
                   RhoMode::kClosedForm)

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "allocation_counter.hpp"
+#include "contact_rows.hpp"
 #include "haptic/config/device.hpp"
 #include "haptic/kinesthetic/anisotropic.hpp"
 #include "haptic/kinesthetic/port_safety.hpp"
@@ -98,6 +99,42 @@ TEST(KinestheticAllocation, RenderingTickAndPortGuardAllocateNothing) {
     EXPECT_EQ(contact_ticks, 6 * 60);
     EXPECT_TRUE(out.actuator_force.allFinite());
     EXPECT_TRUE(out.actuator_force.allFinite());
+}
+
+// nullspace's redistribution (§5.3) runs only with two or more active contacts that share a
+// resultant: the middle phalanx and the fingertip on one face (NullspaceRendering.Splits...).
+TEST(KinestheticAllocation, NullspaceRedistributionAllocatesNothing) {
+    const config::ExoskeletonConfig exo_config =
+        config::loadDeviceConfig(std::string(HAPTIC_CONFIG_DIR) + "/devices/exoskeleton.yaml")
+            .exoskeleton();
+    const ExoskeletonDevice exo(exo_config);
+    ConfigVector q(3);
+    q << 0.5, 0.7, 0.4;
+    const std::array<msgs::LinearConstraint, 2> rows{
+        testing::phalanxContact(exo_config, q, 1, 0.6, 0.0018, 2.6),
+        testing::phalanxContact(exo_config, q, 2, 1.0, 0.003, 2.6)};
+    RenderParameters p;
+    p.tracking_stiffness = 2.0;
+    p.method = RenderingMethod::kNaive;
+    KinestheticRenderer naive(exo, p);
+    p.method = RenderingMethod::kNullspace;
+    KinestheticRenderer renderer(exo, p);
+    const ConfigVector q_dot = ConfigVector::Zero(3);
+    RenderOutput naive_out;
+    RenderOutput out;
+    naive.tick(q, q_dot, rows, naive_out);
+    renderer.tick(q, q_dot, rows, out);  // warm-up
+    std::size_t allocations = 0;
+    {
+        testing::ScopedAllocationCounter counter;
+        for (int k = 0; k < 60; ++k) {
+            renderer.tick(q, q_dot, rows, out);
+        }
+        allocations = counter.allocations();
+    }
+    EXPECT_EQ(allocations, 0U);
+    ASSERT_EQ(out.active_constraints, 2);
+    EXPECT_NE(out.actuator_force[0], naive_out.actuator_force[0]) << "the redistribution ran";
 }
 
 }  // namespace

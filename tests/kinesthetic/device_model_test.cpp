@@ -44,27 +44,6 @@ TEST(ExoskeletonDevice, ActuationMatrixIsTheGradientOfTheClosure) {
     }
 }
 
-TEST(ExoskeletonDevice, ContactJacobianMatchesFiniteDifferences) {
-    const ExoskeletonDevice sut(shippedExoskeleton());
-    const ConfigVector q = pose(0.5, 0.8, 0.3);
-    PointJacobian J;
-    sut.contactJacobian(q, J);
-    ASSERT_EQ(J.rows(), 2);
-    for (int j = 0; j < 3; ++j) {
-        const double h = 1e-6;
-        ConfigVector qp = q;
-        ConfigVector qm = q;
-        qp[j] += h;
-        qm[j] -= h;
-        PointVector xp;
-        PointVector xm;
-        sut.contactPoint(qp, xp);
-        sut.contactPoint(qm, xm);
-        EXPECT_NEAR(J(0, j), (xp[0] - xm[0]) / (2 * h), 1e-9);
-        EXPECT_NEAR(J(1, j), (xp[1] - xm[1]) / (2 * h), 1e-9);
-    }
-}
-
 TEST(ExoskeletonDevice, StrokeGrowsWithFlexionAcrossTheShippedJointLimits) {
     const auto exo = shippedExoskeleton();
     const ExoskeletonDevice sut(exo);

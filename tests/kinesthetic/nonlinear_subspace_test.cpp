@@ -12,6 +12,7 @@
 #include <numbers>
 #include <utility>
 
+#include "contact_rows.hpp"
 #include "haptic/config/device.hpp"
 #include "haptic/kinesthetic/contact_gap.hpp"
 #include "haptic/kinesthetic/device_model.hpp"
@@ -34,40 +35,7 @@ ExoskeletonDevice unclampedExoskeleton() {
     return ExoskeletonDevice(strong);
 }
 
-// The fingertip of the device's planar finger at q pressed `depth_m` into a plane whose
-// normal (in the finger's plane) makes `normal_angle_rad` with the x axis.
-msgs::LinearConstraint fingertipContact(const config::ExoskeletonConfig& exo, const ConfigVector& q,
-                                        double depth_m, double normal_angle_rad) {
-    msgs::LinearConstraint row;
-    msgs::ContactKinematics& c = row.contact;
-    c.joints = 3;
-    c.gap_m = -depth_m;
-    c.normal = {std::cos(normal_angle_rad), std::sin(normal_angle_rad), 0.0};
-    // Joint centres along the chain; the tip at the end.
-    Eigen::Vector2d joint = Eigen::Vector2d::Zero();
-    std::array<Eigen::Vector2d, 3> centres;
-    double phi = 0.0;
-    for (int k = 0; k < 3; ++k) {
-        centres[static_cast<std::size_t>(k)] = joint;
-        phi += q[k];
-        joint += exo.finger.phalanx_lengths_m[static_cast<std::size_t>(k)] *
-                 Eigen::Vector2d(std::cos(phi), std::sin(phi));
-    }
-    for (std::size_t j = 0; j < 3; ++j) {
-        c.q_ref_rad[j] = q[static_cast<Eigen::Index>(j)];
-        c.axis[j] = {0.0, 0.0, 1.0};
-        const Eigen::Vector2d lever = joint - centres[j];
-        c.lever_m[j] = {lever.x(), lever.y(), 0.0};
-    }
-    // The sim's row: g's linearisation at q_ref.
-    ConfigVector gradient;
-    const double g = contactGap(c, q, &gradient);
-    for (int i = 0; i < 3; ++i) {
-        row.a[static_cast<std::size_t>(i)] = gradient[i];
-    }
-    row.b = gradient.dot(q) - g;
-    return row;
-}
+using testing::fingertipContact;
 
 RenderParameters parameters(RenderingMethod method) {
     RenderParameters p;

@@ -71,20 +71,6 @@ void ExoskeletonDevice::contactPoint(const ConfigVector& q, PointVector& x) cons
     }
 }
 
-void ExoskeletonDevice::contactJacobian(const ConfigVector& q, PointJacobian& J) const noexcept {
-    J.setZero(2, 3);
-    double phi = 0.0;
-    for (int k = 0; k < 3; ++k) {
-        phi += q[k];
-        const double length = exo_.finger.phalanx_lengths_m[k];
-        // Phalanx k moves with every joint j <= k.
-        for (int j = 0; j <= k; ++j) {
-            J(0, j) -= length * std::sin(phi);
-            J(1, j) += length * std::cos(phi);
-        }
-    }
-}
-
 ActuatorLimits ExoskeletonDevice::actuatorLimits(int /*actuator*/) const noexcept {
     return ActuatorLimits{exo_.actuator.max_force_n, exo_.actuator.stroke_min_m,
                           exo_.actuator.stroke_max_m};

@@ -46,11 +46,6 @@ void LinearPointDevice::contactPoint(const ConfigVector& q, PointVector& x) cons
     x = q;
 }
 
-void LinearPointDevice::contactJacobian(const ConfigVector& /*q*/,
-                                        PointJacobian& J) const noexcept {
-    J.setIdentity(dofs(), dofs());
-}
-
 ActuatorLimits LinearPointDevice::actuatorLimits(int /*actuator*/) const noexcept {
     return ActuatorLimits{max_force_n_, -half_width_m_, half_width_m_};
 }

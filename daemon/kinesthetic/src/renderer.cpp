@@ -1,6 +1,7 @@
 #include "haptic/kinesthetic/renderer.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -289,7 +290,7 @@ void KinestheticRenderer::tick(const ConfigVector& q, const ConfigVector& q_dot,
             break;
         case RenderingMethod::kNullspace:
             renderProxy(1.0, q, C, d, out);
-            redistributeInNullspace(q, out);
+            redistributeInNullspace(C, out);
             break;
         case RenderingMethod::kAnisotropic:
             renderProxy(chooseRho(C, d, q), q, C, d, out);
@@ -371,33 +372,74 @@ void KinestheticRenderer::renderProxy(double rho, const ConfigVector& q, const C
     out.coupling_force.noalias() = K * (out.proxy - q);
 }
 
-void KinestheticRenderer::redistributeInNullspace(const ConfigVector& q,
+void KinestheticRenderer::redistributeInNullspace(const ConstraintMatrix& C,
                                                   RenderOutput& out) noexcept {
+    // §5.3: the proxy fixes the contact forces' resultant; among the distributions over the
+    // active contacts with that resultant, take the one the actuators render best. Only the
+    // rows' own contacts say where each force acts (its Cartesian normal); without them, or
+    // with one contact, there is nothing to redistribute and this is naive.
+    const int k = warm_start_.size;  // the proxy's active rows, as its solve left them
+    if (!out.in_contact || contacts_.empty() || k < 2) {
+        return;
+    }
     const int n = device_.dofs();
-    PointJacobian J;
-    device_.contactJacobian(q, J);
-    if (!out.in_contact || J.rows() >= n || !J.allFinite()) {
-        return;  // no joint torques without a contact force: nothing to redistribute
+    BoundedMatrix<kMaxDofs, kMaxDofs> A(n, k);  // active rows' gradients, one a column
+    BoundedMatrix<3, kMaxDofs> normals(3, k);   // the same contacts' Cartesian normals
+    for (int j = 0; j < k; ++j) {
+        const auto row = static_cast<std::size_t>(warm_start_.index[static_cast<std::size_t>(j)]);
+        A.col(j) = C.col(static_cast<Eigen::Index>(row));
+        const auto& normal = contacts_[row].contact.normal;
+        normals.col(j) = Eigen::Vector3d(normal[0], normal[1], normal[2]).normalized();
     }
-    const BoundedMatrix<kMaxPointDim, kMaxPointDim> JJt = J * J.transpose();
-    const Eigen::LDLT<BoundedMatrix<kMaxPointDim, kMaxPointDim>> jj_ldlt(JJt);
-    if (jj_ldlt.info() != Eigen::Success ||
-        !(jj_ldlt.vectorD().minCoeff() > 1e-12 * (1.0 + JJt.diagonal().maxCoeff()))) {
-        return;  // singular finger pose: the contact force is undefined, keep naive
+    // Contact force magnitudes mu >= 0 with tau_c = A mu (the proxy's KKT condition).
+    const BoundedMatrix<kMaxDofs, kMaxDofs> gram = A.transpose() * A;
+    const Eigen::LDLT<BoundedMatrix<kMaxDofs, kMaxDofs>> gram_ldlt(gram);
+    if (gram_ldlt.info() != Eigen::Success ||
+        !(gram_ldlt.vectorD().minCoeff() > 1e-12 * (1.0 + gram.diagonal().maxCoeff()))) {
+        return;  // dependent active rows: the split among them is not defined
     }
-    const ConfigMatrix identity = ConfigMatrix::Identity(n, n);
-    const ConfigMatrix N = identity - J.transpose() * jj_ldlt.solve(J);
-    const ConfigMatrix P_u = identity - P_a_;
-    const ConfigMatrix normal_matrix =
-        N * P_u * N + parameters_.nullspace_regularisation * identity;
-    const Eigen::LDLT<ConfigMatrix> ldlt(normal_matrix);
+    const BoundedVector<kMaxDofs> mu = gram_ldlt.solve(A.transpose() * out.coupling_force);
+    // Variations with the same resultant: the kernel of the normals, Pi its projector.
+    const BoundedMatrix<kMaxDofs, kMaxDofs> normal_gram = normals.transpose() * normals;
+    const Eigen::SelfAdjointEigenSolver<BoundedMatrix<kMaxDofs, kMaxDofs>> eigen(normal_gram);
+    if (eigen.info() != Eigen::Success) {
+        return;
+    }
+    const double kernel_tolerance = 1e-9 * (1.0 + eigen.eigenvalues().cwiseAbs().maxCoeff());
+    BoundedMatrix<kMaxDofs, kMaxDofs> Pi = BoundedMatrix<kMaxDofs, kMaxDofs>::Zero(k, k);
+    for (int i = 0; i < k; ++i) {
+        if (std::abs(eigen.eigenvalues()[i]) <= kernel_tolerance) {
+            Pi.noalias() += eigen.eigenvectors().col(i) * eigen.eigenvectors().col(i).transpose();
+        }
+    }
+    if (!(Pi.trace() > 0.5)) {
+        return;  // independent normals: the resultant fixes every magnitude
+    }
+    // lambda* = argmin |P_u (tau_c + G lambda)|^2 + eps s |lambda|^2, G = A Pi, s its scale.
+    const ConfigMatrix P_u = ConfigMatrix::Identity(n, n) - P_a_;
+    const BoundedMatrix<kMaxDofs, kMaxDofs> G = A * Pi;
+    const double scale = std::max((G.transpose() * G).trace() / k, 1e-300);
+    const BoundedMatrix<kMaxDofs, kMaxDofs> normal_matrix =
+        G.transpose() * P_u * G + parameters_.nullspace_regularisation * scale *
+                                      BoundedMatrix<kMaxDofs, kMaxDofs>::Identity(k, k);
+    const Eigen::LDLT<BoundedMatrix<kMaxDofs, kMaxDofs>> ldlt(normal_matrix);
     if (ldlt.info() != Eigen::Success) {
         return;
     }
-    const ConfigVector rhs = -(N * (P_u * out.coupling_force));
-    const ConfigVector lambda = ldlt.solve(rhs);
-    if (lambda.allFinite()) {
-        out.coupling_force.noalias() += N * lambda;
+    const BoundedVector<kMaxDofs> lambda =
+        ldlt.solve(-(G.transpose() * (P_u * out.coupling_force)));
+    BoundedVector<kMaxDofs> change = Pi * lambda;
+    // Contacts only push: go along the change as far as every magnitude stays >= 0 (the
+    // objective is convex, so any part of the way is no worse than none).
+    double step = 1.0;
+    for (int j = 0; j < k; ++j) {
+        if (change[j] < 0.0) {
+            step = std::min(step, std::max(mu[j], 0.0) / -change[j]);
+        }
+    }
+    change *= step;
+    if (change.allFinite()) {
+        out.coupling_force.noalias() += A * change;
     }
 }
 

@@ -32,7 +32,6 @@ class DeviceModel {
     virtual void actuatorCoordinates(const ConfigVector& q, ActuatorVector& ell) const noexcept = 0;
     virtual void actuationMatrix(const ConfigVector& q, ActuationMatrix& B) const noexcept = 0;
     virtual void contactPoint(const ConfigVector& q, PointVector& x) const noexcept = 0;
-    virtual void contactJacobian(const ConfigVector& q, PointJacobian& J) const noexcept = 0;
 
     [[nodiscard]] virtual ActuatorLimits actuatorLimits(int actuator) const noexcept = 0;
     // Joint (or workspace) bounds of coordinate i of q.
@@ -62,7 +61,6 @@ class LinearPointDevice final : public DeviceModel {
     void actuatorCoordinates(const ConfigVector& q, ActuatorVector& ell) const noexcept override;
     void actuationMatrix(const ConfigVector& q, ActuationMatrix& B) const noexcept override;
     void contactPoint(const ConfigVector& q, PointVector& x) const noexcept override;
-    void contactJacobian(const ConfigVector& q, PointJacobian& J) const noexcept override;
     [[nodiscard]] ActuatorLimits actuatorLimits(int actuator) const noexcept override;
     [[nodiscard]] config::Interval configurationLimits(int i) const noexcept override;
 
@@ -91,7 +89,6 @@ class ExoskeletonDevice final : public DeviceModel {
     void actuatorCoordinates(const ConfigVector& q, ActuatorVector& ell) const noexcept override;
     void actuationMatrix(const ConfigVector& q, ActuationMatrix& B) const noexcept override;
     void contactPoint(const ConfigVector& q, PointVector& x) const noexcept override;
-    void contactJacobian(const ConfigVector& q, PointJacobian& J) const noexcept override;
     [[nodiscard]] ActuatorLimits actuatorLimits(int actuator) const noexcept override;
     [[nodiscard]] config::Interval configurationLimits(int i) const noexcept override;
 

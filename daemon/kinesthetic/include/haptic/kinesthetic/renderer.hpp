@@ -14,10 +14,12 @@
 //                        fully actuated device; on an underactuated one it is the same
 //                        computation as naive (it is the reference the others are judged by).
 //   naive                §5.2: isotropic proxy, rendered force = its projection on range(B).
-//   nullspace            §5.3 [DER here]: tau(lambda) = K (q_p - q) + N lambda where N = I - J^+ J
-//                        spans the joint torques that produce no contact-point force; lambda
-//                        minimises |P_u tau|^2 + eps |lambda|^2, then u = B^+ tau. On the point
-//                        device (J = I) N = 0 and it reduces to naive.
+//   nullspace            §5.3: the naive proxy's contact forces mu_j (tau_c = sum_j mu_j a_j over
+//                        its active rows) redistributed among those contacts with the same
+//                        resultant (sum_j mu_j n_j, n_j the contacts' Cartesian normals), mu
+//                        >= 0, to minimise |P_u tau|^2 + eps |lambda|^2; then u = B^+ tau. Needs
+//                        the rows' contacts (msgs::ContactKinematics); with one contact, rows
+//                        without contacts, or independent normals it is naive.
 //   subspace             §5.4: q_p = q + B alpha / k_a. With one actuator and constraints that
 //                        carry their contact (msgs::ContactKinematics): each violated contact's
 //                        g(chi(q + B alpha / k_a)) = 0 solved along the actuated direction
@@ -61,7 +63,8 @@ struct RenderParameters {
     double actuator_damping{0.0};  // b_v, in actuator units (N s/m)
     int max_iterations{KMetricProjector::kDefaultMaxIterations};
     int rho_search_iterations{48};
-    double nullspace_regularisation{1e-9};  // eps, relative to k_a
+    // eps, relative to the mean squared joint torque of a unit redistribution
+    double nullspace_regularisation{1e-9};
 };
 
 enum class RenderFault : std::uint8_t {
@@ -131,7 +134,7 @@ class KinestheticRenderer {
     void renderNonlinearSubspace(const ConfigVector& q, RenderOutput& out) noexcept;
     void renderLinearizedSubspace(const ConfigVector& q, const ConstraintMatrix& C,
                                   const ConstraintVector& d, RenderOutput& out) noexcept;
-    void redistributeInNullspace(const ConfigVector& q, RenderOutput& out) noexcept;
+    void redistributeInNullspace(const ConstraintMatrix& C, RenderOutput& out) noexcept;
     double chooseRho(const ConstraintMatrix& C, const ConstraintVector& d,
                      const ConfigVector& q) noexcept;
     void clearOutput(const ConfigVector& q, RenderFault fault, RenderOutput& out) noexcept;

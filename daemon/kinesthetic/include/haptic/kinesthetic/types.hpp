@@ -25,7 +25,6 @@ using ConfigMatrix = BoundedMatrix<kMaxDofs, kMaxDofs>;                 // K, P_
 using ActuatorVector = BoundedVector<kMaxActuators>;                    // ell, u (m)
 using ActuationMatrix = BoundedMatrix<kMaxDofs, kMaxActuators>;         // B (n x m)
 using PointVector = BoundedVector<kMaxPointDim>;                        // x = chi(q)
-using PointJacobian = BoundedMatrix<kMaxPointDim, kMaxDofs>;            // J (d x n)
 using ConstraintMatrix = BoundedMatrix<kMaxDofs, kMaxConstraintCount>;  // normals, one a column
 using ConstraintVector = BoundedVector<kMaxConstraintCount>;
 using ConstraintGram = BoundedMatrix<kMaxConstraintCount, kMaxConstraintCount>;  // C^T K^-1 C
