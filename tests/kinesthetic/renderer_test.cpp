@@ -249,6 +249,7 @@ class NullspaceRendering : public ::testing::Test {
         const ConfigVector b = B.col(0);
         return (tau - b * (b.dot(tau) / b.squaredNorm())).norm();
     }
+    double checkBestSplit(double middle_depth_m, double tip_depth_m);
     const config::ExoskeletonConfig config_ = shippedExoskeleton();
     const ExoskeletonDevice exo_{config_};
     const ConfigVector q_ = (ConfigVector(3) << 0.5, 0.7, 0.4).finished();
@@ -277,19 +278,19 @@ TEST_F(NullspaceRendering, IsNaiveWhenTheResultantFixesEveryContactForce) {
     EXPECT_EQ(out.coupling_force, naive.coupling_force);
 }
 
-// The middle phalanx and the fingertip on one flat face: the same resultant can be split
-// between them in a one-parameter family. (Their rows are nearly parallel, so both are active
-// at the naive proxy only for depth ratios of about 0.58-0.63; 0.6 here.) The method takes the
-// member with the least unrenderable torque, found here by brute force over the family (both forces
-// >= 0).
-TEST_F(NullspaceRendering, SplitsForcesOnOneFaceAsTheActuatorRendersBest) {
+// The middle phalanx and the fingertip on one flat face: the same resultant and total can be
+// split between them in a one-parameter family, mu_naive + t (1, -1), with |t| <= min(mu_naive)
+// (no contact's force changes by more than itself). Checks the method's split against the best
+// of that family by brute force and returns the brute force's t. (The two rows are nearly
+// parallel, so both are active at the naive proxy only for depth ratios of about 0.58-0.63.)
+double NullspaceRendering::checkBestSplit(double middle_depth_m, double tip_depth_m) {
     const std::array<msgs::LinearConstraint, 2> rows{
-        phalanxContact(config_, q_, 1, 0.6, 0.0018, kNormalAngle),
-        phalanxContact(config_, q_, 2, 1.0, 0.003, kNormalAngle)};
+        phalanxContact(config_, q_, 1, 0.6, middle_depth_m, kNormalAngle),
+        phalanxContact(config_, q_, 2, 1.0, tip_depth_m, kNormalAngle)};
     const RenderOutput naive = render(RenderingMethod::kNaive, rows);
-    ASSERT_EQ(naive.active_constraints, 2);
+    EXPECT_EQ(naive.active_constraints, 2);
     const RenderOutput out = render(RenderingMethod::kNullspace, rows);
-    ASSERT_TRUE(out.in_contact);
+    EXPECT_TRUE(out.in_contact);
     Eigen::Matrix<double, 3, 2> A;
     for (int j = 0; j < 2; ++j) {
         for (int i = 0; i < 3; ++i) {
@@ -305,40 +306,94 @@ TEST_F(NullspaceRendering, SplitsForcesOnOneFaceAsTheActuatorRendersBest) {
     EXPECT_LT((A * mu - Eigen::Vector3d(out.coupling_force)).norm(),
               1e-12 * naive.coupling_force.norm());
     EXPECT_NEAR(mu.sum(), mu_naive.sum(), 1e-9 * mu_naive.sum());
-    EXPECT_GE(mu.minCoeff(), -1e-12 * mu_naive.sum());
-    // Brute force: mu_naive + t (1, -1) over every split with both forces >= 0.
+    const double bound = mu_naive.minCoeff();
+    EXPECT_GT(bound, 0.0);
+    EXPECT_LE((mu - mu_naive).cwiseAbs().maxCoeff(), bound * (1.0 + 1e-9));
     double best = std::numeric_limits<double>::infinity();
+    double best_t = 0.0;
     const int steps = 200000;
     for (int i = 0; i <= steps; ++i) {
-        const double t = -mu_naive[0] + (mu_naive[0] + mu_naive[1]) * i / steps;
+        const double t = bound * (2.0 * i / steps - 1.0);
         const Eigen::Vector3d tau = A * (mu_naive + Eigen::Vector2d(t, -t));
-        best = std::min(best, unrenderable(ConfigVector(tau)));
+        const double value = unrenderable(ConfigVector(tau));
+        if (value < best) {
+            best = value;
+            best_t = t;
+        }
     }
     EXPECT_LT(unrenderable(out.coupling_force), unrenderable(naive.coupling_force));
     EXPECT_NEAR(unrenderable(out.coupling_force), best, 1e-6 * unrenderable(naive.coupling_force));
     EXPECT_NE(out.actuator_force[0], naive.actuator_force[0]);
+    return best_t / bound;
 }
 
-// On the point device every contact acts at the point itself: a split with the same
-// resultant is the same force, so the method is naive.
-TEST_F(NullspaceRendering, IsNaiveOnThePointDevice) {
-    const LinearPointDevice point(study::actuatedDirection(0.5), 100.0);
-    RenderParameters p;
-    p.method = RenderingMethod::kNaive;
-    KinestheticRenderer point_naive(point, p);
-    p.method = RenderingMethod::kNullspace;
-    KinestheticRenderer point_nullspace(point, p);
-    ConstraintMatrix wall;
-    ConstraintVector offset;
-    study::wallConstraint(2, wall, offset);
-    ConfigVector x(2);
-    x << 0.1, -0.01;
-    const ConfigVector zero2 = ConfigVector::Zero(2);
-    RenderOutput naive_out;
-    RenderOutput out;
-    point_naive.tick(x, zero2, wall, offset, naive_out);
-    point_nullspace.tick(x, zero2, wall, offset, out);
-    EXPECT_DOUBLE_EQ(out.actuator_force[0], naive_out.actuator_force[0]);
+TEST_F(NullspaceRendering, SplitsForcesOnOneFaceAsTheActuatorRendersBest) {
+    const double t = checkBestSplit(0.0018, 0.003);
+    EXPECT_LT(std::abs(t), 0.99) << "the best split lies inside the bounds";
+}
+
+TEST_F(NullspaceRendering, StopsAtTheBoundWhereTheBestSplitLiesBeyondIt) {
+    // Deeper in the middle: the fingertip carries little, and moving more than that is barred.
+    const double t = checkBestSplit(0.00188, 0.003);
+    EXPECT_GT(std::abs(t), 0.999) << "the best split lies on the bound";
+}
+
+// Contacts pushing from opposite sides: moving force between them keeping the resultant would
+// squeeze the finger harder; the total is kept too, so nothing moves.
+TEST_F(NullspaceRendering, IsNaiveForOpposedContacts) {
+    const std::array<msgs::LinearConstraint, 2> rows{
+        phalanxContact(config_, q_, 1, 0.6, 0.002, kNormalAngle),
+        phalanxContact(config_, q_, 2, 1.0, 0.002, kNormalAngle - std::numbers::pi)};
+    const RenderOutput naive = render(RenderingMethod::kNaive, rows);
+    ASSERT_EQ(naive.active_constraints, 2);
+    const RenderOutput out = render(RenderingMethod::kNullspace, rows);
+    EXPECT_EQ(out.coupling_force, naive.coupling_force);
+}
+
+// A second contact becoming active moves nothing at first: the force is continuous through
+// the onset (a step would stay as the sweep gets finer; a continuous change shrinks with it).
+TEST_F(NullspaceRendering, HasNoStepWhereASecondContactBecomesActive) {
+    const msgs::LinearConstraint tip = phalanxContact(config_, q_, 2, 1.0, 0.003, kNormalAngle);
+    const auto largestChange = [&](int samples) {
+        double largest = 0.0;
+        double last = 0.0;
+        int onsets = 0;
+        int last_active = 0;
+        for (int i = 0; i <= samples; ++i) {
+            const double ratio = 0.575 + 0.015 * i / samples;  // through the onset near 0.583
+            const std::array<msgs::LinearConstraint, 2> rows{
+                phalanxContact(config_, q_, 1, 0.6, ratio * 0.003, kNormalAngle), tip};
+            const RenderOutput out = render(RenderingMethod::kNullspace, rows);
+            if (i > 0) {
+                largest = std::max(largest, std::abs(out.actuator_force[0] - last));
+            }
+            onsets += out.active_constraints == 2 && last_active == 1 ? 1 : 0;
+            last_active = out.active_constraints;
+            last = out.actuator_force[0];
+        }
+        EXPECT_EQ(onsets, 1);
+        return largest;
+    };
+    const double coarse = largestChange(300);
+    const double fine = largestChange(3000);
+    EXPECT_GT(coarse, 0.0);
+    EXPECT_LT(fine, 0.2 * coarse) << "a step at the onset: " << fine << " N";
+}
+
+// Rows without their contacts (a sim that does not fill them) say nothing about where each
+// force acts: naive, even where the same rows with contacts are redistributed.
+TEST_F(NullspaceRendering, IsNaiveForRowsWithoutContacts) {
+    std::array<msgs::LinearConstraint, 2> rows{
+        phalanxContact(config_, q_, 1, 0.6, 0.0018, kNormalAngle),
+        phalanxContact(config_, q_, 2, 1.0, 0.003, kNormalAngle)};
+    ASSERT_NE(render(RenderingMethod::kNullspace, rows).coupling_force,
+              render(RenderingMethod::kNaive, rows).coupling_force);
+    for (auto& row : rows) {
+        row.contact = msgs::ContactKinematics{};
+    }
+    const RenderOutput naive = render(RenderingMethod::kNaive, rows);
+    ASSERT_EQ(naive.active_constraints, 2);
+    EXPECT_EQ(render(RenderingMethod::kNullspace, rows).coupling_force, naive.coupling_force);
 }
 
 // Done when: every solver hits its bound gracefully on degenerate input.

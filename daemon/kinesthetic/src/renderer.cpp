@@ -374,22 +374,25 @@ void KinestheticRenderer::renderProxy(double rho, const ConfigVector& q, const C
 
 void KinestheticRenderer::redistributeInNullspace(const ConstraintMatrix& C,
                                                   RenderOutput& out) noexcept {
-    // §5.3: the proxy fixes the contact forces' resultant; among the distributions over the
-    // active contacts with that resultant, take the one the actuators render best. Only the
-    // rows' own contacts say where each force acts (its Cartesian normal); without them, or
-    // with one contact, there is nothing to redistribute and this is naive.
+    // §5.3: the proxy fixes the contact forces' resultant; the force is moved among the
+    // active contacts, keeping the resultant and the total, to the split the actuators render
+    // best. Only the rows' own contacts say where each force acts (its Cartesian normal);
+    // without them, or with one contact, there is nothing to move and this is naive.
     const int k = warm_start_.size;  // the proxy's active rows, as its solve left them
     if (!out.in_contact || contacts_.empty() || k < 2) {
         return;
     }
     const int n = device_.dofs();
     BoundedMatrix<kMaxDofs, kMaxDofs> A(n, k);  // active rows' gradients, one a column
-    BoundedMatrix<3, kMaxDofs> normals(3, k);   // the same contacts' Cartesian normals
+    // Per contact: its Cartesian normal and a 1. A change in the kernel of these columns moves
+    // force between contacts: the resultant and the sum of the magnitudes stay. (Without the
+    // sum, opposed normals would let it squeeze the finger harder without limit.)
+    BoundedMatrix<4, kMaxDofs> moves(4, k);
     for (int j = 0; j < k; ++j) {
         const auto row = static_cast<std::size_t>(warm_start_.index[static_cast<std::size_t>(j)]);
         A.col(j) = C.col(static_cast<Eigen::Index>(row));
         const auto& normal = contacts_[row].contact.normal;
-        normals.col(j) = Eigen::Vector3d(normal[0], normal[1], normal[2]).normalized();
+        moves.col(j) << Eigen::Vector3d(normal[0], normal[1], normal[2]).normalized(), 1.0;
     }
     // Contact force magnitudes mu >= 0 with tau_c = A mu (the proxy's KKT condition).
     const BoundedMatrix<kMaxDofs, kMaxDofs> gram = A.transpose() * A;
@@ -399,21 +402,25 @@ void KinestheticRenderer::redistributeInNullspace(const ConstraintMatrix& C,
         return;  // dependent active rows: the split among them is not defined
     }
     const BoundedVector<kMaxDofs> mu = gram_ldlt.solve(A.transpose() * out.coupling_force);
-    // Variations with the same resultant: the kernel of the normals, Pi its projector.
-    const BoundedMatrix<kMaxDofs, kMaxDofs> normal_gram = normals.transpose() * normals;
-    const Eigen::SelfAdjointEigenSolver<BoundedMatrix<kMaxDofs, kMaxDofs>> eigen(normal_gram);
+    // Pi: the projector on that kernel. Directions whose resultant is nearly kept count in
+    // part, fading out by kMoveTolerance, so that normals turning apart (a contact reaching an
+    // edge) end the redistribution gradually instead of in one tick.
+    constexpr double kMoveTolerance = 1e-3;  // |resultant change|^2 per |change|^2
+    const BoundedMatrix<kMaxDofs, kMaxDofs> move_gram = moves.transpose() * moves;
+    const Eigen::SelfAdjointEigenSolver<BoundedMatrix<kMaxDofs, kMaxDofs>> eigen(move_gram);
     if (eigen.info() != Eigen::Success) {
         return;
     }
-    const double kernel_tolerance = 1e-9 * (1.0 + eigen.eigenvalues().cwiseAbs().maxCoeff());
     BoundedMatrix<kMaxDofs, kMaxDofs> Pi = BoundedMatrix<kMaxDofs, kMaxDofs>::Zero(k, k);
     for (int i = 0; i < k; ++i) {
-        if (std::abs(eigen.eigenvalues()[i]) <= kernel_tolerance) {
-            Pi.noalias() += eigen.eigenvectors().col(i) * eigen.eigenvectors().col(i).transpose();
+        const double weight = std::clamp(1.0 - eigen.eigenvalues()[i] / kMoveTolerance, 0.0, 1.0);
+        if (weight > 0.0) {
+            Pi.noalias() +=
+                weight * eigen.eigenvectors().col(i) * eigen.eigenvectors().col(i).transpose();
         }
     }
-    if (!(Pi.trace() > 0.5)) {
-        return;  // independent normals: the resultant fixes every magnitude
+    if (!(Pi.trace() > 0.0)) {
+        return;  // the resultant and the total fix every magnitude
     }
     // lambda* = argmin |P_u (tau_c + G lambda)|^2 + eps s |lambda|^2, G = A Pi, s its scale.
     const ConfigMatrix P_u = ConfigMatrix::Identity(n, n) - P_a_;
@@ -429,12 +436,15 @@ void KinestheticRenderer::redistributeInNullspace(const ConstraintMatrix& C,
     const BoundedVector<kMaxDofs> lambda =
         ldlt.solve(-(G.transpose() * (P_u * out.coupling_force)));
     BoundedVector<kMaxDofs> change = Pi * lambda;
-    // Contacts only push: go along the change as far as every magnitude stays >= 0 (the
-    // objective is convex, so any part of the way is no worse than none).
+    // No contact's force changes by more than itself (so none goes below 0 or above twice
+    // what the proxy gives it, and a contact that just became active, mu ~ 0, moves nothing:
+    // no step at its onset). Going part of the way is no worse than none: the objective is
+    // convex. For two contacts this is the best split within those bounds.
     double step = 1.0;
     for (int j = 0; j < k; ++j) {
-        if (change[j] < 0.0) {
-            step = std::min(step, std::max(mu[j], 0.0) / -change[j]);
+        const double magnitude = std::abs(change[j]);
+        if (magnitude > 0.0) {
+            step = std::min(step, std::max(mu[j], 0.0) / magnitude);
         }
     }
     change *= step;

@@ -15,11 +15,12 @@
 //                        computation as naive (it is the reference the others are judged by).
 //   naive                §5.2: isotropic proxy, rendered force = its projection on range(B).
 //   nullspace            §5.3: the naive proxy's contact forces mu_j (tau_c = sum_j mu_j a_j over
-//                        its active rows) redistributed among those contacts with the same
-//                        resultant (sum_j mu_j n_j, n_j the contacts' Cartesian normals), mu
-//                        >= 0, to minimise |P_u tau|^2 + eps |lambda|^2; then u = B^+ tau. Needs
-//                        the rows' contacts (msgs::ContactKinematics); with one contact, rows
-//                        without contacts, or independent normals it is naive.
+//                        its active rows) moved among those contacts keeping their resultant
+//                        (sum_j mu_j n_j, n_j the contacts' Cartesian normals) and total, each by
+//                        at most its own mu_j, to minimise |P_u tau|^2 + eps s |lambda|^2; then
+//                        u = B^+ tau. Needs the rows' contacts (msgs::ContactKinematics); with
+//                        one contact, rows without contacts, or normals that fix every force it
+//                        is naive (docs/algorithms.md §5.3).
 //   subspace             §5.4: q_p = q + B alpha / k_a. With one actuator and constraints that
 //                        carry their contact (msgs::ContactKinematics): each violated contact's
 //                        g(chi(q + B alpha / k_a)) = 0 solved along the actuated direction
