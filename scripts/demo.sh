@@ -85,8 +85,10 @@ cleanup() {
   [[ -n "${EMU_PID:-}" ]] && stop "$EMU_PID" hapticemu
   [[ -n "${ROUDI_PID:-}" ]] && stop "$ROUDI_PID" iox-roudi
   local stale
-  # shellcheck disable=SC2046  # one path per line, none with spaces
-  stale=$(ls $(iceoryx_paths "$(id -gn)") 2>/dev/null || true)
+  local group paths
+  group=$(id -gn) || group=$(id -g)  # a gid without a name in the group database
+  mapfile -t paths < <(iceoryx_paths "$group")
+  stale=$(ls -d "${paths[@]}" 2>/dev/null || true)
   # Fast DDS segments (data sharing, SHM transport ports) created during this run count too.
   stale+=" $(find /dev/shm -maxdepth 1 -name 'fast*' -newer "$LOGS" 2>/dev/null || true)"
   if [[ -n "${stale// /}" ]]; then

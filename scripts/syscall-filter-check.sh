@@ -30,8 +30,9 @@ chmod +x "$demo"
 pkill -9 -x iox-roudi 2>/dev/null || true  # only the traced one: none ran before
 # shellcheck source=scripts/iceoryx-paths.sh
 source "$ROOT/scripts/iceoryx-paths.sh"
-# shellcheck disable=SC2046  # one path per line, none with spaces
-rm -f $(iceoryx_paths "$(id -gn)")
+group=$(id -gn) || group=$(id -g)  # a gid without a name in the group database
+mapfile -t iceoryx_files < <(iceoryx_paths "$group")
+rm -f "${iceoryx_files[@]}"
 fastdds shm clean >/dev/null 2>&1 || true
 
 expand() {  # a systemd syscall set, recursively
