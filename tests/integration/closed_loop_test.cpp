@@ -138,9 +138,11 @@ TEST_F(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitch
     // Two periods of the default scene's script (6 s each), with every method switched in
     // live during the second.
     const std::string csv = "/tmp/haptic-closed-loop-" + std::to_string(::getpid()) + ".csv";
-    ChildProcess recorder(
-        {HAPTICCTL_PATH, "--dds-domain", domainArgument(), "record", csv, "--duration", "12"},
-        "record");
+    // Up to 10 s for the first telemetry (not the default 2 s): beside CPU-heavy tests the new
+    // participant's discovery took longer and record gave up with "no daemon" (exit 3).
+    ChildProcess recorder({HAPTICCTL_PATH, "--dds-domain", domainArgument(), "--timeout", "10",
+                           "record", csv, "--duration", "12"},
+                          "record");
     std::this_thread::sleep_for(6s);
     for (const char* method :
          {"naive", "subspace", "anisotropic", "nullspace", "standard", "linearized_subspace"}) {
