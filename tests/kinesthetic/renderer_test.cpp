@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
@@ -378,6 +379,50 @@ TEST_F(NullspaceRendering, HasNoStepWhereASecondContactBecomesActive) {
     const double fine = largestChange(3000);
     EXPECT_GT(coarse, 0.0);
     EXPECT_LT(fine, 0.2 * coarse) << "a step at the onset: " << fine << " N";
+}
+
+// The largest change of the actuator force between neighbouring samples of a sweep, at two
+// resolutions: a step stays as the sweep gets finer, a continuous change shrinks with it.
+template <typename RowsAt>
+std::pair<double, double> largestChanges(
+    const RowsAt& rows_at,
+    const std::function<RenderOutput(std::span<const msgs::LinearConstraint>)>& render) {
+    const auto largest = [&](int samples) {
+        double worst = 0.0;
+        double last = 0.0;
+        for (int i = 0; i <= samples; ++i) {
+            const auto rows = rows_at(static_cast<double>(i) / samples);
+            const double u = render(rows).actuator_force[0];
+            if (i > 0) {
+                worst = std::max(worst, std::abs(u - last));
+            }
+            last = u;
+        }
+        return worst;
+    };
+    return {largest(300), largest(3000)};
+}
+
+// The second contact's normal turning away from the first (a contact reaching an edge): the
+// redistribution fades out instead of stopping in one tick.
+TEST_F(NullspaceRendering, FadesOutContinuouslyAsTheNormalsTurnApart) {
+    const auto rows_at = [&](double x) {
+        return std::array<msgs::LinearConstraint, 2>{
+            phalanxContact(config_, q_, 1, 0.6, 0.0018, kNormalAngle),
+            phalanxContact(config_, q_, 2, 1.0, 0.003, kNormalAngle + 0.06 * x)};
+    };
+    const auto nullspace = [&](std::span<const msgs::LinearConstraint> rows) {
+        return render(RenderingMethod::kNullspace, rows);
+    };
+    const auto start = rows_at(0.0);
+    const auto end = rows_at(1.0);
+    ASSERT_NE(nullspace(start).coupling_force,
+              render(RenderingMethod::kNaive, start).coupling_force);
+    EXPECT_EQ(nullspace(end).coupling_force, render(RenderingMethod::kNaive, end).coupling_force)
+        << "3.4 degrees apart the normals fix both forces";
+    const auto [coarse, fine] = largestChanges(rows_at, nullspace);
+    EXPECT_GT(coarse, 0.0);
+    EXPECT_LT(fine, 0.2 * coarse) << "a step as the normals turn apart: " << fine << " N";
 }
 
 // Rows without their contacts (a sim that does not fill them) say nothing about where each

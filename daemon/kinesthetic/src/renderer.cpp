@@ -401,56 +401,69 @@ void KinestheticRenderer::redistributeInNullspace(const ConstraintMatrix& C,
         !(gram_ldlt.vectorD().minCoeff() > 1e-12 * (1.0 + gram.diagonal().maxCoeff()))) {
         return;  // dependent active rows: the split among them is not defined
     }
-    const BoundedVector<kMaxDofs> mu = gram_ldlt.solve(A.transpose() * out.coupling_force);
-    // Pi: the projector on that kernel. Directions whose resultant is nearly kept count in
-    // part, fading out by kMoveTolerance, so that normals turning apart (a contact reaching an
-    // edge) end the redistribution gradually instead of in one tick.
-    constexpr double kMoveTolerance = 1e-3;  // |resultant change|^2 per |change|^2
+    const BoundedVector<kMaxDofs> mu =
+        gram_ldlt.solve(A.transpose() * out.coupling_force).cwiseMax(0.0);
+    const ConfigMatrix P_u = ConfigMatrix::Identity(n, n) - P_a_;
+    const BoundedMatrix<kMaxDofs, kMaxDofs> curvature = A.transpose() * P_u * A;
+    const double scale = curvature.trace() / k;  // of |P_u A dmu|^2 per |dmu|^2
+    if (!(scale > 0.0)) {
+        return;  // every contact's torque is renderable: nothing to gain
+    }
+    // The moves: eigenvectors v_i of the columns' Gram matrix with eigenvalue l_i below
+    // kMoveTolerance (l_i = 0: resultant and total kept exactly). Each is penalised by
+    // scale * l_i / (kMoveTolerance - l_i), so a direction that keeps them only nearly counts
+    // less, and none as its eigenvalue reaches the tolerance: normals turning apart (a contact
+    // reaching an edge) end the redistribution continuously.
+    constexpr double kMoveTolerance = 1e-3;  // |resultant and total change|^2 per |dmu|^2
     const BoundedMatrix<kMaxDofs, kMaxDofs> move_gram = moves.transpose() * moves;
     const Eigen::SelfAdjointEigenSolver<BoundedMatrix<kMaxDofs, kMaxDofs>> eigen(move_gram);
     if (eigen.info() != Eigen::Success) {
         return;
     }
-    BoundedMatrix<kMaxDofs, kMaxDofs> Pi = BoundedMatrix<kMaxDofs, kMaxDofs>::Zero(k, k);
+    BoundedMatrix<kMaxDofs, kMaxDofs> V(k, k);
+    BoundedVector<kMaxDofs> penalty(k);
+    int m = 0;
     for (int i = 0; i < k; ++i) {
-        const double weight = std::clamp(1.0 - eigen.eigenvalues()[i] / kMoveTolerance, 0.0, 1.0);
-        if (weight > 0.0) {
-            Pi.noalias() +=
-                weight * eigen.eigenvectors().col(i) * eigen.eigenvectors().col(i).transpose();
+        const double l = std::max(eigen.eigenvalues()[i], 0.0);
+        if (l < kMoveTolerance) {
+            V.col(m) = eigen.eigenvectors().col(i);
+            penalty[m] = scale * l / (kMoveTolerance - l);
+            ++m;
         }
     }
-    if (!(Pi.trace() > 0.0)) {
+    if (m == 0 || 2 * k > kMaxConstraintCount) {
         return;  // the resultant and the total fix every magnitude
     }
-    // lambda* = argmin |P_u (tau_c + G lambda)|^2 + eps s |lambda|^2, G = A Pi, s its scale.
-    const ConfigMatrix P_u = ConfigMatrix::Identity(n, n) - P_a_;
-    const BoundedMatrix<kMaxDofs, kMaxDofs> G = A * Pi;
-    const double scale = std::max((G.transpose() * G).trace() / k, 1e-300);
-    const BoundedMatrix<kMaxDofs, kMaxDofs> normal_matrix =
-        G.transpose() * P_u * G + parameters_.nullspace_regularisation * scale *
-                                      BoundedMatrix<kMaxDofs, kMaxDofs>::Identity(k, k);
-    const Eigen::LDLT<BoundedMatrix<kMaxDofs, kMaxDofs>> ldlt(normal_matrix);
+    // dmu = V c minimising |P_u (tau_c + A V c)|^2 + sum_i penalty_i c_i^2 + eps scale |c|^2:
+    // its unconstrained minimiser c0, then the minimiser within |dmu_j| <= mu_j (no contact's
+    // force changes by more than itself: none goes below 0, and one that has just become
+    // active moves nothing), as the K-metric projection of c0 in the objective's own metric
+    // onto those bounds (the same active-set solver as the proxy's). The bounded minimiser of a
+    // strictly convex objective moves continuously with its data: no force step when a contact
+    // becomes active or leaves.
+    ConfigMatrix H = V.leftCols(m).transpose() * curvature * V.leftCols(m);
+    H.diagonal() += penalty.head(m) + BoundedVector<kMaxDofs>::Constant(
+                                          m, parameters_.nullspace_regularisation * scale);
+    const Eigen::LDLT<ConfigMatrix> ldlt(H);
     if (ldlt.info() != Eigen::Success) {
         return;
     }
-    const BoundedVector<kMaxDofs> lambda =
-        ldlt.solve(-(G.transpose() * (P_u * out.coupling_force)));
-    BoundedVector<kMaxDofs> change = Pi * lambda;
-    // No contact's force changes by more than itself (so none goes below 0 or above twice
-    // what the proxy gives it, and a contact that just became active, mu ~ 0, moves nothing:
-    // no step at its onset). Going part of the way is no worse than none: the objective is
-    // convex. For two contacts this is the best split within those bounds.
-    double step = 1.0;
+    const ConfigVector c0 =
+        ldlt.solve(-(V.leftCols(m).transpose() * (A.transpose() * (P_u * out.coupling_force))));
+    ConstraintMatrix bounds(m, 2 * k);
+    ConstraintVector limits(2 * k);
     for (int j = 0; j < k; ++j) {
-        const double magnitude = std::abs(change[j]);
-        if (magnitude > 0.0) {
-            step = std::min(step, std::max(mu[j], 0.0) / magnitude);
-        }
+        bounds.col(j) = V.row(j).head(m).transpose();       // dmu_j >= -mu_j
+        bounds.col(k + j) = -V.row(j).head(m).transpose();  // -dmu_j >= -mu_j
+        limits[j] = -mu[j];
+        limits[k + j] = -mu[j];
     }
-    change *= step;
-    if (change.allFinite()) {
-        out.coupling_force.noalias() += A * change;
+    ConfigVector c;
+    const ProjectionResult bounded = move_projector_.project(H, c0, bounds, limits, {}, c);
+    if (bounded.status != SolveStatus::kOptimal || !c.allFinite()) {
+        return;  // naive rather than a move the bounds were not checked for
     }
+    out.coupling_force.noalias() += A * (V.leftCols(m) * c);
 }
 
 void KinestheticRenderer::renderNonlinearSubspace(const ConfigVector& q,

@@ -17,7 +17,8 @@
 //   nullspace            §5.3: the naive proxy's contact forces mu_j (tau_c = sum_j mu_j a_j over
 //                        its active rows) moved among those contacts keeping their resultant
 //                        (sum_j mu_j n_j, n_j the contacts' Cartesian normals) and total, each by
-//                        at most its own mu_j, to minimise |P_u tau|^2 + eps s |lambda|^2; then
+//                        at most its own mu_j: the bounded minimiser of |P_u tau|^2 plus
+//                        penalties on moves that keep the resultant only nearly; then
 //                        u = B^+ tau. Needs the rows' contacts (msgs::ContactKinematics); with
 //                        one contact, rows without contacts, or normals that fix every force it
 //                        is naive (docs/algorithms.md §5.3).
@@ -143,6 +144,7 @@ class KinestheticRenderer {
     const DeviceModel& device_;
     RenderParameters parameters_;
     KMetricProjector projector_;
+    KMetricProjector move_projector_;  // nullspace: its moves within their bounds
     ActiveSet warm_start_;
     // Per-tick scratch, sized in the constructor.
     ActuationMatrix B_;
