@@ -431,7 +431,7 @@ void KinestheticRenderer::redistributeInNullspace(const ConstraintMatrix& C,
             ++m;
         }
     }
-    if (m == 0 || 2 * k > kMaxConstraintCount) {
+    if (m == 0) {
         return;  // the resultant and the total fix every magnitude
     }
     // dmu = V c minimising |P_u (tau_c + A V c)|^2 + sum_i penalty_i c_i^2 + eps scale |c|^2:
@@ -450,6 +450,7 @@ void KinestheticRenderer::redistributeInNullspace(const ConstraintMatrix& C,
     }
     const ConfigVector c0 =
         ldlt.solve(-(V.leftCols(m).transpose() * (A.transpose() * (P_u * out.coupling_force))));
+    static_assert(2 * kMaxDofs <= kMaxConstraintCount, "two bounds per active row");
     ConstraintMatrix bounds(m, 2 * k);
     ConstraintVector limits(2 * k);
     for (int j = 0; j < k; ++j) {
