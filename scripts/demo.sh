@@ -126,8 +126,11 @@ elif nice -n -5 true 2>/dev/null; then EMU_NICE=(nice -n -5); fi
 # The user's intent is the default scene's press / slide / edge script (config/user.yaml);
 # handsim follows the user's tracked hand, not the script, so both devices and the simulated
 # hand agree on one finger.
-setsid "${EMU_NICE[@]}" "$HAPTICEMU" --user "$ROOT/config/user.yaml" </dev/null \
-  >"$LOGS/hapticemu.log" 2>&1 &
+# --felt-log: what the user's pad under the thimble feels, every tick (the thimble's felt force
+# in the plot and report).
+FELT="$LOGS/felt.csv"
+setsid "${EMU_NICE[@]}" "$HAPTICEMU" --user "$ROOT/config/user.yaml" --felt-log "$FELT" \
+  </dev/null >"$LOGS/hapticemu.log" 2>&1 &
 EMU_PID=$!
 
 echo "demo: starting hapticd (--realtime $REALTIME) and handsim"
@@ -158,7 +161,7 @@ if ((COMPARE)); then
       echo "demo: 'hapticctl method $method' failed: $(cat "$LOGS/method-$method.log")" >&2; exit 1; }
     sleep 1  # past the 200 ms blend into the new method
     "$HAPTICCTL" --timeout 10 record "$LOGS/method-$method.csv" --duration "$RECORD" >>"$LOGS/method-$method.log" 2>&1
-    "$HAPTICCTL" plot "$LOGS/method-$method.csv" --output "$LOGS/method-$method.png" \
+    "$HAPTICCTL" plot "$LOGS/method-$method.csv" --output "$LOGS/method-$method.png" --felt "$FELT" \
       >"$LOGS/method-$method.txt" 2>&1 || true
     echo "== $method"
     tail -n +2 "$LOGS/method-$method.txt"
@@ -178,7 +181,7 @@ plot_recording() {
   wait "$RECORD_PID" 2>/dev/null || true
   RECORD_PID=
   plotted=1
-  if "$HAPTICCTL" plot "$CSV" --output "$PNG" >"$LOGS/plot.log" 2>&1; then
+  if "$HAPTICCTL" plot "$CSV" --output "$PNG" --felt "$FELT" >"$LOGS/plot.log" 2>&1; then
     PLOT_MESSAGE="demo: $RECORD s of forces and loop timing plotted to $PNG (data: $CSV)"
   else
     PLOT_MESSAGE="demo: plotting failed: $(tail -n 1 "$LOGS/plot.log")"

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "telemetry_csv.hpp"
+
 namespace haptic::ctl {
 namespace {
 
@@ -178,23 +180,175 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
     ThimbleReport report;
     const auto& time = device.column("time_s");
     report.ticks = time.size();
-    double sum = 0.0;
+    const bool have_felt = device.values.contains("felt_force_x_n");
+    std::vector<double> felt_magnitude;
+    double reference_sum = 0.0;
+    double felt_sum = 0.0;
+    double squared_error_sum = 0.0;
     for (std::size_t i = 0; i < time.size(); ++i) {
-        const double force = norm3(device, "thimble_reference_force_", "_n", i);
-        report.peak_reference_force_n = std::max(report.peak_reference_force_n, force);
-        if (force > settings.contact_threshold_n) {
+        const double reference = norm3(device, "thimble_reference_force_", "_n", i);
+        report.peak_reference_force_n = std::max(report.peak_reference_force_n, reference);
+        double felt = 0.0;
+        double error = 0.0;
+        bool felt_known = false;
+        if (have_felt) {
+            felt = norm3(device, "felt_force_", "_n", i);
+            felt_known = std::isfinite(felt);
+            if (felt_known) {
+                double squared = 0.0;
+                for (const char* axis : {"x", "y", "z"}) {
+                    const double d =
+                        device.column(fmt::format("felt_force_{}_n", axis))[i] -
+                        device.column(fmt::format("thimble_reference_force_{}_n", axis))[i];
+                    squared += d * d;
+                }
+                error = std::sqrt(squared);
+                felt_magnitude.push_back(felt);
+                report.peak_indentation_m =
+                    std::max(report.peak_indentation_m, device.column("felt_indentation_m")[i]);
+            }
+        }
+        if (reference > settings.contact_threshold_n || felt > settings.contact_threshold_n) {
             ++report.contact_ticks;
-            sum += force;
+            reference_sum += reference;
+            if (felt_known) {
+                ++report.felt_ticks;
+                felt_sum += felt;
+                squared_error_sum += error * error;
+                report.peak_error_n = std::max(report.peak_error_n, error);
+            }
         }
     }
     if (report.contact_ticks > 0) {
-        report.mean_reference_force_n = sum / static_cast<double>(report.contact_ticks);
+        report.mean_reference_force_n = reference_sum / static_cast<double>(report.contact_ticks);
+    }
+    if (report.felt_ticks > 0) {
+        report.mean_felt_force_n = felt_sum / static_cast<double>(report.felt_ticks);
+        report.rms_error_n = std::sqrt(squared_error_sum / static_cast<double>(report.felt_ticks));
+        report.felt_quality = contactQuality(felt_magnitude, settings);
     }
     return report;
 }
 
+RecordingInfo readRecordingInfo(std::string_view csv) {
+    RecordingInfo info;
+    constexpr std::string_view kDevices = "# devices: ";
+    while (!csv.empty() && csv.starts_with('#')) {
+        const std::string_view line = nextLine(csv);
+        if (line.starts_with(kOriginLinePrefix)) {
+            std::string_view digits = line.substr(kOriginLinePrefix.size());
+            std::int64_t origin = 0;
+            if (std::from_chars(digits.data(), digits.data() + digits.size(), origin).ec ==
+                std::errc()) {
+                info.origin_ns = origin;
+            }
+        } else if (line.starts_with(kDevices)) {
+            // "0 exo (exoskeleton), 1 thimble (thimble)"
+            for (std::string_view entry : splitFields(line.substr(kDevices.size()))) {
+                while (entry.starts_with(' ')) {
+                    entry.remove_prefix(1);
+                }
+                const std::size_t space = entry.find(' ');
+                const std::size_t paren = entry.find(" (");
+                int index = 0;
+                if (space == std::string_view::npos || paren == std::string_view::npos ||
+                    std::from_chars(entry.data(), entry.data() + space, index).ec != std::errc()) {
+                    continue;
+                }
+                info.device_names[index] = std::string(entry.substr(space + 1, paren - space - 1));
+            }
+        }
+    }
+    return info;
+}
+
+std::map<std::string, FeltSeries, std::less<>> readFeltLog(std::string_view csv) {
+    std::string_view header = nextLine(csv);
+    while (header.starts_with('#') && !csv.empty()) {
+        header = nextLine(csv);
+    }
+    if (!header.starts_with("stamp_ns,device,pose_known,indentation_m,force_x_n")) {
+        throw std::runtime_error("felt log: the first line is not hapticemu --felt-log's header");
+    }
+    std::map<std::string, FeltSeries, std::less<>> out;
+    while (!csv.empty()) {
+        const std::vector<std::string_view> fields = splitFields(nextLine(csv));
+        if (fields.size() < 7) {
+            continue;  // a truncated last line: the emulator was still writing
+        }
+        std::int64_t stamp = 0;
+        std::array<double, 4> numbers{};  // indentation, force x, y, z
+        bool ok =
+            std::from_chars(fields[0].data(), fields[0].data() + fields[0].size(), stamp).ec ==
+            std::errc();
+        for (std::size_t k = 0; k < numbers.size() && ok; ++k) {
+            const std::string_view field = fields[3 + k];
+            ok = std::from_chars(field.data(), field.data() + field.size(), numbers[k]).ec ==
+                 std::errc();
+        }
+        if (!ok) {
+            continue;
+        }
+        FeltSeries& series = out[std::string(fields[1])];
+        series.stamp_ns.push_back(stamp);
+        series.indentation_m.push_back(numbers[0]);
+        series.force_n.push_back({numbers[1], numbers[2], numbers[3]});
+    }
+    return out;
+}
+
+std::size_t attachFeltLog(std::map<int, DeviceColumns>& devices, const RecordingInfo& recording,
+                          const std::map<std::string, FeltSeries, std::less<>>& felt) {
+    if (recording.origin_ns < 0) {
+        throw std::runtime_error(
+            "the recording has no '" + std::string(kOriginLinePrefix) +
+            "' line to align a felt log with (recorded by an older hapticctl)");
+    }
+    if (recording.device_names.empty()) {
+        throw std::runtime_error(
+            "the recording names no devices (hapticd's status was not received while "
+            "recording), so the felt log's devices cannot be matched");
+    }
+    constexpr std::int64_t kMaxAgeNs = 20'000'000;
+    std::size_t attached = 0;
+    for (auto& [index, device] : devices) {
+        const auto name = recording.device_names.find(index);
+        if (device.kind != "thimble" || name == recording.device_names.end()) {
+            continue;
+        }
+        const auto series = felt.find(name->second);
+        if (series == felt.end()) {
+            continue;
+        }
+        const auto& time = device.column("time_s");
+        std::array<std::vector<double>, 3> force;
+        std::vector<double> indentation;
+        const FeltSeries& log = series->second;
+        std::size_t next = 0;  // first log row after the tick
+        for (const double t : time) {
+            const auto stamp =
+                recording.origin_ns + static_cast<std::int64_t>(std::llround(t * 1e9));
+            while (next < log.stamp_ns.size() && log.stamp_ns[next] <= stamp) {
+                ++next;
+            }
+            const bool known = next > 0 && stamp - log.stamp_ns[next - 1] <= kMaxAgeNs;
+            for (std::size_t k = 0; k < 3; ++k) {
+                force[k].push_back(known ? log.force_n[next - 1][k] : std::nan(""));
+            }
+            indentation.push_back(known ? log.indentation_m[next - 1] : std::nan(""));
+        }
+        device.values["felt_force_x_n"] = std::move(force[0]);
+        device.values["felt_force_y_n"] = std::move(force[1]);
+        device.values["felt_force_z_n"] = std::move(force[2]);
+        device.values["felt_indentation_m"] = std::move(indentation);
+        ++attached;
+    }
+    return attached;
+}
+
 std::string formatReport(const std::map<int, DeviceColumns>& devices,
-                         const ContactQualitySettings& settings) {
+                         const ContactQualitySettings& settings,
+                         const ContactQualitySettings& thimble_settings) {
     std::string out;
     const auto latencyLine = [](const DeviceColumns& device) {
         const TrackingLatency latency = trackingLatency(device);
@@ -236,12 +390,28 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
                 r.steps_over_rate_limit, settings.max_step_n);
             out += latencyLine(device);
         } else if (device.kind == "thimble") {
-            const ThimbleReport r = thimbleReport(device, settings);
+            const ThimbleReport r = thimbleReport(device, thimble_settings);
             out += fmt::format(
-                "thimble (device {}): {} ticks, reference pad force above {:.2f} N on {}, mean "
-                "{:.3f} N, peak {:.3f} N (the felt pad force is not measured yet)\n",
-                index, r.ticks, settings.contact_threshold_n, r.contact_ticks,
+                "thimble (device {}): {} ticks, {} in contact (reference or felt pad force above "
+                "{:.2f} N); reference mean {:.3f} N, peak {:.3f} N\n",
+                index, r.ticks, r.contact_ticks, thimble_settings.contact_threshold_n,
                 r.mean_reference_force_n, r.peak_reference_force_n);
+            if (r.felt_ticks == 0) {
+                out +=
+                    "  felt pad force: no felt log (plot --felt FILE, from hapticemu "
+                    "--felt-log)\n";
+            } else {
+                const ContactQuality& q = r.felt_quality;
+                out += fmt::format(
+                    "  felt vs reference, {} ticks: mean |felt| {:.3f} N, error RMS {:.3f} N "
+                    "({:.1f}% of the mean |reference|), peak {:.3f} N; pad indented up to {:.2f} "
+                    "mm\n"
+                    "  felt: at the {:.2f} N pad force limit {:.1f}% of contact ticks; chatter "
+                    "{:.3f} N RMS = {:.1f}% of its mean\n",
+                    r.felt_ticks, r.mean_felt_force_n, r.rms_error_n, 100.0 * r.errorFraction(),
+                    r.peak_error_n, 1e3 * r.peak_indentation_m, thimble_settings.clamp_n,
+                    100.0 * q.clampFraction(), q.chatter_rms_n, 100.0 * q.chatterFraction());
+            }
             out += latencyLine(device);
         }
     }

@@ -19,14 +19,23 @@
 //   steps      the largest change of the command between consecutive ticks, and how many
 //              changes exceed the rate limit (the safety stage lets a force fall towards zero
 //              faster than that; a rise never).
-// Thimble: the reference pad force (|F| and its mean in contact); the felt pad force needs a
-// pad model of the user's and is not measured yet.
+// Thimble, on the ticks where the reference or the felt pad force exceeds the threshold:
+//   reference  the net force the object applies to the sim's pad (thimble_reference_force_*);
+//   felt       the force the virtual user's own pad feels under the plate (hapticemu
+//              --felt-log, attachFeltLog: a Hertz pad, not the optimiser's model), at the
+//              felt log's last row at or before the tick;
+//   error      RMS and peak of |felt - reference| (vectors, device frame), and RMS as a share
+//              of the mean |reference|;
+//   chatter, clamp  of |felt|, against the thimble's pad force limit.
+//   Without a felt log only the reference is reported.
 // Both: the tracker-to-command latency. On the first tick whose sim input follows a new
 // tracker sample (tracking_sampled_s changes), the time from when handsim's reader received
 // that sample, and from the sample's own stamp (which adds the tracker's own latency), to
 // that tick: the first command computed from the sample. Recorded runs on one host only (the
 // stamps are the sim host's monotonic clock).
 
+#include <array>
+#include <cstdint>
 #include <map>
 #include <string>
 #include <string_view>
@@ -86,18 +95,52 @@ struct ExoskeletonReport {
 
 struct ThimbleReport {
     std::size_t ticks{0};
-    std::size_t contact_ticks{0};  // reference |F| above the threshold
+    std::size_t contact_ticks{0};  // reference |F| (or felt |F|, when known) above the threshold
     double mean_reference_force_n{0.0};
     double peak_reference_force_n{0.0};
+    // From the felt log (attachFeltLog); felt_ticks = 0: none attached.
+    std::size_t felt_ticks{0};
+    double mean_felt_force_n{0.0};
+    double rms_error_n{0.0};
+    double peak_error_n{0.0};
+    ContactQuality felt_quality;  // of |felt|, clamp = the pad force limit
+    double peak_indentation_m{0.0};
+    [[nodiscard]] double errorFraction() const noexcept {
+        return mean_reference_force_n > 0.0 ? rms_error_n / mean_reference_force_n : 0.0;
+    }
 };
+
+// What a recording's '#' lines say: the monotonic stamp of time_s = 0 and each device's name.
+struct RecordingInfo {
+    std::int64_t origin_ns{-1};  // -1: the recording predates the line
+    std::map<int, std::string> device_names;
+};
+[[nodiscard]] RecordingInfo readRecordingInfo(std::string_view csv);
+
+// hapticemu --felt-log: per device name, the rows in time order.
+struct FeltSeries {
+    std::vector<std::int64_t> stamp_ns;
+    std::vector<std::array<double, 3>> force_n;
+    std::vector<double> indentation_m;
+};
+// Throws std::runtime_error when the text is not a felt log.
+[[nodiscard]] std::map<std::string, FeltSeries, std::less<>> readFeltLog(std::string_view csv);
+
+// Adds felt_force_{x,y,z}_n and felt_indentation_m to each thimble of `devices` the log names
+// (NaN where the log has no row within 20 ms before the tick). Returns how many devices got
+// them. Throws std::runtime_error when the recording has no origin line or names no devices.
+std::size_t attachFeltLog(std::map<int, DeviceColumns>& devices, const RecordingInfo& recording,
+                          const std::map<std::string, FeltSeries, std::less<>>& felt);
 
 [[nodiscard]] ExoskeletonReport exoskeletonReport(const DeviceColumns& device,
                                                   const ContactQualitySettings& settings);
 [[nodiscard]] ThimbleReport thimbleReport(const DeviceColumns& device,
                                           const ContactQualitySettings& settings);
 
-// The report as text, one block per device.
+// The report as text, one block per device. `thimble_settings.clamp_n`: the thimble's pad force
+// limit (safety.max_force_n).
 [[nodiscard]] std::string formatReport(const std::map<int, DeviceColumns>& devices,
-                                       const ContactQualitySettings& settings);
+                                       const ContactQualitySettings& settings,
+                                       const ContactQualitySettings& thimble_settings);
 
 }  // namespace haptic::ctl

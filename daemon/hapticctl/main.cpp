@@ -18,8 +18,10 @@
 #include <exception>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <sstream>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -298,7 +300,7 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
                                      converted.error.c_str());
                     }
                 }
-                out << haptic::ctl::telemetryCsvProvenance(HAPTIC_VERSION, wall_clock_ns,
+                out << haptic::ctl::telemetryCsvProvenance(HAPTIC_VERSION, wall_clock_ns, origin_ns,
                                                            have_status ? &status : nullptr)
                     << haptic::ctl::telemetryCsvHeader();
             }
@@ -332,26 +334,65 @@ int recordTelemetry(const haptic::config::DaemonConfig& cfg, const std::string& 
 }
 
 // Renders a recorded CSV to PNG with gnuplot (Debian's gnuplot-nox), script on its stdin.
-// Prints the end-to-end figures of the recording (closed_loop_report.hpp).
-void printReport(const std::string& csv_path, double clamp_n) {
-    std::ifstream file(csv_path);
+std::optional<std::string> readWholeFile(const std::string& path) {
+    std::ifstream file(path);
+    if (!file) {
+        return std::nullopt;
+    }
     std::stringstream text;
     text << file.rdbuf();
+    return text.str();
+}
+
+// Prints the end-to-end figures of the recording (closed_loop_report.hpp), with the felt pad
+// forces of `felt` attached to the thimbles.
+void printReport(const std::string& csv, double clamp_n, double thimble_max_force_n,
+                 const std::map<std::string, haptic::ctl::FeltSeries, std::less<>>* felt) {
     haptic::ctl::ContactQualitySettings settings;
     settings.clamp_n = clamp_n;
-    std::fputs(
-        haptic::ctl::formatReport(haptic::ctl::readTelemetryCsv(text.str()), settings).c_str(),
-        stdout);
+    haptic::ctl::ContactQualitySettings thimble_settings;
+    thimble_settings.clamp_n = thimble_max_force_n;
+    auto devices = haptic::ctl::readTelemetryCsv(csv);
+    if (felt != nullptr) {
+        (void)haptic::ctl::attachFeltLog(devices, haptic::ctl::readRecordingInfo(csv), *felt);
+    }
+    std::fputs(haptic::ctl::formatReport(devices, settings, thimble_settings).c_str(), stdout);
 }
 
 int plotTelemetry(const std::string& csv_path, std::string png_path, double clamp_n,
-                  double thimble_max_force_n) {
+                  double thimble_max_force_n, const std::string& felt_path) {
     if (png_path.empty()) {
         png_path = csv_path + ".png";
     }
-    if (!std::ifstream(csv_path)) {
+    const auto csv = readWholeFile(csv_path);
+    if (!csv) {
         std::fprintf(stderr, "hapticctl: cannot read '%s'\n", csv_path.c_str());
         return kExitError;
+    }
+    // The felt log is read and matched before gnuplot runs: a log that cannot be used is an
+    // error, not a plot without it.
+    std::optional<std::map<std::string, haptic::ctl::FeltSeries, std::less<>>> felt;
+    haptic::ctl::FeltLogPlot felt_plot;
+    if (!felt_path.empty()) {
+        const auto felt_text = readWholeFile(felt_path);
+        if (!felt_text) {
+            std::fprintf(stderr, "hapticctl: cannot read '%s'\n", felt_path.c_str());
+            return kExitError;
+        }
+        try {
+            felt = haptic::ctl::readFeltLog(*felt_text);
+            const auto recording = haptic::ctl::readRecordingInfo(*csv);
+            auto devices = haptic::ctl::readTelemetryCsv(*csv);
+            if (haptic::ctl::attachFeltLog(devices, recording, *felt) == 0) {
+                std::fprintf(stderr, "hapticctl: '%s' names no thimble of the recording '%s'\n",
+                             felt_path.c_str(), csv_path.c_str());
+                return kExitError;
+            }
+            felt_plot = {felt_path, recording.origin_ns};
+        } catch (const std::runtime_error& e) {
+            std::fprintf(stderr, "hapticctl: %s: %s\n", felt_path.c_str(), e.what());
+            return kExitError;
+        }
     }
     int pipe_fds[2];
     if (::pipe(pipe_fds) != 0) {
@@ -374,8 +415,8 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
                      std::strerror(spawned));
         return kExitError;
     }
-    const std::string script =
-        haptic::ctl::telemetryPlotScript(csv_path, png_path, clamp_n, thimble_max_force_n);
+    const std::string script = haptic::ctl::telemetryPlotScript(
+        csv_path, png_path, clamp_n, thimble_max_force_n, felt ? &felt_plot : nullptr);
     const bool written =
         ::write(pipe_fds[1], script.data(), script.size()) == static_cast<ssize_t>(script.size());
     ::close(pipe_fds[1]);
@@ -386,7 +427,7 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
         return kExitError;
     }
     std::printf("%s\n", png_path.c_str());
-    printReport(csv_path, clamp_n);
+    printReport(*csv, clamp_n, thimble_max_force_n, felt ? &*felt : nullptr);
     return EXIT_SUCCESS;
 }
 
@@ -574,6 +615,10 @@ int main(int argc, char** argv) {
                      "shows twice it")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
+    std::string plot_felt;
+    plot->add_option("--felt", plot_felt,
+                     "the virtual user's felt log (hapticemu --felt-log) of the same run: the "
+                     "felt pad force joins the thimble's panel and report");
 
     using haptic::msgs::CommandKind;
     struct Simple {
@@ -648,7 +693,8 @@ int main(int argc, char** argv) {
             return recordTelemetry(cfg, record_path, record_duration_s, timeout_s);
         }
         if (plot->parsed()) {
-            return plotTelemetry(plot_path, plot_output, plot_clamp_n, plot_thimble_max_force_n);
+            return plotTelemetry(plot_path, plot_output, plot_clamp_n, plot_thimble_max_force_n,
+                                 plot_felt);
         }
         if (method->parsed()) {
             return sendCommand(cfg, CommandKind::kSetMethod, method_name, timeout_s, over_dds);

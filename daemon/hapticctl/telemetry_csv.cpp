@@ -25,7 +25,7 @@ std::string quoted(const std::string& path) {
 }  // namespace
 
 std::string telemetryCsvProvenance(std::string_view hapticctl_version, std::int64_t wall_clock_ns,
-                                   const msgs::HapticStatus* status) {
+                                   std::int64_t origin_ns, const msgs::HapticStatus* status) {
     const std::time_t seconds = static_cast<std::time_t>(wall_clock_ns / 1'000'000'000);
     std::tm utc{};
     ::gmtime_r(&seconds, &utc);
@@ -33,6 +33,8 @@ std::string telemetryCsvProvenance(std::string_view hapticctl_version, std::int6
     out += fmt::format(
         "# started {:04}-{:02}-{:02}T{:02}:{:02}:{:02}Z (first sample, wall clock)\n",
         utc.tm_year + 1900, utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec);
+    out +=
+        fmt::format("{}{} (hapticd's stamp of the first sample)\n", kOriginLinePrefix, origin_ns);
     if (status == nullptr) {
         out += "# hapticd: no status received, version and configuration unknown\n";
         return out;
@@ -157,7 +159,8 @@ int columnNumber(std::string_view name) {
 }  // namespace
 
 std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path,
-                                double exo_clamp_n, double thimble_max_force_n) {
+                                double exo_clamp_n, double thimble_max_force_n,
+                                const FeltLogPlot* felt) {
     // Columns: 1 tick, 2 time, 3 device, 4 device kind, 5 exoskeleton force command [N],
     // 6-8 thimble servo commands [rad], 9 tick work (read + compute + write), 10 wake-up
     // latency, 11 read, 12 write. One panel per device kind, each in its own unit.
@@ -206,12 +209,19 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
         "(sqrt(${x}**2 + ${y}**2 + ${z}**2)) axes x1y2 with points pt 7 ps 0.3 "
         "title '|reference pad force|', "
         "{csv} every ::1 using (strcol(4) eq 'thimble' ? $2 : 1/0):{model} axes x1y2 with points "
-        "pt 7 ps 0.3 title 'pad model force (plate commanded)'"
-        "\nunset y2label\nunset y2tics\nset y2range [*:*]\n",
+        "pt 7 ps 0.3 title 'pad model force (plate commanded)'",
         fmt::arg("csv", csv), fmt::arg("x", columnNumber("thimble_reference_force_x_n")),
         fmt::arg("y", columnNumber("thimble_reference_force_y_n")),
         fmt::arg("z", columnNumber("thimble_reference_force_z_n")),
         fmt::arg("model", columnNumber("thimble_pad_force_model_n")));
+    if (felt != nullptr) {
+        // The felt log: stamp_ns, device, pose_known, indentation_m, force x, y, z, ...
+        script += fmt::format(
+            ", {log} every ::1 using (($1 - {origin}) * 1e-9):(sqrt($5**2 + $6**2 + $7**2)) "
+            "axes x1y2 with lines lw 2 title '|felt pad force| (virtual user, --felt-log)'",
+            fmt::arg("log", quoted(felt->path)), fmt::arg("origin", felt->origin_ns));
+    }
+    script += "\nunset y2label\nunset y2tics\nset y2range [*:*]\n";
     script += fmt::format(
         "set ylabel 'loop timing [us, log scale]'\n"
         "set logscale y\n"

@@ -14,10 +14,13 @@ namespace haptic::ctl {
 
 std::string telemetryCsvHeader();
 // The '#' lines before the header: who recorded, when (UTC wall clock of the first sample),
-// which hapticd with which configuration (from its status; nullptr: none received), and the
-// name of each device index. Readers skip '#' lines (gnuplot does too).
+// the monotonic stamp shown as time_s = 0 (`origin_ns`: logs of other processes on the host,
+// such as hapticemu --felt-log, line up with it), which hapticd with which configuration (from
+// its status; nullptr: none received), and the name of each device index. Readers skip '#'
+// lines (gnuplot does too).
 std::string telemetryCsvProvenance(std::string_view hapticctl_version, std::int64_t wall_clock_ns,
-                                   const msgs::HapticStatus* status);
+                                   std::int64_t origin_ns, const msgs::HapticStatus* status);
+inline constexpr std::string_view kOriginLinePrefix = "# time_s 0 is CLOCK_MONOTONIC ns ";
 // `origin_ns`: the stamp shown as t = 0 (the first recorded sample).
 std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t origin_ns);
 
@@ -25,8 +28,15 @@ std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t or
 // `exo_clamp_n`: the exoskeleton's force clamp; its panel shows twice that either way (the
 // sim's reference can spike far beyond it on contact impacts). `thimble_max_force_n`: the
 // thimble's pad force limit; its pad-force axis shows twice that.
+// `felt`: the virtual user's felt log (hapticemu --felt-log) with the recording's origin_ns:
+// the thimble panel then shows the felt pad force too.
+struct FeltLogPlot {
+    std::string path;
+    std::int64_t origin_ns{0};
+};
 std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path,
-                                double exo_clamp_n = 10.0, double thimble_max_force_n = 1.5);
+                                double exo_clamp_n = 10.0, double thimble_max_force_n = 1.5,
+                                const FeltLogPlot* felt = nullptr);
 
 // Samples missing from a recording: hapticd sends every `step`-th tick
 // (loop.telemetry_decimation), so per device a larger step between consecutive ticks is samples

@@ -11,6 +11,8 @@
 //                                         "tracker start" resumes it)
 //   ... --estop-relay 0x0E0               also the E-stop relay's status on that id
 //                                         ("estop press" on stdin presses its button)
+//   ... --user FILE --felt-log felt.csv   what the user's pad under each thimble feels,
+//                                         every tick (hapticctl plot --felt reads it)
 //
 // It prints "ready" on stdout once the bus is open, and each fault command's result
 // ("ok" or "error: ...") on stdout, so a test driving it through pipes can synchronise. With
@@ -21,8 +23,11 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <exception>
 #include <fstream>
@@ -130,6 +135,47 @@ class CommandReader {
     std::string pending_;
 };
 
+// The virtual user's log of what its pads felt, one row per worn thimble per tick. stamp_ns is
+// CLOCK_MONOTONIC, the clock of hapticd's telemetry stamps, so a recording on the same host
+// lines up with it (hapticctl plot --felt).
+class FeltLog {
+  public:
+    explicit FeltLog(const std::string& path) : file_(std::fopen(path.c_str(), "w")) {
+        if (file_ == nullptr) {
+            throw std::runtime_error("--felt-log " + path + ": " + std::strerror(errno));
+        }
+        std::fprintf(file_,
+                     "# hapticemu " HAPTIC_VERSION
+                     " felt log: the virtual user's pad under each thimble (config pad); "
+                     "stamp_ns is CLOCK_MONOTONIC; force on the pad and moment about the device "
+                     "origin, device frame\n"
+                     "stamp_ns,device,pose_known,indentation_m,force_x_n,force_y_n,force_z_n,"
+                     "moment_x_nm,moment_y_nm,moment_z_nm\n");
+    }
+    ~FeltLog() { std::fclose(file_); }
+    FeltLog(const FeltLog&) = delete;
+    FeltLog& operator=(const FeltLog&) = delete;
+
+    void write(std::int64_t stamp_ns, const std::vector<haptic::emu::VirtualUser::FeltPad>& felt) {
+        for (const auto& pad : felt) {
+            const haptic::emu::FeltPadContact& c = pad.contact;
+            std::fprintf(file_, "%lld,%s,%d,%.7f,%.5f,%.5f,%.5f,%.7f,%.7f,%.7f\n",
+                         static_cast<long long>(stamp_ns), pad.device.c_str(), c.pose_known ? 1 : 0,
+                         c.indentation_m, c.force_device_n.x(), c.force_device_n.y(),
+                         c.force_device_n.z(), c.moment_device_nm.x(), c.moment_device_nm.y(),
+                         c.moment_device_nm.z());
+        }
+        // A reader follows the file while the run goes on (the demo plots before stopping us).
+        if (++rows_ % 100 == 0) {
+            std::fflush(file_);
+        }
+    }
+
+  private:
+    std::FILE* file_;
+    std::uint64_t rows_{0};
+};
+
 std::string readFile(const std::filesystem::path& path) {
     std::ifstream file(path);
     if (!file) {
@@ -189,6 +235,11 @@ int main(int argc, char** argv) {
                    "also emulate the E-stop relay, sending its status on this CAN id (hex, as "
                    "daemon.yaml's estop_relay.status_id); commands on stdin: estop press|release|"
                    "silence|resume|corrupt N");
+    std::string felt_log_path;
+    app.add_option("--felt-log", felt_log_path,
+                   "with --user: write what the user's pad under each thimble feels, every "
+                   "tick, to this CSV (hapticctl plot --felt)")
+        ->needs(user_option);
     auto* log_level_option = app.add_option(
         "--log-level", log_level, "trace, debug, info, warn, error (default: the user file's)");
     CLI11_PARSE(app, argc, argv);
@@ -302,6 +353,10 @@ int main(int argc, char** argv) {
                 user->wear(device.config, *device.emulator);
             }
         }
+        std::unique_ptr<FeltLog> felt_log;
+        if (!felt_log_path.empty()) {
+            felt_log = std::make_unique<FeltLog>(felt_log_path);
+        }
         std::unique_ptr<haptic::ipc::DdsParticipant> participant;
         haptic::ipc::DdsWriter<haptic::idl::HandPose> tracker_writer;
         if (user) {
@@ -366,6 +421,9 @@ int main(int argc, char** argv) {
             }
             if (relay) {
                 relay->tick(*bus, now_ns);
+            }
+            if (felt_log) {
+                felt_log->write(now_ns, user->feelThimbles());
             }
             if (user) {
                 const auto pose = user->track(now_ns, t_s);

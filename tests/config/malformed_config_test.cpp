@@ -620,6 +620,8 @@ TEST(VirtualUserConfig, ReadsEveryKey) {
     EXPECT_EQ(user.hand_impedance.stiffness_nm_per_rad[1], 0.5);
     EXPECT_EQ(user.hand_impedance.inertia_kg_m2[0], 4.5e-5);
     EXPECT_EQ(user.hand_impedance.damping_nms_per_rad[2], 0.002);
+    EXPECT_EQ(user.pad.radius_m, 0.0075);
+    EXPECT_EQ(user.pad.effective_modulus_pa, 8.0e4);
     EXPECT_EQ(user.tracker.topic, "tracking/hand");  // the default
     EXPECT_EQ(user.tracker.rate_hz, 60);
     EXPECT_EQ(user.tracker.latency_ms, 35.0);
@@ -649,6 +651,12 @@ TEST(VirtualUserConfig, AJointWithoutStiffnessIsRefused) {
     expectError(userError("user_zero_stiffness.yaml"),
                 {file.string(), lineOf(file, "stiffness_nm_per_rad"), -1,
                  "hand_impedance.stiffness_nm_per_rad[1]", "got 0"});
+}
+
+TEST(VirtualUserConfig, APadRadiusInTheWrongUnitIsRefused) {
+    const auto file = kDataDir / "user_pad_radius.yaml";
+    expectError(userError("user_pad_radius.yaml"),
+                {file.string(), lineOf(file, "radius_m"), -1, "pad.radius_m", "got 0.08"});
 }
 
 TEST(ConfigReferences, ExoskeletonNeedsFingerJoints) {

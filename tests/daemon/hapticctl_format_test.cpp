@@ -1,11 +1,14 @@
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
+#include <string>
 #include <vector>
 
 #include "closed_loop_report.hpp"
@@ -42,7 +45,8 @@ TEST(SimStatusFormat, ShowsRateStepTimeZeroedStepsAndTheLastRejectedInput) {
     EXPECT_THAT(clean, HasSubstr("softhand_fingertip_index_res1 (169 nodes, 516 elements)"));
     EXPECT_THAT(clean, HasSubstr("4000 at 200.0 Hz"));
     EXPECT_THAT(clean, HasSubstr("p50   511.0 us"));
-    EXPECT_THAT(clean, HasSubstr("220 steps rescaled (5.5%), 0 substepped (0.0%), 4 frozen (0.1%)"));
+    EXPECT_THAT(clean,
+                HasSubstr("220 steps rescaled (5.5%), 0 substepped (0.0%), 4 frozen (0.1%)"));
     EXPECT_THAT(clean, HasSubstr("no input rejected"));
 
     status.inputs_rejected = 3;
@@ -314,7 +318,7 @@ TEST(ClosedLoopReport, TrackerToCommandLatencyIsTakenWhereTheSampleChanges) {
     EXPECT_NEAR(latency.from_receipt_ms.max, 25.0, 1e-6);
     EXPECT_NEAR(latency.from_sample_ms.p50, 35.0, 1e-6);
     EXPECT_NEAR(latency.from_sample_ms.max, 35.0, 1e-6);
-    const std::string text = formatReport(devices, {});
+    const std::string text = formatReport(devices, {}, {});
     EXPECT_NE(text.find("from handsim's receipt p50 15.0 ms"), std::string::npos) << text;
 
     EXPECT_EQ(latency.tracker_samples, static_cast<std::size_t>(samples))
@@ -325,7 +329,7 @@ TEST(ClosedLoopReport, TrackerToCommandLatencyIsTakenWhereTheSampleChanges) {
     scripted += telemetryCsvRow(sample, 0);
     const auto scripted_devices = readTelemetryCsv(scripted);
     EXPECT_EQ(trackingLatency(scripted_devices.at(0)).tracker_samples, 0U);
-    EXPECT_NE(formatReport(scripted_devices, {}).find("no tracker samples (scripted hand)"),
+    EXPECT_NE(formatReport(scripted_devices, {}, {}).find("no tracker samples (scripted hand)"),
               std::string::npos);
 
     // Every 10th tick recorded: tracker samples, but none measurable, and the report says why.
@@ -343,7 +347,7 @@ TEST(ClosedLoopReport, TrackerToCommandLatencyIsTakenWhereTheSampleChanges) {
     const TrackingLatency none = trackingLatency(decimated_devices.at(0));
     EXPECT_EQ(none.from_receipt_ms.count, 0U);
     EXPECT_GT(none.tracker_samples, 50U);
-    const std::string decimated_text = formatReport(decimated_devices, {});
+    const std::string decimated_text = formatReport(decimated_devices, {}, {});
     EXPECT_NE(decimated_text.find("not measured"), std::string::npos) << decimated_text;
     EXPECT_EQ(decimated_text.find("scripted"), std::string::npos) << decimated_text;
 }
@@ -364,13 +368,19 @@ TEST(TelemetryCsv, TheProvenanceLinesNameTheRecordingAndReadersSkipThem) {
     ASSERT_TRUE(status.devices.push_back(thimble));
     // 2026-11-27 07:55:12 UTC
     const std::int64_t wall_clock_ns = 1'795'766'112LL * 1'000'000'000 + 250'000'000;
-    const std::string provenance = telemetryCsvProvenance("0.1.0", wall_clock_ns, &status);
+    const std::string provenance =
+        telemetryCsvProvenance("0.1.0", wall_clock_ns, 123'456'789'000, &status);
     EXPECT_EQ(provenance,
               "# hapticctl record 0.1.0\n"
               "# started 2026-11-27T07:55:12Z (first sample, wall clock)\n"
+              "# time_s 0 is CLOCK_MONOTONIC ns 123456789000 (hapticd's stamp of the first "
+              "sample)\n"
               "# hapticd 0.1.0, configuration sha256:00aa\n"
               "# devices: 0 exo (exoskeleton), 1 thimble (thimble)\n");
-    EXPECT_THAT(telemetryCsvProvenance("0.1.0", wall_clock_ns, nullptr),
+    const RecordingInfo info = readRecordingInfo(provenance + telemetryCsvHeader());
+    EXPECT_EQ(info.origin_ns, 123'456'789'000);
+    EXPECT_EQ(info.device_names, (std::map<int, std::string>{{0, "exo"}, {1, "thimble"}}));
+    EXPECT_THAT(telemetryCsvProvenance("0.1.0", wall_clock_ns, 0, nullptr),
                 HasSubstr("# hapticd: no status received, version and configuration unknown\n"));
 
     msgs::TelemetrySample sample;
@@ -395,6 +405,16 @@ TEST(TelemetryCsv, GapsInEachDevicesTickNumbersCountAsMissingSamples) {
     gaps.add(0, 150);  // 130 and 140 missing
     gaps.add(1, 130);
     EXPECT_EQ(gaps.missing(), 2U);
+}
+
+// The felt pad force comes from the felt log, on the recording's time axis: its stamps less
+// the recording's origin. Columns 5-7 are force_x_n..force_z_n, the header readFeltLog checks.
+TEST(TelemetryCsv, PlotScriptPutsTheFeltLogOnTheRecordingsTimeAxis) {
+    const FeltLogPlot felt{"/tmp/felt.csv", 7'000'000'000'123};
+    const auto script = telemetryPlotScript("t.csv", "t.png", 10.0, 1.5, &felt);
+    EXPECT_THAT(script, HasSubstr("'/tmp/felt.csv' every ::1 using (($1 - 7000000000123) * 1e-9):"
+                                  "(sqrt($5**2 + $6**2 + $7**2)) axes x1y2"));
+    EXPECT_THAT(telemetryPlotScript("t.csv", "t.png"), Not(HasSubstr("felt pad force")));
 }
 
 TEST(TelemetryCsv, PlotScriptQuotesPathsForGnuplot) {
@@ -477,9 +497,83 @@ TEST(ClosedLoopReport, ReadsTheRecordingBackAndComparesFeltWithReference) {
     const ThimbleReport thimble = thimbleReport(devices.at(1), {});
     EXPECT_EQ(thimble.contact_ticks, 50U);
     EXPECT_NEAR(thimble.mean_reference_force_n, 1.0, 1e-4);
-    const std::string text = formatReport(devices, {});
+    const std::string text = formatReport(devices, {}, {});
     EXPECT_NE(text.find("error RMS 0.500 N (25.0% of it)"), std::string::npos) << text;
     EXPECT_THROW((void)readTelemetryCsv("time,tick\n1,2\n"), std::runtime_error);
+}
+
+// A thimble recording and the virtual user's felt log of the same run, on one monotonic
+// clock: the felt pad force lines up with the ticks and is compared with the reference.
+TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
+    msgs::HapticStatus status;
+    msgs::DeviceStatus thimble_status;
+    thimble_status.device_id.assign("pad_device");
+    thimble_status.kind = msgs::DeviceKind::kThimble;
+    ASSERT_TRUE(status.devices.push_back(thimble_status));
+    const std::int64_t origin_ns = 7'000'000'000'123;
+    std::string csv = telemetryCsvProvenance("0.1.0", 0, origin_ns, &status) + telemetryCsvHeader();
+    msgs::TelemetrySample sample;
+    sample.device_index = 0;
+    sample.device_kind = msgs::DeviceKind::kThimble;
+    for (int i = 0; i < 100; ++i) {
+        sample.tick = static_cast<std::uint64_t>(i);
+        sample.stamp_ns = origin_ns + 1'000'000LL * i;
+        const bool contact = i >= 40;
+        sample.thimble.reference_force_device_n = {0.0, 0.0, contact ? -0.5 : 0.0};
+        csv += telemetryCsvRow(sample, origin_ns);
+    }
+    // The pad under the plate feels 0.4 N from tick 50 on (the plate arrives 10 ms late), logged
+    // every millisecond half a tick before hapticd's ticks, up to tick 70 (the log then stops).
+    std::string felt_log =
+        "# hapticemu felt log\n"
+        "stamp_ns,device,pose_known,indentation_m,force_x_n,force_y_n,force_z_n,moment_x_nm,"
+        "moment_y_nm,moment_z_nm\n";
+    for (int i = -5; i <= 70; ++i) {
+        const bool pressed = i >= 50;
+        felt_log += fmt::format("{},pad_device,1,{},0.0,0.0,{},0,0,0\n",
+                                origin_ns + 1'000'000LL * i - 500'000, pressed ? 0.0015 : 0.0,
+                                pressed ? -0.4 : 0.0);
+    }
+    felt_log += "7000080";  // a truncated last line: the emulator was still writing
+
+    auto devices = readTelemetryCsv(csv);
+    const auto felt = readFeltLog(felt_log);
+    ASSERT_EQ(felt.at("pad_device").stamp_ns.size(), 76U);
+    ASSERT_EQ(attachFeltLog(devices, readRecordingInfo(csv), felt), 1U);
+    const auto& felt_z = devices.at(0).column("felt_force_z_n");
+    EXPECT_EQ(felt_z[49], 0.0);
+    EXPECT_EQ(felt_z[50], -0.4);
+    // The last row (69.5 ms) stands for the ticks up to 20 ms after it; later ones are
+    // unknown, not zero.
+    EXPECT_EQ(felt_z[89], -0.4);
+    EXPECT_TRUE(std::isnan(felt_z[90]));
+
+    ContactQualitySettings thimble_settings;
+    thimble_settings.clamp_n = 1.5;
+    const ThimbleReport report = thimbleReport(devices.at(0), thimble_settings);
+    EXPECT_EQ(report.contact_ticks, 60U);  // reference from tick 40
+    EXPECT_EQ(report.felt_ticks, 50U);     // of those, felt known up to tick 89
+    // Ticks 40-49: error 0.5 N; 50-89: 0.1 N.
+    EXPECT_NEAR(report.rms_error_n, std::sqrt((10 * 0.25 + 40 * 0.01) / 50.0), 1e-9);
+    EXPECT_NEAR(report.peak_error_n, 0.5, 1e-9);
+    EXPECT_NEAR(report.peak_indentation_m, 0.0015, 1e-12);
+    EXPECT_EQ(report.felt_quality.clamp_ticks, 0U);
+    const std::string text = formatReport(devices, {}, thimble_settings);
+    EXPECT_THAT(text, HasSubstr("felt vs reference, 50 ticks"));
+    EXPECT_THAT(text, HasSubstr("pad indented up to 1.50 mm"));
+
+    // A felt log for another device, a recording from before the origin line, not a felt log.
+    auto unmatched = readTelemetryCsv(csv);
+    const auto other_device = readFeltLog(
+        "stamp_ns,device,pose_known,indentation_m,force_x_n,force_y_n,force_z_n\n"
+        "1,other,1,0,0,0,0\n");
+    EXPECT_EQ(attachFeltLog(unmatched, readRecordingInfo(csv), other_device), 0U);
+    EXPECT_THROW((void)attachFeltLog(unmatched, readRecordingInfo(telemetryCsvHeader()), felt),
+                 std::runtime_error);
+    EXPECT_THROW((void)readFeltLog(csv), std::runtime_error);
+    // Without a felt log the report says how to get one.
+    EXPECT_THAT(formatReport(readTelemetryCsv(csv), {}, thimble_settings),
+                HasSubstr("felt pad force: no felt log"));
 }
 
 TEST(ContactQuality, AHeldContactForceHasNoChatterAndIsNotAtTheClamp) {

@@ -31,6 +31,7 @@ std::size_t firstAngle(config::Finger finger) {
 VirtualUser::VirtualUser(const config::VirtualUserConfig& config, std::string_view replay_text)
     : tracker_(config.tracker),
       impedance_(config.hand_impedance),
+      pad_(config.pad),
       scene_(config.scene),
       noise_engine_(config.tracker.seed) {
     // The user's hand has the scene's geometry, so the intent of a script is the pose
@@ -83,7 +84,13 @@ void VirtualUser::wear(const config::DeviceConfig& device, DeviceEmulator& emula
     }
     ExoskeletonModel* exoskeleton = emulator.exoskeletonModel();
     if (exoskeleton == nullptr) {
-        return;  // a thimble moves no joint of the hand
+        // A thimble moves no joint of the hand: it indents the pad.
+        const ThimbleModel* thimble = emulator.thimbleModel();
+        if (thimble != nullptr) {
+            thimbles_.push_back({thimble, UserPad(device.thimble(), pad_)});
+            felt_.push_back({device.name, FeltPadContact{}});
+        }
+        return;
     }
     const config::Finger finger = binding->second.finger;
     const softhand::HandPoseInput start = intent(0.0);
@@ -106,6 +113,13 @@ void VirtualUser::drive(double t_s) {
         worn.model->setIntent(
             {pose.flexion_rad[first], pose.flexion_rad[first + 1], pose.flexion_rad[first + 2]});
     }
+}
+
+const std::vector<VirtualUser::FeltPad>& VirtualUser::feelThimbles() {
+    for (std::size_t i = 0; i < thimbles_.size(); ++i) {
+        felt_[i].contact = thimbles_[i].pad.feel(thimbles_[i].model->angleRad());
+    }
+    return felt_;
 }
 
 softhand::HandPoseInput VirtualUser::actualPose(double t_s) const {

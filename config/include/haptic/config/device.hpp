@@ -203,7 +203,7 @@ struct ServoConfig {
 // YAML: finger_calibration: {...}. Per user: where the pad is and how far it may be pressed.
 struct FingerCalibration {
     double contact_height_m{0.0};   // plate height where the undeformed pad is first touched
-    double max_indentation_m{0.0};  // the plate never goes past contact_height + this
+    double max_indentation_m{0.0};  // the plate never goes below contact_height - this
     Transform T_finger_device;      // device base frame in the finger frame
 };
 

@@ -26,6 +26,17 @@ struct HandImpedanceConfig {
     std::array<double, 3> damping_nms_per_rad{0.004, 0.0015, 0.0008};
 };
 
+// The user's finger pad under a thimble's plate (docs/drivers.md, "Virtual user"): a Hertz
+// sphere of the fingertip's radius, F = 4/3 E* sqrt(R) delta^(3/2) at indentation delta. It is
+// the user's, not the tactile optimiser's pad law (an exponential stiffening), so the felt
+// force judges the rendering rather than restating its model. The defaults are the scene's
+// fingertip (diameter 16 mm) and the FEM tissue's material (E 50 kPa, nu 0.45) as a half-space,
+// E* = E / (1 - nu^2).
+struct UserPadConfig {
+    double radius_m{0.008};
+    double effective_modulus_pa{6.27e4};
+};
+
 // YAML: tracker: {topic, rate_hz, latency_ms, position_noise_m, angle_noise_rad, seed}
 struct TrackerConfig {
     std::string topic{"tracking/hand"};
@@ -42,6 +53,7 @@ struct VirtualUserConfig {
     // The scene whose hand and tracking block (scripted or replay) give the intent.
     SceneConfig scene;
     HandImpedanceConfig hand_impedance;
+    UserPadConfig pad;
     TrackerConfig tracker;
     DdsConfig dds;
     // Every device the user wears; all on one bus, each bound to a finger in the scene.

@@ -4,8 +4,9 @@
 // for the devices (docs/drivers.md, "Virtual user"). Its intent is a scene's tracking script
 // or replay; the finger an exoskeleton is worn on follows that intent through the hand
 // impedance and the exoskeleton's actuator force (ExoskeletonModel), so the device moves the
-// finger away from its intent. The thimble pushes its plate against the pad and reacts on the
-// nail side of the same phalanx: an internal force that moves no joint. The tracker sees the
+// finger away from its intent. The thimble pushes its plate against the pad (UserPad: the
+// user's own pad model gives the force felt) and reacts on the nail side of the same phalanx:
+// an internal force that indents the pad but moves no joint. The tracker sees the
 // actual pose, sampled at its rate and delivered after its latency, with noise.
 // No I/O: hapticemu's main publishes what track() returns.
 
@@ -14,12 +15,14 @@
 #include <memory>
 #include <optional>
 #include <random>
+#include <string>
 #include <string_view>
 #include <variant>
 #include <vector>
 
 #include "haptic/config/virtual_user.hpp"
 #include "haptic/emu/device_emulator.hpp"
+#include "haptic/emu/user_pad.hpp"
 #include "haptic/msgs/messages.hpp"
 #include "haptic/softhand/hand_builder.hpp"
 #include "haptic/softhand/tracking_input.hpp"
@@ -38,8 +41,17 @@ class VirtualUser {
     VirtualUser& operator=(const VirtualUser&) = delete;
 
     // Puts `device` on the hand. An exoskeleton's finger joints become the user's: the
-    // finger is placed at the intent of t = 0 and follows it through the hand impedance.
+    // finger is placed at the intent of t = 0 and follows it through the hand impedance. A
+    // thimble's plate presses on the user's pad (config pad).
     void wear(const config::DeviceConfig& device, DeviceEmulator& emulator);
+
+    // What the pad under each worn thimble feels with its plate where the thimble's model
+    // has it now (wear() order).
+    struct FeltPad {
+        std::string device;
+        FeltPadContact contact;
+    };
+    [[nodiscard]] const std::vector<FeltPad>& feelThimbles();
 
     // Before the devices' models step at t_s (seconds since start): the worn exoskeletons'
     // fingers aim for the intent of that instant.
@@ -61,16 +73,23 @@ class VirtualUser {
         config::Finger finger;
         ExoskeletonModel* model;
     };
+    struct WornThimble {
+        const ThimbleModel* model;
+        UserPad pad;
+    };
     using Script = std::variant<softhand::PressSlideEdgeScript, softhand::GraspLiftPlacePushScript,
                                 softhand::ReplayTrack>;
 
     config::TrackerConfig tracker_;
     config::HandImpedanceConfig impedance_;
+    config::UserPadConfig pad_;
     config::SceneConfig scene_;
     std::unique_ptr<softhand::HandModel> model_;
     std::unique_ptr<softhand::TrackedHand> hand_;
     std::unique_ptr<Script> script_;
     std::vector<WornExoskeleton> exoskeletons_;
+    std::vector<WornThimble> thimbles_;
+    std::vector<FeltPad> felt_;  // parallel to thimbles_
 
     std::mt19937 noise_engine_;
     std::normal_distribution<double> unit_normal_{0.0, 1.0};

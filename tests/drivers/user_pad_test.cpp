@@ -1,0 +1,158 @@
+// The virtual user's pad under the thimble (UserPad): the plate where the measured servo angles
+// put it, pressing a Hertz sphere. The plate poses come from the thimble's inverse kinematics
+// and the expected indentations from sampling the sphere's surface, so the test shares no
+// formula with the pad's own geometry.
+
+#include "haptic/emu/user_pad.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+
+#include "haptic/config/device.hpp"
+#include "haptic/config/virtual_user.hpp"
+#include "haptic/tactile/thimble_kinematics.hpp"
+
+namespace haptic::emu {
+namespace {
+
+config::ThimbleConfig shippedThimble() {
+    return config::loadDeviceConfig(std::string(HAPTIC_CONFIG_DIR) + "/devices/thimble.yaml")
+        .thimble();
+}
+
+config::UserPadConfig shippedPad() {
+    return config::loadVirtualUserConfig(std::string(HAPTIC_CONFIG_DIR) + "/user.yaml").pad;
+}
+
+// The deepest any point of the sphere lies beyond the plate's plane (the side the plate came
+// from), by sampling its surface on a fine grid: the indentation, found the slow way.
+double deepestSphereSample(const Eigen::Vector3d& centre, double radius,
+                           const tactile::PlatformPose& plate) {
+    const Eigen::Vector3d normal = plate.plateNormal();  // from the plate into the finger
+    double deepest = -std::numeric_limits<double>::infinity();
+    constexpr int kSteps = 720;
+    for (int i = 0; i <= kSteps; ++i) {
+        const double polar = std::numbers::pi * i / kSteps;
+        for (int j = 0; j < 2 * kSteps; ++j) {
+            const double azimuth = std::numbers::pi * j / kSteps;
+            const Eigen::Vector3d point =
+                centre + radius * Eigen::Vector3d(std::sin(polar) * std::cos(azimuth),
+                                                  std::sin(polar) * std::sin(azimuth),
+                                                  std::cos(polar));
+            deepest = std::max(deepest, (plate.position_m - point).dot(normal));
+        }
+    }
+    return deepest;
+}
+
+tactile::InverseResult plateAt(const config::ThimbleConfig& thimble, double height_m,
+                               double tilt_x_rad, double tilt_y_rad) {
+    const tactile::ThimbleKinematics kinematics(thimble);
+    return kinematics.inverse({height_m, tilt_x_rad, tilt_y_rad}, false);
+}
+
+TEST(UserPad, ALevelPlateIndentsThePadByItsHeightPastFirstContact) {
+    const auto thimble = shippedThimble();
+    const auto pad = shippedPad();
+    UserPad user_pad(thimble, pad);
+    // The pad's outermost point: the phalanx's centre 12 mm from the device origin
+    // (T_finger_device) plus the fingertip's 8 mm radius.
+    const double first_contact = user_pad.firstContactHeightM();
+    EXPECT_NEAR(first_contact, 0.020, 1e-12);
+    for (const double depth : {0.0005, 0.001, 0.002, 0.0035}) {
+        const auto plate = plateAt(thimble, first_contact - depth, 0.0, 0.0);
+        ASSERT_TRUE(plate.ok());
+        const FeltPadContact felt = user_pad.feel(plate.servo_rad);
+        ASSERT_TRUE(felt.pose_known);
+        EXPECT_NEAR(felt.indentation_m, depth, 1e-9);
+        // Hertz: F = 4/3 E* sqrt(R) delta^1.5, straight into the finger (-z), on the axis.
+        const double hertz =
+            4.0 / 3.0 * pad.effective_modulus_pa * std::sqrt(pad.radius_m) * std::pow(depth, 1.5);
+        EXPECT_NEAR(felt.force_device_n.z(), -hertz, 1e-9);
+        EXPECT_NEAR(felt.force_device_n.head<2>().norm(), 0.0, 1e-9);
+        EXPECT_NEAR(felt.moment_device_nm.norm(), 0.0, 1e-9);
+    }
+    // The shipped pad: about 0.24 N at 1 mm, 0.67 N at 2 mm (E* 62.7 kPa, R 8 mm).
+    EXPECT_NEAR(user_pad.forceAt(0.001), 0.236, 0.002);
+    EXPECT_NEAR(user_pad.forceAt(0.002), 0.669, 0.002);
+}
+
+TEST(UserPad, ATiltedPlateIndentsAsDeepAsTheSphereReachesPastIt) {
+    const auto thimble = shippedThimble();
+    const auto pad = shippedPad();
+    UserPad user_pad(thimble, pad);
+    const double first_contact = user_pad.firstContactHeightM();
+    const Eigen::Vector3d centre(0.0, 0.0, 0.012);  // -T_finger_device's translation
+    int pressed = 0;
+    for (const double tilt_deg : {-20.0, -8.0, 5.0, 15.0}) {
+        for (const double depth : {0.0005, 0.002}) {
+            const double tilt = tilt_deg * std::numbers::pi / 180.0;
+            const auto plate = plateAt(thimble, first_contact - depth, tilt, 0.4 * tilt);
+            ASSERT_TRUE(plate.ok()) << tilt_deg;
+            const FeltPadContact felt = user_pad.feel(plate.servo_rad);
+            ASSERT_TRUE(felt.pose_known);
+            const double expected =
+                std::max(0.0, deepestSphereSample(centre, pad.radius_m, plate.pose));
+            // The grid's spacing (pi / 720 rad) bounds its error by R (1 - cos) < 1e-7 m.
+            EXPECT_NEAR(felt.indentation_m, expected, 2e-7) << tilt_deg << " " << depth;
+            EXPECT_NEAR(felt.force_device_n.norm(), user_pad.forceAt(felt.indentation_m), 1e-12);
+            if (felt.indentation_m > 0.0) {
+                ++pressed;
+                // Along the plate's normal, and about the origin from the pressed point.
+                EXPECT_NEAR(felt.force_device_n.normalized().dot(plate.pose.plateNormal()), 1.0,
+                            1e-12);
+                EXPECT_TRUE(felt.moment_device_nm.isApprox(
+                    felt.point_device_m.cross(felt.force_device_n), 1e-12));
+                // The pressed point is on the plate and on the sphere's axis along the normal.
+                EXPECT_NEAR(
+                    (felt.point_device_m - plate.pose.position_m).dot(plate.pose.plateNormal()),
+                    0.0, 1e-12);
+            }
+        }
+    }
+    EXPECT_GE(pressed, 6);
+}
+
+TEST(UserPad, TheRetractedPlateAndAPlateBesideThePadFeelNothing) {
+    const auto thimble = shippedThimble();
+    UserPad user_pad(thimble, shippedPad());
+    const tactile::ThimbleKinematics kinematics(thimble);
+    const auto retracted = kinematics.inverse(kinematics.retractPose(), false);
+    ASSERT_TRUE(retracted.ok());
+    const FeltPadContact felt = user_pad.feel(retracted.servo_rad);
+    EXPECT_TRUE(felt.pose_known);
+    EXPECT_EQ(felt.indentation_m, 0.0);
+    EXPECT_EQ(felt.force_device_n, Eigen::Vector3d::Zero());
+
+    // A small plate tilted far enough that the point under the sphere's centre is past its rim.
+    config::ThimbleConfig small_plate = thimble;
+    small_plate.plate_radius_m = 0.002;
+    UserPad beside(small_plate, shippedPad());
+    const auto tilted = plateAt(small_plate, beside.firstContactHeightM() - 0.001, 0.35, 0.0);
+    ASSERT_TRUE(tilted.ok());
+    const FeltPadContact rim = beside.feel(tilted.servo_rad);
+    EXPECT_TRUE(rim.pose_known);
+    EXPECT_GT((rim.point_device_m - tilted.pose.position_m).norm(), 0.002);
+    EXPECT_EQ(rim.force_device_n, Eigen::Vector3d::Zero());
+}
+
+TEST(UserPad, AnglesWithNoPoseFeelNothingAndTheNextPoseIsFoundAgain) {
+    const auto thimble = shippedThimble();
+    UserPad user_pad(thimble, shippedPad());
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const FeltPadContact none = user_pad.feel({nan, 0.9, 0.9});
+    EXPECT_FALSE(none.pose_known);
+    EXPECT_EQ(none.force_device_n, Eigen::Vector3d::Zero());
+    const auto plate = plateAt(thimble, user_pad.firstContactHeightM() - 0.001, 0, 0);
+    ASSERT_TRUE(plate.ok());
+    const FeltPadContact felt = user_pad.feel(plate.servo_rad);
+    EXPECT_TRUE(felt.pose_known);
+    EXPECT_NEAR(felt.indentation_m, 0.001, 1e-9);
+}
+
+}  // namespace
+}  // namespace haptic::emu
