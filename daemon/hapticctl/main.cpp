@@ -388,7 +388,12 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
                              felt_path.c_str(), csv_path.c_str());
                 return kExitError;
             }
-            felt_plot = {felt_path, recording.origin_ns};
+            double end_s = 0.0;
+            for (const auto& [index, device] : devices) {
+                const auto& time = device.column("time_s");
+                end_s = time.empty() ? end_s : std::max(end_s, time.back());
+            }
+            felt_plot = {felt_path, recording.origin_ns, end_s};
         } catch (const std::runtime_error& e) {
             std::fprintf(stderr, "hapticctl: %s: %s\n", felt_path.c_str(), e.what());
             return kExitError;

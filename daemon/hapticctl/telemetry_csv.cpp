@@ -217,9 +217,11 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
     if (felt != nullptr) {
         // The felt log: stamp_ns, device, pose_known, indentation_m, force x, y, z, ...
         script += fmt::format(
-            ", {log} every ::1 using (($1 - {origin}) * 1e-9):(sqrt($5**2 + $6**2 + $7**2)) "
-            "axes x1y2 with lines lw 2 title '|felt pad force| (virtual user, --felt-log)'",
-            fmt::arg("log", quoted(felt->path)), fmt::arg("origin", felt->origin_ns));
+            ", {log} every ::1 using (($1 - {origin}) * 1e-9 <= {end} && $1 >= {origin} ? "
+            "($1 - {origin}) * 1e-9 : 1/0):(sqrt($5**2 + $6**2 + $7**2)) axes x1y2 with lines "
+            "lw 2 title '|felt pad force| (virtual user, --felt-log)'",
+            fmt::arg("log", quoted(felt->path)), fmt::arg("origin", felt->origin_ns),
+            fmt::arg("end", felt->end_s));
     }
     script += "\nunset y2label\nunset y2tics\nset y2range [*:*]\n";
     script += fmt::format(

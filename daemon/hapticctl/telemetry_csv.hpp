@@ -29,10 +29,12 @@ std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t or
 // sim's reference can spike far beyond it on contact impacts). `thimble_max_force_n`: the
 // thimble's pad force limit; its pad-force axis shows twice that.
 // `felt`: the virtual user's felt log (hapticemu --felt-log) with the recording's origin_ns:
-// the thimble panel then shows the felt pad force too.
+// the thimble panel then shows the felt pad force too, over the recording's time span
+// [0, end_s] (the log usually spans more: it starts with the emulator).
 struct FeltLogPlot {
     std::string path;
     std::int64_t origin_ns{0};
+    double end_s{0.0};
 };
 std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path,
                                 double exo_clamp_n = 10.0, double thimble_max_force_n = 1.5,

@@ -410,10 +410,11 @@ TEST(TelemetryCsv, GapsInEachDevicesTickNumbersCountAsMissingSamples) {
 // The felt pad force comes from the felt log, on the recording's time axis: its stamps less
 // the recording's origin. Columns 5-7 are force_x_n..force_z_n, the header readFeltLog checks.
 TEST(TelemetryCsv, PlotScriptPutsTheFeltLogOnTheRecordingsTimeAxis) {
-    const FeltLogPlot felt{"/tmp/felt.csv", 7'000'000'000'123};
+    const FeltLogPlot felt{"/tmp/felt.csv", 7'000'000'000'123, 12.5};
     const auto script = telemetryPlotScript("t.csv", "t.png", 10.0, 1.5, &felt);
-    EXPECT_THAT(script, HasSubstr("'/tmp/felt.csv' every ::1 using (($1 - 7000000000123) * 1e-9):"
-                                  "(sqrt($5**2 + $6**2 + $7**2)) axes x1y2"));
+    EXPECT_THAT(script, HasSubstr("'/tmp/felt.csv' every ::1 using (($1 - 7000000000123) * 1e-9 "
+                                  "<= 12.5 && $1 >= 7000000000123 ? ($1 - 7000000000123) * 1e-9 "
+                                  ": 1/0):(sqrt($5**2 + $6**2 + $7**2)) axes x1y2"));
     EXPECT_THAT(telemetryPlotScript("t.csv", "t.png"), Not(HasSubstr("felt pad force")));
 }
 
