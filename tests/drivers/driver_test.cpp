@@ -273,8 +273,12 @@ TEST(ThimbleDriver, ServosFollowTargetsAtTheRateLimitAndHeartbeatLossIsDetected)
     Rig rig(device, emu::EmulatorMode::kLockstep);
     ThimbleDriver driver(device, rig.host);
     const double rate = device.thimble().servos.max_rate_rad_per_s;
-    protocol::ThimbleCommand command{{1.2, 1.2, 1.2}};
-    double previous = 0.0;
+    // From the retract pose the device powers on at, towards the pad.
+    const tactile::ThimbleKinematics kinematics(device.thimble());
+    const auto retract = kinematics.inverse(kinematics.retractPose());
+    ASSERT_TRUE(retract.ok());
+    protocol::ThimbleCommand command{{0.6, 0.6, 0.6}};
+    double previous = retract.servo_rad[0];
     for (int i = 0; i < 20; ++i) {
         rig.advance(kMs);
         driver.poll(rig.now);
@@ -282,8 +286,8 @@ TEST(ThimbleDriver, ServosFollowTargetsAtTheRateLimitAndHeartbeatLossIsDetected)
         rig.advance(0);
         driver.poll(rig.now);
         const double angle = driver.state().servos.servo_angle_rad[0];
-        ASSERT_LE(angle - previous, rate * 1e-3 + 1e-4) << "faster than the rate limit";
-        ASSERT_GT(angle, previous);
+        ASSERT_LE(previous - angle, rate * 1e-3 + 1e-4) << "faster than the rate limit";
+        ASSERT_LT(angle, previous);
         previous = angle;
     }
     EXPECT_EQ(driver.faults(rig.now), 0U);

@@ -9,6 +9,7 @@
 #include "haptic/devices/actuator_limits.hpp"
 #include "haptic/emu/device_models.hpp"
 #include "haptic/emu/fault_injector.hpp"
+#include "haptic/tactile/thimble_kinematics.hpp"
 
 namespace haptic::emu {
 namespace {
@@ -120,15 +121,30 @@ TEST(ThimbleModel, ServosAreRateLimitedAndClampedToTheirRange) {
     const auto device = thimbleDevice();
     const auto& servos = device.thimble().servos;
     ThimbleModel model(device);
-    model.step(1e-3, {10.0, -10.0, 0.0});
-    EXPECT_NEAR(model.angleRad()[0], servos.max_rate_rad_per_s * 1e-3, 1e-12);
-    EXPECT_NEAR(model.angleRad()[1], -servos.max_rate_rad_per_s * 1e-3, 1e-12);
+    const std::array<double, 3> start = model.angleRad();
+    model.step(1e-3, {-10.0, -10.0, start[2]});
+    EXPECT_NEAR(model.angleRad()[0], start[0] - servos.max_rate_rad_per_s * 1e-3, 1e-12);
+    EXPECT_NEAR(model.angleRad()[1], start[1] - servos.max_rate_rad_per_s * 1e-3, 1e-12);
     for (int i = 0; i < 5000; ++i) {
         model.step(1e-3, {10.0, -10.0, std::nan("")});
     }
     EXPECT_NEAR(model.angleRad()[0], servos.max_rad, 1e-9);
     EXPECT_NEAR(model.angleRad()[1], servos.min_rad, 1e-9);
-    EXPECT_EQ(model.angleRad()[2], 0.0);  // NaN target: hold
+    EXPECT_EQ(model.angleRad()[2], start[2]);  // NaN target: hold
+}
+
+// Powered on, the plate stands at the retract pose, off the finger: the pose hapticd sends
+// first, so a user who put the thimble on first is never pressed before hapticd comes up.
+TEST(ThimbleModel, PowersOnAtTheRetractPose) {
+    const auto device = thimbleDevice();
+    const ThimbleModel model(device);
+    const tactile::ThimbleKinematics kinematics(device.thimble());
+    const tactile::ForwardResult pose = kinematics.forward(model.angleRad());
+    ASSERT_TRUE(pose.ok());
+    EXPECT_NEAR(pose.dofs.height_m, kinematics.retractPose().height_m, 1e-9);
+    EXPECT_NEAR(pose.dofs.tilt_x_rad, 0.0, 1e-9);
+    EXPECT_NEAR(pose.dofs.tilt_y_rad, 0.0, 1e-9);
+    EXPECT_GT(pose.dofs.height_m, device.thimble().finger_calibration.contact_height_m + 0.005);
 }
 
 TEST(FaultInjector, ParsesCommandsAndExplainsBadOnes) {

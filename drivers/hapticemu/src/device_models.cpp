@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "haptic/devices/actuator_limits.hpp"
+#include "haptic/tactile/thimble_kinematics.hpp"
 
 namespace haptic::emu {
 
@@ -142,7 +143,16 @@ ThimbleModel::ThimbleModel(const config::DeviceConfig& device) {
         throw std::invalid_argument("thimble model: device '" + device.name + "' is not a thimble");
     }
     servos_ = device.thimble().servos;
-    angle_rad_.fill(std::clamp(0.0, servos_.min_rad, servos_.max_rad));
+    // Powered on, the servos stand where the plate is farthest from the pad (the retract
+    // pose), as a device's firmware would home them: anywhere else would press the finger of a
+    // user who put the thimble on before hapticd came up (0 rad on the shipped geometry is a
+    // plate 12 mm into the pad). A geometry without a retract pose starts at 0 rad.
+    const tactile::ThimbleKinematics kinematics(device.thimble());
+    const tactile::InverseResult retract = kinematics.inverse(kinematics.retractPose(), false);
+    for (std::size_t i = 0; i < angle_rad_.size(); ++i) {
+        angle_rad_[i] =
+            std::clamp(retract.ok() ? retract.servo_rad[i] : 0.0, servos_.min_rad, servos_.max_rad);
+    }
 }
 
 void ThimbleModel::step(double dt_s, const std::array<double, 3>& target_rad) noexcept {

@@ -68,7 +68,7 @@ class ExoskeletonModel {
 };
 
 // Thimble: each servo moves towards its target with a first-order lag whose speed is capped
-// at servos.max_rate; targets are clamped to the servo range.
+// at servos.max_rate; targets are clamped to the servo range. It powers on at the retract pose.
 class ThimbleModel {
   public:
     explicit ThimbleModel(const config::DeviceConfig& device);
