@@ -23,8 +23,9 @@ UserPadConfig readUserPad(MapReader map) {
     UserPadConfig out;
     // A fingertip's radius is of the order of 5-12 mm; pad moduli of 10 kPa..10 MPa span
     // the soft pulp to a callused pad. Outside, a unit slip is likelier than a finger.
-    out.radius_m = map.required("radius_m", spec::Real::closed(0.002, 0.02));
-    out.effective_modulus_pa = map.required("effective_modulus_pa", spec::Real::closed(1e4, 1e7));
+    out.radius_m = map.optional("radius_m", out.radius_m, spec::Real::closed(0.002, 0.02));
+    out.effective_modulus_pa = map.optional("effective_modulus_pa", out.effective_modulus_pa,
+                                            spec::Real::closed(1e4, 1e7));
     map.finish();
     return out;
 }
@@ -76,7 +77,9 @@ VirtualUserConfig loadVirtualUserConfig(const std::filesystem::path& path) {
         }
     }
     out.hand_impedance = readHandImpedance(root.requiredMap("hand_impedance"));
-    out.pad = readUserPad(root.requiredMap("pad"));
+    if (auto pad = root.optionalMap("pad")) {
+        out.pad = readUserPad(std::move(*pad));
+    }
     out.tracker = readTracker(root.requiredMap("tracker"));
     out.dds = detail::readDds(root);
     const ListReader device_list = detail::requiredDeviceList(root);

@@ -180,21 +180,23 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
     ThimbleReport report;
     const auto& time = device.column("time_s");
     report.ticks = time.size();
-    const bool have_felt = device.values.contains("felt_force_x_n");
-    std::vector<double> felt_magnitude;
+    report.felt_attached = device.values.contains("felt_force_x_n");
+    // |felt| per tick for the chatter and limit figures, an unknown tick holding the last known
+    // value: dropping it would join the ticks either side into one moving average.
+    std::vector<double> felt_held;
     double reference_sum = 0.0;
+    double reference_on_felt_sum = 0.0;
     double felt_sum = 0.0;
     double squared_error_sum = 0.0;
+    double last_felt = 0.0;
     for (std::size_t i = 0; i < time.size(); ++i) {
         const double reference = norm3(device, "thimble_reference_force_", "_n", i);
         report.peak_reference_force_n = std::max(report.peak_reference_force_n, reference);
-        double felt = 0.0;
+        double felt = std::nan("");
         double error = 0.0;
-        bool felt_known = false;
-        if (have_felt) {
+        if (report.felt_attached) {
             felt = norm3(device, "felt_force_", "_n", i);
-            felt_known = std::isfinite(felt);
-            if (felt_known) {
+            if (std::isfinite(felt)) {
                 double squared = 0.0;
                 for (const char* axis : {"x", "y", "z"}) {
                     const double d =
@@ -203,17 +205,21 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
                     squared += d * d;
                 }
                 error = std::sqrt(squared);
-                felt_magnitude.push_back(felt);
+                last_felt = felt;
                 report.peak_indentation_m =
                     std::max(report.peak_indentation_m, device.column("felt_indentation_m")[i]);
             }
+            felt_held.push_back(last_felt);
         }
-        if (reference > settings.contact_threshold_n || felt > settings.contact_threshold_n) {
+        const bool felt_known = std::isfinite(felt);
+        if (reference > settings.contact_threshold_n ||
+            (felt_known && felt > settings.contact_threshold_n)) {
             ++report.contact_ticks;
             reference_sum += reference;
             if (felt_known) {
                 ++report.felt_ticks;
                 felt_sum += felt;
+                reference_on_felt_sum += reference;
                 squared_error_sum += error * error;
                 report.peak_error_n = std::max(report.peak_error_n, error);
             }
@@ -223,9 +229,11 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
         report.mean_reference_force_n = reference_sum / static_cast<double>(report.contact_ticks);
     }
     if (report.felt_ticks > 0) {
-        report.mean_felt_force_n = felt_sum / static_cast<double>(report.felt_ticks);
-        report.rms_error_n = std::sqrt(squared_error_sum / static_cast<double>(report.felt_ticks));
-        report.felt_quality = contactQuality(felt_magnitude, settings);
+        const auto n = static_cast<double>(report.felt_ticks);
+        report.mean_felt_force_n = felt_sum / n;
+        report.mean_reference_on_felt_ticks_n = reference_on_felt_sum / n;
+        report.rms_error_n = std::sqrt(squared_error_sum / n);
+        report.felt_quality = contactQuality(felt_held, settings);
     }
     return report;
 }
@@ -267,38 +275,49 @@ std::map<std::string, FeltSeries, std::less<>> readFeltLog(std::string_view csv)
     while (header.starts_with('#') && !csv.empty()) {
         header = nextLine(csv);
     }
-    if (!header.starts_with("stamp_ns,device,pose_known,indentation_m,force_x_n")) {
+    // stamp_ns, device, pose_known, indentation_m, force x, y, z, moment x, y, z
+    constexpr std::size_t kFields = 10;
+    if (!header.starts_with("stamp_ns,device,pose_known,indentation_m,force_x_n") ||
+        splitFields(header).size() != kFields) {
         throw std::runtime_error("felt log: the first line is not hapticemu --felt-log's header");
     }
+    const auto parse = [](std::string_view field, auto& value) {
+        const auto [end, error] = std::from_chars(field.data(), field.data() + field.size(), value);
+        return error == std::errc() && end == field.data() + field.size();
+    };
     std::map<std::string, FeltSeries, std::less<>> out;
     while (!csv.empty()) {
         const std::vector<std::string_view> fields = splitFields(nextLine(csv));
-        if (fields.size() < 7) {
-            continue;  // a truncated last line: the emulator was still writing
+        // A line cut short (the emulator was still writing it) has fewer fields, or a last
+        // number that no longer parses whole.
+        if (fields.size() != kFields || fields[1].empty()) {
+            continue;
         }
         std::int64_t stamp = 0;
-        std::array<double, 4> numbers{};  // indentation, force x, y, z
-        bool ok =
-            std::from_chars(fields[0].data(), fields[0].data() + fields[0].size(), stamp).ec ==
-            std::errc();
+        int pose_known = 0;
+        std::array<double, 7> numbers{};  // indentation, force x, y, z, moment x, y, z
+        bool ok = parse(fields[0], stamp) && parse(fields[2], pose_known);
         for (std::size_t k = 0; k < numbers.size() && ok; ++k) {
-            const std::string_view field = fields[3 + k];
-            ok = std::from_chars(field.data(), field.data() + field.size(), numbers[k]).ec ==
-                 std::errc();
+            ok = parse(fields[3 + k], numbers[k]);
         }
         if (!ok) {
             continue;
         }
         FeltSeries& series = out[std::string(fields[1])];
         series.stamp_ns.push_back(stamp);
-        series.indentation_m.push_back(numbers[0]);
-        series.force_n.push_back({numbers[1], numbers[2], numbers[3]});
+        // No pose for the angles: the force is unknown, not zero.
+        const double unknown = std::nan("");
+        series.indentation_m.push_back(pose_known != 0 ? numbers[0] : unknown);
+        series.force_n.push_back(pose_known != 0
+                                     ? std::array<double, 3>{numbers[1], numbers[2], numbers[3]}
+                                     : std::array<double, 3>{unknown, unknown, unknown});
     }
     return out;
 }
 
-std::size_t attachFeltLog(std::map<int, DeviceColumns>& devices, const RecordingInfo& recording,
-                          const std::map<std::string, FeltSeries, std::less<>>& felt) {
+std::vector<std::string> attachFeltLog(std::map<int, DeviceColumns>& devices,
+                                       const RecordingInfo& recording,
+                                       const std::map<std::string, FeltSeries, std::less<>>& felt) {
     if (recording.origin_ns < 0) {
         throw std::runtime_error(
             "the recording has no '" + std::string(kOriginLinePrefix) +
@@ -310,7 +329,7 @@ std::size_t attachFeltLog(std::map<int, DeviceColumns>& devices, const Recording
             "recording), so the felt log's devices cannot be matched");
     }
     constexpr std::int64_t kMaxAgeNs = 20'000'000;
-    std::size_t attached = 0;
+    std::vector<std::string> attached;
     for (auto& [index, device] : devices) {
         const auto name = recording.device_names.find(index);
         if (device.kind != "thimble" || name == recording.device_names.end()) {
@@ -326,6 +345,13 @@ std::size_t attachFeltLog(std::map<int, DeviceColumns>& devices, const Recording
         const FeltSeries& log = series->second;
         std::size_t next = 0;  // first log row after the tick
         for (const double t : time) {
+            if (!std::isfinite(t)) {
+                for (auto& axis : force) {
+                    axis.push_back(std::nan(""));
+                }
+                indentation.push_back(std::nan(""));
+                continue;
+            }
             const auto stamp =
                 recording.origin_ns + static_cast<std::int64_t>(std::llround(t * 1e9));
             while (next < log.stamp_ns.size() && log.stamp_ns[next] <= stamp) {
@@ -341,7 +367,7 @@ std::size_t attachFeltLog(std::map<int, DeviceColumns>& devices, const Recording
         device.values["felt_force_y_n"] = std::move(force[1]);
         device.values["felt_force_z_n"] = std::move(force[2]);
         device.values["felt_indentation_m"] = std::move(indentation);
-        ++attached;
+        attached.push_back(name->second);
     }
     return attached;
 }
@@ -396,21 +422,33 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
                 "{:.2f} N); reference mean {:.3f} N, peak {:.3f} N\n",
                 index, r.ticks, r.contact_ticks, thimble_settings.contact_threshold_n,
                 r.mean_reference_force_n, r.peak_reference_force_n);
-            if (r.felt_ticks == 0) {
+            if (!r.felt_attached) {
                 out +=
                     "  felt pad force: no felt log (plot --felt FILE, from hapticemu "
                     "--felt-log)\n";
+            } else if (r.felt_ticks == 0) {
+                out += "  felt pad force: the felt log has no value on any contact tick\n";
             } else {
                 const ContactQuality& q = r.felt_quality;
                 out += fmt::format(
-                    "  felt vs reference, {} ticks: mean |felt| {:.3f} N, error RMS {:.3f} N "
-                    "({:.1f}% of the mean |reference|), peak {:.3f} N; pad indented up to {:.2f} "
-                    "mm\n"
-                    "  felt: at the {:.2f} N pad force limit {:.1f}% of contact ticks; chatter "
-                    "{:.3f} N RMS = {:.1f}% of its mean\n",
-                    r.felt_ticks, r.mean_felt_force_n, r.rms_error_n, 100.0 * r.errorFraction(),
-                    r.peak_error_n, 1e3 * r.peak_indentation_m, thimble_settings.clamp_n,
-                    100.0 * q.clampFraction(), q.chatter_rms_n, 100.0 * q.chatterFraction());
+                    "  felt vs reference, {} contact ticks with a felt value: mean |felt| {:.3f} "
+                    "N against a mean |reference| {:.3f} N there; error RMS {:.3f} N ({:.1f}% of "
+                    "that reference), peak {:.3f} N; pad indented up to {:.2f} mm\n",
+                    r.felt_ticks, r.mean_felt_force_n, r.mean_reference_on_felt_ticks_n,
+                    r.rms_error_n, 100.0 * r.errorFraction(), r.peak_error_n,
+                    1e3 * r.peak_indentation_m);
+                if (q.contact_ticks == 0) {
+                    out +=
+                        fmt::format("  felt: never above {:.2f} N, so no chatter or limit figure\n",
+                                    thimble_settings.contact_threshold_n);
+                } else {
+                    out += fmt::format(
+                        "  felt above {:.2f} N on {} ticks: at the {:.2f} N pad force limit on "
+                        "{:.1f}% of them; chatter {:.3f} N RMS = {:.1f}% of its mean there\n",
+                        thimble_settings.contact_threshold_n, q.contact_ticks,
+                        thimble_settings.clamp_n, 100.0 * q.clampFraction(), q.chatter_rms_n,
+                        100.0 * q.chatterFraction());
+                }
             }
             out += latencyLine(device);
         }

@@ -26,7 +26,7 @@
 //              felt log's last row at or before the tick;
 //   error      RMS and peak of |felt - reference| (vectors, device frame), and RMS as a share
 //              of the mean |reference|;
-//   chatter, clamp  of |felt|, against the thimble's pad force limit.
+//   chatter, clamp  of |felt| where it exceeds the threshold, against the pad force limit.
 //   Without a felt log only the reference is reported.
 // Both: the tracker-to-command latency. On the first tick whose sim input follows a new
 // tracker sample (tracking_sampled_s changes), the time from when handsim's reader received
@@ -95,18 +95,26 @@ struct ExoskeletonReport {
 
 struct ThimbleReport {
     std::size_t ticks{0};
-    std::size_t contact_ticks{0};  // reference |F| (or felt |F|, when known) above the threshold
-    double mean_reference_force_n{0.0};
+    // Reference |F| or a known felt |F| above the threshold.
+    std::size_t contact_ticks{0};
+    double mean_reference_force_n{0.0};  // over the contact ticks
     double peak_reference_force_n{0.0};
-    // From the felt log (attachFeltLog); felt_ticks = 0: none attached.
+    // From the felt log (attachFeltLog), over the contact ticks with a known felt force.
+    bool felt_attached{false};
     std::size_t felt_ticks{0};
     double mean_felt_force_n{0.0};
+    double mean_reference_on_felt_ticks_n{0.0};
     double rms_error_n{0.0};
     double peak_error_n{0.0};
-    ContactQuality felt_quality;  // of |felt|, clamp = the pad force limit
+    // Of |felt| over every tick (an unknown one holding the last known value), by
+    // contactQuality's own rule: the ticks with |felt| above the threshold, clamp = the pad
+    // force limit.
+    ContactQuality felt_quality;
     double peak_indentation_m{0.0};
+    // RMS error as a share of the mean |reference| on the same ticks.
     [[nodiscard]] double errorFraction() const noexcept {
-        return mean_reference_force_n > 0.0 ? rms_error_n / mean_reference_force_n : 0.0;
+        return mean_reference_on_felt_ticks_n > 0.0 ? rms_error_n / mean_reference_on_felt_ticks_n
+                                                    : 0.0;
     }
 };
 
@@ -117,7 +125,8 @@ struct RecordingInfo {
 };
 [[nodiscard]] RecordingInfo readRecordingInfo(std::string_view csv);
 
-// hapticemu --felt-log: per device name, the rows in time order.
+// hapticemu --felt-log: per device name, the rows in time order; a row whose pose was not
+// known (pose_known 0) has NaN force and indentation.
 struct FeltSeries {
     std::vector<std::int64_t> stamp_ns;
     std::vector<std::array<double, 3>> force_n;
@@ -127,10 +136,12 @@ struct FeltSeries {
 [[nodiscard]] std::map<std::string, FeltSeries, std::less<>> readFeltLog(std::string_view csv);
 
 // Adds felt_force_{x,y,z}_n and felt_indentation_m to each thimble of `devices` the log names
-// (NaN where the log has no row within 20 ms before the tick). Returns how many devices got
-// them. Throws std::runtime_error when the recording has no origin line or names no devices.
-std::size_t attachFeltLog(std::map<int, DeviceColumns>& devices, const RecordingInfo& recording,
-                          const std::map<std::string, FeltSeries, std::less<>>& felt);
+// (NaN where the log has no row within 20 ms before the tick). Returns the names of the
+// devices that got them. Throws std::runtime_error when the recording has no origin line or
+// names no devices.
+std::vector<std::string> attachFeltLog(std::map<int, DeviceColumns>& devices,
+                                       const RecordingInfo& recording,
+                                       const std::map<std::string, FeltSeries, std::less<>>& felt);
 
 [[nodiscard]] ExoskeletonReport exoskeletonReport(const DeviceColumns& device,
                                                   const ContactQualitySettings& settings);

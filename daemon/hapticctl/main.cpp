@@ -379,24 +379,33 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
             std::fprintf(stderr, "hapticctl: cannot read '%s'\n", felt_path.c_str());
             return kExitError;
         }
+        haptic::ctl::RecordingInfo recording;
+        std::map<int, haptic::ctl::DeviceColumns> devices;
+        try {
+            recording = haptic::ctl::readRecordingInfo(*csv);
+            devices = haptic::ctl::readTelemetryCsv(*csv);
+        } catch (const std::runtime_error& e) {
+            std::fprintf(stderr, "hapticctl: %s: %s\n", csv_path.c_str(), e.what());
+            return kExitError;
+        }
         try {
             felt = haptic::ctl::readFeltLog(*felt_text);
-            const auto recording = haptic::ctl::readRecordingInfo(*csv);
-            auto devices = haptic::ctl::readTelemetryCsv(*csv);
-            if (haptic::ctl::attachFeltLog(devices, recording, *felt) == 0) {
-                std::fprintf(stderr, "hapticctl: '%s' names no thimble of the recording '%s'\n",
-                             felt_path.c_str(), csv_path.c_str());
-                return kExitError;
-            }
-            double end_s = 0.0;
-            for (const auto& [index, device] : devices) {
-                const auto& time = device.column("time_s");
-                end_s = time.empty() ? end_s : std::max(end_s, time.back());
-            }
-            felt_plot = {felt_path, recording.origin_ns, end_s};
+            felt_plot.devices = haptic::ctl::attachFeltLog(devices, recording, *felt);
         } catch (const std::runtime_error& e) {
             std::fprintf(stderr, "hapticctl: %s: %s\n", felt_path.c_str(), e.what());
             return kExitError;
+        }
+        if (felt_plot.devices.empty()) {
+            std::fprintf(stderr, "hapticctl: '%s' names no thimble of the recording '%s'\n",
+                         felt_path.c_str(), csv_path.c_str());
+            return kExitError;
+        }
+        felt_plot.path = felt_path;
+        felt_plot.origin_ns = recording.origin_ns;
+        for (const auto& [index, device] : devices) {
+            const auto& time = device.column("time_s");
+            felt_plot.end_s =
+                time.empty() ? felt_plot.end_s : std::max(felt_plot.end_s, time.back());
         }
     }
     int pipe_fds[2];

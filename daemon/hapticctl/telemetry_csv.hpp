@@ -7,6 +7,7 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "haptic/msgs/messages.hpp"
 
@@ -35,6 +36,7 @@ struct FeltLogPlot {
     std::string path;
     std::int64_t origin_ns{0};
     double end_s{0.0};
+    std::vector<std::string> devices;  // the log's thimbles in the recording, one line each
 };
 std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path,
                                 double exo_clamp_n = 10.0, double thimble_max_force_n = 1.5,

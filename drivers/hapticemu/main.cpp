@@ -140,7 +140,7 @@ class CommandReader {
 // lines up with it (hapticctl plot --felt).
 class FeltLog {
   public:
-    explicit FeltLog(const std::string& path) : file_(std::fopen(path.c_str(), "w")) {
+    explicit FeltLog(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "w")) {
         if (file_ == nullptr) {
             throw std::runtime_error("--felt-log " + path + ": " + std::strerror(errno));
         }
@@ -152,28 +152,45 @@ class FeltLog {
                      "stamp_ns,device,pose_known,indentation_m,force_x_n,force_y_n,force_z_n,"
                      "moment_x_nm,moment_y_nm,moment_z_nm\n");
     }
-    ~FeltLog() { std::fclose(file_); }
+    ~FeltLog() {
+        if (std::fclose(file_) != 0 && !failed_) {
+            spdlog::error("--felt-log {}: closing failed ({})", path_, std::strerror(errno));
+        }
+    }
     FeltLog(const FeltLog&) = delete;
     FeltLog& operator=(const FeltLog&) = delete;
 
     void write(std::int64_t stamp_ns, const std::vector<haptic::emu::VirtualUser::FeltPad>& felt) {
+        if (failed_) {
+            return;
+        }
+        bool ok = true;
         for (const auto& pad : felt) {
             const haptic::emu::FeltPadContact& c = pad.contact;
-            std::fprintf(file_, "%lld,%s,%d,%.7f,%.5f,%.5f,%.5f,%.7f,%.7f,%.7f\n",
-                         static_cast<long long>(stamp_ns), pad.device.c_str(), c.pose_known ? 1 : 0,
-                         c.indentation_m, c.force_device_n.x(), c.force_device_n.y(),
-                         c.force_device_n.z(), c.moment_device_nm.x(), c.moment_device_nm.y(),
-                         c.moment_device_nm.z());
+            ok = ok &&
+                 std::fprintf(file_, "%lld,%s,%d,%.7f,%.5f,%.5f,%.5f,%.7f,%.7f,%.7f\n",
+                              static_cast<long long>(stamp_ns), pad.device.c_str(),
+                              c.pose_known ? 1 : 0, c.indentation_m, c.force_device_n.x(),
+                              c.force_device_n.y(), c.force_device_n.z(), c.moment_device_nm.x(),
+                              c.moment_device_nm.y(), c.moment_device_nm.z()) > 0;
         }
         // A reader follows the file while the run goes on (the demo plots before stopping us).
-        if (++rows_ % 100 == 0) {
-            std::fflush(file_);
+        if (++ticks_ % 100 == 0) {
+            ok = ok && std::fflush(file_) == 0;
+        }
+        if (!ok) {
+            // The devices go on: a full disk must not stop the emulated hardware, only its log.
+            failed_ = true;
+            spdlog::error("--felt-log {}: writing failed ({}); no more rows are written", path_,
+                          std::strerror(errno));
         }
     }
 
   private:
+    std::string path_;
     std::FILE* file_;
-    std::uint64_t rows_{0};
+    std::uint64_t ticks_{0};
+    bool failed_{false};
 };
 
 std::string readFile(const std::filesystem::path& path) {

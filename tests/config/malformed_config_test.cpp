@@ -653,6 +653,14 @@ TEST(VirtualUserConfig, AJointWithoutStiffnessIsRefused) {
                  "hand_impedance.stiffness_nm_per_rad[1]", "got 0"});
 }
 
+// Without a pad block the user's pad is the documented default (the scene's fingertip and
+// the FEM tissue's material).
+TEST(VirtualUserConfig, WithoutAPadBlockThePadIsTheDefault) {
+    const VirtualUserConfig user = loadVirtualUserConfig(kDataDir / "user_default_pad.yaml");
+    EXPECT_EQ(user.pad.radius_m, 0.008);
+    EXPECT_EQ(user.pad.effective_modulus_pa, 6.27e4);
+}
+
 TEST(VirtualUserConfig, APadRadiusInTheWrongUnitIsRefused) {
     const auto file = kDataDir / "user_pad_radius.yaml";
     expectError(userError("user_pad_radius.yaml"),

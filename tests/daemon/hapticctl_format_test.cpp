@@ -410,11 +410,15 @@ TEST(TelemetryCsv, GapsInEachDevicesTickNumbersCountAsMissingSamples) {
 // The felt pad force comes from the felt log, on the recording's time axis: its stamps less
 // the recording's origin. Columns 5-7 are force_x_n..force_z_n, the header readFeltLog checks.
 TEST(TelemetryCsv, PlotScriptPutsTheFeltLogOnTheRecordingsTimeAxis) {
-    const FeltLogPlot felt{"/tmp/felt.csv", 7'000'000'000'123, 12.5};
+    const FeltLogPlot felt{"/tmp/felt.csv", 7'000'000'000'123, 12.5, {"left", "right"}};
     const auto script = telemetryPlotScript("t.csv", "t.png", 10.0, 1.5, &felt);
-    EXPECT_THAT(script, HasSubstr("'/tmp/felt.csv' every ::1 using (($1 - 7000000000123) * 1e-9 "
-                                  "<= 12.5 && $1 >= 7000000000123 ? ($1 - 7000000000123) * 1e-9 "
-                                  ": 1/0):(sqrt($5**2 + $6**2 + $7**2)) axes x1y2"));
+    for (const std::string device : {"left", "right"}) {
+        // One line per device, only its rows with a known pose, over the recording's span.
+        EXPECT_THAT(script, HasSubstr("'/tmp/felt.csv' every ::1 using (strcol(2) eq '" + device +
+                                      "' && $3 == 1 && $1 >= 7000000000123 && ($1 - "
+                                      "7000000000123) * 1e-9 <= 12.5 ? ($1 - 7000000000123) * "
+                                      "1e-9 : 1/0):(sqrt($5**2 + $6**2 + $7**2)) axes x1y2"));
+    }
     EXPECT_THAT(telemetryPlotScript("t.csv", "t.png"), Not(HasSubstr("felt pad force")));
 }
 
@@ -531,17 +535,24 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
         "moment_y_nm,moment_z_nm\n";
     for (int i = -5; i <= 70; ++i) {
         const bool pressed = i >= 50;
-        felt_log += fmt::format("{},pad_device,1,{},0.0,0.0,{},0,0,0\n",
-                                origin_ns + 1'000'000LL * i - 500'000, pressed ? 0.0015 : 0.0,
-                                pressed ? -0.4 : 0.0);
+        // Row 30 had no plate pose: its force is unknown, not 0 N.
+        felt_log += fmt::format("{},pad_device,{},{},0.0,0.0,{},0,0,0\n",
+                                origin_ns + 1'000'000LL * i - 500'000, i == 30 ? 0 : 1,
+                                pressed ? 0.0015 : 0.0, pressed ? -0.4 : 0.0);
     }
-    felt_log += "7000080";  // a truncated last line: the emulator was still writing
+    // A last line cut short, as a reader racing the writer sees it: it stops inside force_z,
+    // and a line with fewer than the ten fields is skipped.
+    felt_log += fmt::format("{},pad_device,1,0.001,0.0,0.0,-0.2", origin_ns + 70'500'000);
 
     auto devices = readTelemetryCsv(csv);
     const auto felt = readFeltLog(felt_log);
     ASSERT_EQ(felt.at("pad_device").stamp_ns.size(), 76U);
-    ASSERT_EQ(attachFeltLog(devices, readRecordingInfo(csv), felt), 1U);
+    ASSERT_EQ(attachFeltLog(devices, readRecordingInfo(csv), felt),
+              std::vector<std::string>{"pad_device"});
     const auto& felt_z = devices.at(0).column("felt_force_z_n");
+    EXPECT_EQ(felt_z[29], 0.0);
+    EXPECT_TRUE(std::isnan(felt_z[30]));  // the row without a pose
+    EXPECT_EQ(felt_z[31], 0.0);
     EXPECT_EQ(felt_z[49], 0.0);
     EXPECT_EQ(felt_z[50], -0.4);
     // The last row (69.5 ms) stands for the ticks up to 20 ms after it; later ones are
@@ -554,27 +565,52 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
     const ThimbleReport report = thimbleReport(devices.at(0), thimble_settings);
     EXPECT_EQ(report.contact_ticks, 60U);  // reference from tick 40
     EXPECT_EQ(report.felt_ticks, 50U);     // of those, felt known up to tick 89
-    // Ticks 40-49: error 0.5 N; 50-89: 0.1 N.
-    EXPECT_NEAR(report.rms_error_n, std::sqrt((10 * 0.25 + 40 * 0.01) / 50.0), 1e-9);
+    EXPECT_NEAR(report.mean_reference_force_n, 0.5, 1e-9);
+    EXPECT_NEAR(report.mean_reference_on_felt_ticks_n, 0.5, 1e-9);
+    EXPECT_NEAR(report.mean_felt_force_n, 40 * 0.4 / 50.0, 1e-9);
+    // Ticks 40-49: error 0.5 N; 50-89: 0.1 N. The share is of the reference on those ticks.
+    const double rms = std::sqrt((10 * 0.25 + 40 * 0.01) / 50.0);
+    EXPECT_NEAR(report.rms_error_n, rms, 1e-9);
+    EXPECT_NEAR(report.errorFraction(), rms / 0.5, 1e-9);
     EXPECT_NEAR(report.peak_error_n, 0.5, 1e-9);
     EXPECT_NEAR(report.peak_indentation_m, 0.0015, 1e-12);
+    // The unknown ticks hold the last known |felt| (tick 30: 0 N; 90-99: 0.4 N), so the
+    // chatter and limit figures see 0 N up to tick 49 and 0.4 N from tick 50 to the end: one
+    // step, never at the 1.5 N limit.
+    std::vector<double> held(100, 0.0);
+    std::fill(held.begin() + 50, held.end(), 0.4);
+    const ContactQuality expected = contactQuality(held, thimble_settings);
+    EXPECT_EQ(report.felt_quality.contact_ticks, 50U);
     EXPECT_EQ(report.felt_quality.clamp_ticks, 0U);
+    EXPECT_DOUBLE_EQ(report.felt_quality.chatter_rms_n, expected.chatter_rms_n);
+    EXPECT_DOUBLE_EQ(report.felt_quality.mean_contact_force_n, 0.4);
     const std::string text = formatReport(devices, {}, thimble_settings);
-    EXPECT_THAT(text, HasSubstr("felt vs reference, 50 ticks"));
+    EXPECT_THAT(text, HasSubstr("felt vs reference, 50 contact ticks with a felt value"));
     EXPECT_THAT(text, HasSubstr("pad indented up to 1.50 mm"));
+    EXPECT_THAT(text, HasSubstr("felt above 0.05 N on 50 ticks"));
 
     // A felt log for another device, a recording from before the origin line, not a felt log.
     auto unmatched = readTelemetryCsv(csv);
     const auto other_device = readFeltLog(
-        "stamp_ns,device,pose_known,indentation_m,force_x_n,force_y_n,force_z_n\n"
-        "1,other,1,0,0,0,0\n");
-    EXPECT_EQ(attachFeltLog(unmatched, readRecordingInfo(csv), other_device), 0U);
+        "stamp_ns,device,pose_known,indentation_m,force_x_n,force_y_n,force_z_n,moment_x_nm,"
+        "moment_y_nm,moment_z_nm\n"
+        "1,other,1,0,0,0,0,0,0,0\n");
+    EXPECT_TRUE(attachFeltLog(unmatched, readRecordingInfo(csv), other_device).empty());
     EXPECT_THROW((void)attachFeltLog(unmatched, readRecordingInfo(telemetryCsvHeader()), felt),
                  std::runtime_error);
     EXPECT_THROW((void)readFeltLog(csv), std::runtime_error);
-    // Without a felt log the report says how to get one.
+    // Without a felt log the report says how to get one; with one that has nothing in
+    // contact, it says that instead.
     EXPECT_THAT(formatReport(readTelemetryCsv(csv), {}, thimble_settings),
                 HasSubstr("felt pad force: no felt log"));
+    auto no_felt_in_contact = readTelemetryCsv(csv);
+    const auto early_log = readFeltLog(
+        "stamp_ns,device,pose_known,indentation_m,force_x_n,force_y_n,force_z_n,moment_x_nm,"
+        "moment_y_nm,moment_z_nm\n" +
+        fmt::format("{},pad_device,1,0,0,0,0,0,0,0\n", origin_ns));
+    ASSERT_EQ(attachFeltLog(no_felt_in_contact, readRecordingInfo(csv), early_log).size(), 1U);
+    EXPECT_THAT(formatReport(no_felt_in_contact, {}, thimble_settings),
+                HasSubstr("the felt log has no value on any contact tick"));
 }
 
 TEST(ContactQuality, AHeldContactForceHasNoChatterAndIsNotAtTheClamp) {

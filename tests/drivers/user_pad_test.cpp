@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -115,6 +116,39 @@ TEST(UserPad, ATiltedPlateIndentsAsDeepAsTheSphereReachesPastIt) {
         }
     }
     EXPECT_GE(pressed, 6);
+}
+
+// A thimble mounted off the phalanx's axis and turned on it: the pad's centre is where
+// T_finger_device puts the finger's origin in the device frame, found here by inverting the
+// mount point by point (p_finger = R p_device + t, solved for the p_device that maps to 0).
+TEST(UserPad, AnOffAxisTurnedMountMovesThePadWhereTheTransformPutsIt) {
+    auto thimble = shippedThimble();
+    auto& mount = thimble.finger_calibration.T_finger_device;
+    mount.translation_m = {0.0015, -0.001, -0.0125};
+    mount.rpy_rad = {0.05, -0.04, 0.6};
+    const auto pad = shippedPad();
+    UserPad user_pad(thimble, pad);
+    const Eigen::Matrix3d rotation = (Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ()) *
+                                      Eigen::AngleAxisd(-0.04, Eigen::Vector3d::UnitY()) *
+                                      Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitX()))
+                                         .toRotationMatrix();
+    const Eigen::Vector3d t(0.0015, -0.001, -0.0125);
+    // The finger's origin maps from the device point c: R c + t = 0.
+    const Eigen::Vector3d& c = user_pad.sphereCentreDeviceM();
+    EXPECT_NEAR((rotation * c + t).norm(), 0.0, 1e-15);
+    // A transposed rotation would put it elsewhere: the test can tell the two apart.
+    EXPECT_GT((rotation.transpose() * c + t).norm(), 1e-4);
+
+    // And the plate presses that sphere: indentation against the sampled surface.
+    for (const double tilt : {-0.2, 0.0, 0.25}) {
+        const auto plate = plateAt(thimble, c.z() + pad.radius_m - 0.0015, tilt, -0.5 * tilt);
+        ASSERT_TRUE(plate.ok());
+        const FeltPadContact felt = user_pad.feel(plate.servo_rad);
+        ASSERT_TRUE(felt.pose_known);
+        EXPECT_NEAR(felt.indentation_m, deepestSphereSample(c, pad.radius_m, plate.pose), 2e-7);
+        // The pressed point lies on the line through the centre along the plate's normal.
+        EXPECT_NEAR((felt.point_device_m - c).cross(plate.pose.plateNormal()).norm(), 0.0, 1e-12);
+    }
 }
 
 TEST(UserPad, TheRetractedPlateAndAPlateBesideThePadFeelNothing) {

@@ -191,7 +191,8 @@ TEST_F(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitch
     felt_text << felt_file.rdbuf();
     auto felt_devices = devices;
     ASSERT_EQ(ctl::attachFeltLog(felt_devices, ctl::readRecordingInfo(text.str()),
-                                 ctl::readFeltLog(felt_text.str())),
+                                 ctl::readFeltLog(felt_text.str()))
+                  .size(),
               1U);
     std::printf("%s", ctl::formatReport(felt_devices, settings, thimble_settings).c_str());
 
