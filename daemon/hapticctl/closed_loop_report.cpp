@@ -275,9 +275,11 @@ std::map<std::string, FeltSeries, std::less<>> readFeltLog(std::string_view csv)
     while (header.starts_with('#') && !csv.empty()) {
         header = nextLine(csv);
     }
-    // stamp_ns, device, pose_known, indentation_m, force x, y, z, moment x, y, z
-    constexpr std::size_t kFields = 10;
-    if (!header.starts_with("stamp_ns,device,pose_known,indentation_m,force_x_n") ||
+    // stamp_ns, device, finger_penetration_m, pose_known, indentation_m, force x, y, z,
+    // moment x, y, z
+    constexpr std::size_t kFields = 11;
+    if (!header.starts_with("stamp_ns,device,finger_penetration_m,pose_known,indentation_m,"
+                            "force_x_n") ||
         splitFields(header).size() != kFields) {
         throw std::runtime_error("felt log: the first line is not hapticemu --felt-log's header");
     }
@@ -295,17 +297,20 @@ std::map<std::string, FeltSeries, std::less<>> readFeltLog(std::string_view csv)
         }
         std::int64_t stamp = 0;
         int pose_known = 0;
+        double penetration = 0.0;
         std::array<double, 7> numbers{};  // indentation, force x, y, z, moment x, y, z
-        bool ok = parse(fields[0], stamp) && parse(fields[2], pose_known);
+        bool ok = parse(fields[0], stamp) && parse(fields[2], penetration) &&
+                  parse(fields[3], pose_known);
         for (std::size_t k = 0; k < numbers.size() && ok; ++k) {
-            ok = parse(fields[3 + k], numbers[k]);
+            ok = parse(fields[4 + k], numbers[k]);
         }
         if (!ok) {
             continue;
         }
         FeltSeries& series = out[std::string(fields[1])];
         series.stamp_ns.push_back(stamp);
-        // No pose for the angles: the force is unknown, not zero.
+        series.finger_penetration_m.push_back(penetration);
+        // No pad contact known: the force is unknown, not zero.
         const double unknown = std::nan("");
         series.indentation_m.push_back(pose_known != 0 ? numbers[0] : unknown);
         series.force_n.push_back(pose_known != 0
@@ -332,7 +337,7 @@ std::vector<std::string> attachFeltLog(std::map<int, DeviceColumns>& devices,
     std::vector<std::string> attached;
     for (auto& [index, device] : devices) {
         const auto name = recording.device_names.find(index);
-        if (device.kind != "thimble" || name == recording.device_names.end()) {
+        if (name == recording.device_names.end()) {
             continue;
         }
         const auto series = felt.find(name->second);
@@ -342,6 +347,7 @@ std::vector<std::string> attachFeltLog(std::map<int, DeviceColumns>& devices,
         const auto& time = device.column("time_s");
         std::array<std::vector<double>, 3> force;
         std::vector<double> indentation;
+        std::vector<double> penetration;
         const FeltSeries& log = series->second;
         std::size_t next = 0;  // first log row after the tick
         for (const double t : time) {
@@ -350,6 +356,7 @@ std::vector<std::string> attachFeltLog(std::map<int, DeviceColumns>& devices,
                     axis.push_back(std::nan(""));
                 }
                 indentation.push_back(std::nan(""));
+                penetration.push_back(std::nan(""));
                 continue;
             }
             const auto stamp =
@@ -362,14 +369,38 @@ std::vector<std::string> attachFeltLog(std::map<int, DeviceColumns>& devices,
                 force[k].push_back(known ? log.force_n[next - 1][k] : std::nan(""));
             }
             indentation.push_back(known ? log.indentation_m[next - 1] : std::nan(""));
+            penetration.push_back(known ? log.finger_penetration_m[next - 1] : std::nan(""));
         }
-        device.values["felt_force_x_n"] = std::move(force[0]);
-        device.values["felt_force_y_n"] = std::move(force[1]);
-        device.values["felt_force_z_n"] = std::move(force[2]);
-        device.values["felt_indentation_m"] = std::move(indentation);
+        device.values["finger_penetration_m"] = std::move(penetration);
+        if (device.kind == "thimble") {
+            device.values["felt_force_x_n"] = std::move(force[0]);
+            device.values["felt_force_y_n"] = std::move(force[1]);
+            device.values["felt_force_z_n"] = std::move(force[2]);
+            device.values["felt_indentation_m"] = std::move(indentation);
+        }
         attached.push_back(name->second);
     }
     return attached;
+}
+
+FingerPenetration fingerPenetration(const DeviceColumns& device) {
+    FingerPenetration out;
+    const auto found = device.values.find("finger_penetration_m");
+    if (found == device.values.end()) {
+        return out;
+    }
+    std::vector<double> inside;
+    for (const double depth : found->second) {
+        if (std::isfinite(depth)) {
+            ++out.known;
+            if (depth > 0.0) {
+                inside.push_back(depth);
+            }
+        }
+    }
+    out.inside = inside.size();
+    out.while_inside_m = common::summarize(inside);
+    return out;
 }
 
 std::string formatReport(const std::map<int, DeviceColumns>& devices,
@@ -394,6 +425,17 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
             latency.from_receipt_ms.count, latency.from_receipt_ms.p50, latency.from_receipt_ms.p99,
             latency.from_receipt_ms.max, latency.from_sample_ms.p50, latency.from_sample_ms.p99);
     };
+    const auto penetrationLine = [](const DeviceColumns& device) {
+        const FingerPenetration p = fingerPenetration(device);
+        if (p.known == 0) {
+            return std::string();
+        }
+        return fmt::format(
+            "  the user's finger inside the scene's static objects on {:.1f}% of {} ticks; "
+            "there p50 {:.2f} mm, p99 {:.2f} mm, max {:.2f} mm\n",
+            100.0 * static_cast<double>(p.inside) / static_cast<double>(p.known), p.known,
+            1e3 * p.while_inside_m.p50, 1e3 * p.while_inside_m.p99, 1e3 * p.while_inside_m.max);
+    };
     for (const auto& [index, device] : devices) {
         if (device.kind == "exoskeleton") {
             const ExoskeletonReport r = exoskeletonReport(device, settings);
@@ -414,6 +456,7 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
                 100.0 * q.clampFraction(), 100.0 * r.clampBelowReferenceFraction(), q.chatter_rms_n,
                 100.0 * q.chatterFraction(), q.mean_contact_force_n, r.largest_step_n,
                 r.steps_over_rate_limit, settings.max_step_n);
+            out += penetrationLine(device);
             out += latencyLine(device);
         } else if (device.kind == "thimble") {
             const ThimbleReport r = thimbleReport(device, thimble_settings);
@@ -450,6 +493,7 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
                         100.0 * q.chatterFraction());
                 }
             }
+            out += penetrationLine(device);
             out += latencyLine(device);
         }
     }

@@ -27,6 +27,8 @@
 //   error      RMS and peak of |felt - reference| (vectors, device frame), and RMS as a share
 //              of the mean |reference|;
 //   chatter, clamp  of |felt| where it exceeds the threshold, against the pad force limit.
+// Both, with a felt log: how deep the user's finger (rigid, at its actual pose) reached into
+// the scene's static objects (fingerPenetration).
 //   Without a felt log only the reference is reported.
 // Both: the tracker-to-command latency. On the first tick whose sim input follows a new
 // tracker sample (tracking_sampled_s changes), the time from when handsim's reader received
@@ -125,20 +127,21 @@ struct RecordingInfo {
 };
 [[nodiscard]] RecordingInfo readRecordingInfo(std::string_view csv);
 
-// hapticemu --felt-log: per device name, the rows in time order; a row whose pose was not
-// known (pose_known 0) has NaN force and indentation.
+// hapticemu --felt-log: per device name, the rows in time order; a row without a pad contact
+// (pose_known 0: not a thimble, or no plate pose) has NaN force and indentation.
 struct FeltSeries {
     std::vector<std::int64_t> stamp_ns;
+    std::vector<double> finger_penetration_m;
     std::vector<std::array<double, 3>> force_n;
     std::vector<double> indentation_m;
 };
 // Throws std::runtime_error when the text is not a felt log.
 [[nodiscard]] std::map<std::string, FeltSeries, std::less<>> readFeltLog(std::string_view csv);
 
-// Adds felt_force_{x,y,z}_n and felt_indentation_m to each thimble of `devices` the log names
-// (NaN where the log has no row within 20 ms before the tick). Returns the names of the
-// devices that got them. Throws std::runtime_error when the recording has no origin line or
-// names no devices.
+// Adds finger_penetration_m to each device of `devices` the log names, and felt_force_{x,y,z}_n
+// and felt_indentation_m to each such thimble (NaN where the log has no row within 20 ms
+// before the tick). Returns the names of the devices that got them. Throws std::runtime_error when
+// the recording has no origin line or names no devices.
 std::vector<std::string> attachFeltLog(std::map<int, DeviceColumns>& devices,
                                        const RecordingInfo& recording,
                                        const std::map<std::string, FeltSeries, std::less<>>& felt);
@@ -147,6 +150,16 @@ std::vector<std::string> attachFeltLog(std::map<int, DeviceColumns>& devices,
                                                   const ContactQualitySettings& settings);
 [[nodiscard]] ThimbleReport thimbleReport(const DeviceColumns& device,
                                           const ContactQualitySettings& settings);
+
+// How deep the user's finger reached into the scene's static objects (finger_penetration_m,
+// from the felt log): over the ticks with a known value, the share inside and, while inside,
+// the percentiles in metres. known = 0: no such column or no value.
+struct FingerPenetration {
+    std::size_t known{0};
+    std::size_t inside{0};
+    common::PercentileSummary while_inside_m;
+};
+[[nodiscard]] FingerPenetration fingerPenetration(const DeviceColumns& device);
 
 // The report as text, one block per device. `thimble_settings.clamp_n`: the thimble's pad force
 // limit (safety.max_force_n).

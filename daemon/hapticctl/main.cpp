@@ -381,6 +381,7 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
         }
         haptic::ctl::RecordingInfo recording;
         std::map<int, haptic::ctl::DeviceColumns> devices;
+        std::vector<std::string> attached;
         try {
             recording = haptic::ctl::readRecordingInfo(*csv);
             devices = haptic::ctl::readTelemetryCsv(*csv);
@@ -390,13 +391,22 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
         }
         try {
             felt = haptic::ctl::readFeltLog(*felt_text);
-            felt_plot.devices = haptic::ctl::attachFeltLog(devices, recording, *felt);
+            attached = haptic::ctl::attachFeltLog(devices, recording, *felt);
+            for (const std::string& name : attached) {
+                for (const auto& [index, device] : devices) {
+                    const auto named = recording.device_names.find(index);
+                    if (device.kind == "thimble" && named != recording.device_names.end() &&
+                        named->second == name) {
+                        felt_plot.devices.push_back(name);
+                    }
+                }
+            }
         } catch (const std::runtime_error& e) {
             std::fprintf(stderr, "hapticctl: %s: %s\n", felt_path.c_str(), e.what());
             return kExitError;
         }
-        if (felt_plot.devices.empty()) {
-            std::fprintf(stderr, "hapticctl: '%s' names no thimble of the recording '%s'\n",
+        if (attached.empty()) {
+            std::fprintf(stderr, "hapticctl: '%s' names no device of the recording '%s'\n",
                          felt_path.c_str(), csv_path.c_str());
             return kExitError;
         }

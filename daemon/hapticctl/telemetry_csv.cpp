@@ -215,13 +215,13 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
         fmt::arg("z", columnNumber("thimble_reference_force_z_n")),
         fmt::arg("model", columnNumber("thimble_pad_force_model_n")));
     if (felt != nullptr) {
-        // The felt log: stamp_ns, device, pose_known, indentation_m, force x, y, z, ...; each
-        // device's rows with a known pose, over the recording's span.
+        // The felt log: stamp_ns, device, finger_penetration_m, pose_known, indentation_m,
+        // force x, y, z, ...; each thimble's rows with a known pose, over the recording's span.
         for (const std::string& device : felt->devices) {
             script += fmt::format(
-                ", {log} every ::1 using (strcol(2) eq {device} && $3 == 1 && $1 >= {origin} && "
+                ", {log} every ::1 using (strcol(2) eq {device} && $4 == 1 && $1 >= {origin} && "
                 "($1 - {origin}) * 1e-9 <= {end} ? ($1 - {origin}) * 1e-9 : 1/0):"
-                "(sqrt($5**2 + $6**2 + $7**2)) axes x1y2 with lines lw 2 "
+                "(sqrt($6**2 + $7**2 + $8**2)) axes x1y2 with lines lw 2 "
                 "title {title}",
                 fmt::arg("log", quoted(felt->path)), fmt::arg("device", quoted(device)),
                 fmt::arg("origin", felt->origin_ns), fmt::arg("end", felt->end_s),

@@ -11,8 +11,8 @@
 //                                         "tracker start" resumes it)
 //   ... --estop-relay 0x0E0               also the E-stop relay's status on that id
 //                                         ("estop press" on stdin presses its button)
-//   ... --user FILE --felt-log felt.csv   what the user's pad under each thimble feels,
-//                                         every tick (hapticctl plot --felt reads it)
+//   ... --user FILE --felt-log felt.csv   what the user feels of each worn device, every
+//                                         tick (hapticctl plot --felt reads it)
 //
 // It prints "ready" on stdout once the bus is open, and each fault command's result
 // ("ok" or "error: ...") on stdout, so a test driving it through pipes can synchronise. With
@@ -146,11 +146,12 @@ class FeltLog {
         }
         std::fprintf(file_,
                      "# hapticemu " HAPTIC_VERSION
-                     " felt log: the virtual user's pad under each thimble (config pad); "
-                     "stamp_ns is CLOCK_MONOTONIC; force on the pad and moment about the device "
-                     "origin, device frame\n"
-                     "stamp_ns,device,pose_known,indentation_m,force_x_n,force_y_n,force_z_n,"
-                     "moment_x_nm,moment_y_nm,moment_z_nm\n");
+                     " felt log: per worn device, how deep the user's finger reaches into the "
+                     "scene's static objects, and for a thimble the pad under its plate (config "
+                     "pad; pose_known 0: no pad contact known); stamp_ns is CLOCK_MONOTONIC; "
+                     "force on the pad and moment about the device origin, device frame\n"
+                     "stamp_ns,device,finger_penetration_m,pose_known,indentation_m,force_x_n,"
+                     "force_y_n,force_z_n,moment_x_nm,moment_y_nm,moment_z_nm\n");
     }
     ~FeltLog() {
         if (std::fclose(file_) != 0 && !failed_) {
@@ -160,19 +161,19 @@ class FeltLog {
     FeltLog(const FeltLog&) = delete;
     FeltLog& operator=(const FeltLog&) = delete;
 
-    void write(std::int64_t stamp_ns, const std::vector<haptic::emu::VirtualUser::FeltPad>& felt) {
+    void write(std::int64_t stamp_ns, const std::vector<haptic::emu::VirtualUser::Felt>& felt) {
         if (failed_) {
             return;
         }
         bool ok = true;
-        for (const auto& pad : felt) {
-            const haptic::emu::FeltPadContact& c = pad.contact;
-            ok = ok &&
-                 std::fprintf(file_, "%lld,%s,%d,%.7f,%.5f,%.5f,%.5f,%.7f,%.7f,%.7f\n",
-                              static_cast<long long>(stamp_ns), pad.device.c_str(),
-                              c.pose_known ? 1 : 0, c.indentation_m, c.force_device_n.x(),
-                              c.force_device_n.y(), c.force_device_n.z(), c.moment_device_nm.x(),
-                              c.moment_device_nm.y(), c.moment_device_nm.z()) > 0;
+        for (const auto& device : felt) {
+            const haptic::emu::FeltPadContact& c = device.pad;
+            ok = ok && std::fprintf(file_, "%lld,%s,%.7f,%d,%.7f,%.5f,%.5f,%.5f,%.7f,%.7f,%.7f\n",
+                                    static_cast<long long>(stamp_ns), device.device.c_str(),
+                                    device.finger_penetration_m, c.pose_known ? 1 : 0,
+                                    c.indentation_m, c.force_device_n.x(), c.force_device_n.y(),
+                                    c.force_device_n.z(), c.moment_device_nm.x(),
+                                    c.moment_device_nm.y(), c.moment_device_nm.z()) > 0;
         }
         // A reader follows the file while the run goes on (the demo plots before stopping us).
         if (++ticks_ % 100 == 0) {
@@ -254,8 +255,9 @@ int main(int argc, char** argv) {
                    "silence|resume|corrupt N");
     std::string felt_log_path;
     app.add_option("--felt-log", felt_log_path,
-                   "with --user: write what the user's pad under each thimble feels, every "
-                   "tick, to this CSV (hapticctl plot --felt)")
+                   "with --user: write what the user feels of each worn device (finger "
+                   "penetration, the pad under a thimble), every tick, to this CSV (hapticctl "
+                   "plot --felt)")
         ->needs(user_option);
     auto* log_level_option = app.add_option(
         "--log-level", log_level, "trace, debug, info, warn, error (default: the user file's)");
@@ -440,7 +442,7 @@ int main(int argc, char** argv) {
                 relay->tick(*bus, now_ns);
             }
             if (felt_log) {
-                felt_log->write(now_ns, user->feelThimbles());
+                felt_log->write(now_ns, user->feel(t_s));
             }
             if (user) {
                 const auto pose = user->track(now_ns, t_s);

@@ -415,9 +415,9 @@ TEST(TelemetryCsv, PlotScriptPutsTheFeltLogOnTheRecordingsTimeAxis) {
     for (const std::string device : {"left", "right"}) {
         // One line per device, only its rows with a known pose, over the recording's span.
         EXPECT_THAT(script, HasSubstr("'/tmp/felt.csv' every ::1 using (strcol(2) eq '" + device +
-                                      "' && $3 == 1 && $1 >= 7000000000123 && ($1 - "
+                                      "' && $4 == 1 && $1 >= 7000000000123 && ($1 - "
                                       "7000000000123) * 1e-9 <= 12.5 ? ($1 - 7000000000123) * "
-                                      "1e-9 : 1/0):(sqrt($5**2 + $6**2 + $7**2)) axes x1y2"));
+                                      "1e-9 : 1/0):(sqrt($6**2 + $7**2 + $8**2)) axes x1y2"));
     }
     EXPECT_THAT(telemetryPlotScript("t.csv", "t.png"), Not(HasSubstr("felt pad force")));
 }
@@ -531,18 +531,20 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
     // every millisecond half a tick before hapticd's ticks, up to tick 70 (the log then stops).
     std::string felt_log =
         "# hapticemu felt log\n"
-        "stamp_ns,device,pose_known,indentation_m,force_x_n,force_y_n,force_z_n,moment_x_nm,"
+        "stamp_ns,device,finger_penetration_m,pose_known,indentation_m,force_x_n,force_y_n,"
+        "force_z_n,moment_x_nm,"
         "moment_y_nm,moment_z_nm\n";
     for (int i = -5; i <= 70; ++i) {
         const bool pressed = i >= 50;
         // Row 30 had no plate pose: its force is unknown, not 0 N.
-        felt_log += fmt::format("{},pad_device,{},{},0.0,0.0,{},0,0,0\n",
-                                origin_ns + 1'000'000LL * i - 500'000, i == 30 ? 0 : 1,
+        felt_log += fmt::format("{},pad_device,{},{},{},0.0,0.0,{},0,0,0\n",
+                                origin_ns + 1'000'000LL * i - 500'000,
+                                pressed ? 0.0025 : (i >= 45 ? 0.001 : 0.0), i == 30 ? 0 : 1,
                                 pressed ? 0.0015 : 0.0, pressed ? -0.4 : 0.0);
     }
     // A last line cut short, as a reader racing the writer sees it: it stops inside force_z,
-    // and a line with fewer than the ten fields is skipped.
-    felt_log += fmt::format("{},pad_device,1,0.001,0.0,0.0,-0.2", origin_ns + 70'500'000);
+    // and a line with fewer than the eleven fields is skipped.
+    felt_log += fmt::format("{},pad_device,0.002,1,0.001,0.0,0.0,-0.2", origin_ns + 70'500'000);
 
     auto devices = readTelemetryCsv(csv);
     const auto felt = readFeltLog(felt_log);
@@ -559,6 +561,14 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
     // unknown, not zero.
     EXPECT_EQ(felt_z[89], -0.4);
     EXPECT_TRUE(std::isnan(felt_z[90]));
+
+    // The finger reaches 1 mm into the object from tick 45, 2.5 mm from tick 50; known on the
+    // ticks 0-89 (also on row 30's, which lacks only the pad's pose).
+    const FingerPenetration penetration = fingerPenetration(devices.at(0));
+    EXPECT_EQ(penetration.known, 90U);
+    EXPECT_EQ(penetration.inside, 45U);
+    EXPECT_DOUBLE_EQ(penetration.while_inside_m.p50, 0.0025);
+    EXPECT_DOUBLE_EQ(penetration.while_inside_m.max, 0.0025);
 
     ContactQualitySettings thimble_settings;
     thimble_settings.clamp_n = 1.5;
@@ -588,13 +598,16 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
     EXPECT_THAT(text, HasSubstr("felt vs reference, 50 contact ticks with a felt value"));
     EXPECT_THAT(text, HasSubstr("pad indented up to 1.50 mm"));
     EXPECT_THAT(text, HasSubstr("felt above 0.05 N on 50 ticks"));
+    EXPECT_THAT(text, HasSubstr("the user's finger inside the scene's static objects on 50.0% "
+                                "of 90 ticks; there p50 2.50 mm"));
 
     // A felt log for another device, a recording from before the origin line, not a felt log.
     auto unmatched = readTelemetryCsv(csv);
     const auto other_device = readFeltLog(
-        "stamp_ns,device,pose_known,indentation_m,force_x_n,force_y_n,force_z_n,moment_x_nm,"
+        "stamp_ns,device,finger_penetration_m,pose_known,indentation_m,force_x_n,force_y_n,"
+        "force_z_n,moment_x_nm,"
         "moment_y_nm,moment_z_nm\n"
-        "1,other,1,0,0,0,0,0,0,0\n");
+        "1,other,0,1,0,0,0,0,0,0,0\n");
     EXPECT_TRUE(attachFeltLog(unmatched, readRecordingInfo(csv), other_device).empty());
     EXPECT_THROW((void)attachFeltLog(unmatched, readRecordingInfo(telemetryCsvHeader()), felt),
                  std::runtime_error);
@@ -605,9 +618,10 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
                 HasSubstr("felt pad force: no felt log"));
     auto no_felt_in_contact = readTelemetryCsv(csv);
     const auto early_log = readFeltLog(
-        "stamp_ns,device,pose_known,indentation_m,force_x_n,force_y_n,force_z_n,moment_x_nm,"
+        "stamp_ns,device,finger_penetration_m,pose_known,indentation_m,force_x_n,force_y_n,"
+        "force_z_n,moment_x_nm,"
         "moment_y_nm,moment_z_nm\n" +
-        fmt::format("{},pad_device,1,0,0,0,0,0,0,0\n", origin_ns));
+        fmt::format("{},pad_device,0,1,0,0,0,0,0,0,0\n", origin_ns));
     ASSERT_EQ(attachFeltLog(no_felt_in_contact, readRecordingInfo(csv), early_log).size(), 1U);
     EXPECT_THAT(formatReport(no_felt_in_contact, {}, thimble_settings),
                 HasSubstr("the felt log has no value on any contact tick"));

@@ -14,6 +14,7 @@
 #include "haptic/emu/device_emulator.hpp"
 #include "haptic/emu/device_models.hpp"
 #include "haptic/emu/virtual_user.hpp"
+#include "haptic/softhand/tracking_input.hpp"
 
 namespace haptic::emu {
 namespace {
@@ -106,6 +107,40 @@ TEST(VirtualUser, TheExoskeletonsForceMovesTheFingerAwayFromItsIntent) {
                               pushed_user.user.intent(1.0).flexion_rad[kIndexMcp];
     EXPECT_NEAR(deflection, jacobian[0] * pushed_user.exoskeleton->forceN() / k_mcp,
                 0.2 * std::abs(deflection));
+}
+
+// How far the user's finger reaches into the virtual block: the script puts the distal
+// capsule's lowest point kPressDepth (3 mm) below the top face while pressing; the user's skin
+// (the scene's tissue mesh, rigid on its bones) reaches as deep, give or take the mesh's
+// departure from the capsule; clear of the block before and after.
+TEST(VirtualUser, TheFingerReachesIntoTheBlockAsDeepAsTheScriptPresses) {
+    const auto config = shippedUser();
+    WornDevices worn(config);
+    const auto depth = [&](double t) {
+        return worn.user.fingerPenetrationM(config::Finger::kIndex, worn.user.intent(t));
+    };
+    EXPECT_EQ(depth(0.0), 0.0);
+    EXPECT_NEAR(depth(2.0), softhand::PressSlideEdgeScript::kPressDepth, 0.5e-3);
+    EXPECT_EQ(depth(5.0), 0.0);  // lifted
+    // A finger the model does not simulate (the default scene's is the index alone) has no
+    // skin to judge.
+    EXPECT_TRUE(
+        std::isnan(worn.user.fingerPenetrationM(config::Finger::kThumb, worn.user.intent(2.0))));
+
+    // The exoskeleton's force moves the finger, and with it the depth: extending the actuator
+    // flexes the finger further into the block, retracting it lifts the finger out.
+    WornDevices pushed(config), pulled(config);
+    for (int tick = 0; tick < 2000; ++tick) {
+        const double t = 1e-3 * tick;
+        pushed.step(t, 3.0);
+        pulled.step(t, -3.0);
+    }
+    const double free_depth = depth(2.0);
+    const auto felt_depth = [](WornDevices& user) {
+        return user.user.feel(2.0).front().finger_penetration_m;
+    };
+    EXPECT_GT(felt_depth(pushed), free_depth + 1e-4);
+    EXPECT_LT(felt_depth(pulled), free_depth - 1e-4);
 }
 
 TEST(VirtualUser, TheTrackerSamplesAtItsRateAndDeliversAfterItsLatency) {

@@ -1,11 +1,13 @@
 #include "haptic/emu/virtual_user.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
 
 #include "haptic/emu/device_models.hpp"
+#include "haptic/softhand/bullet_coupling.hpp"
 
 namespace haptic::emu {
 
@@ -39,6 +41,31 @@ VirtualUser::VirtualUser(const config::VirtualUserConfig& config, std::string_vi
     model_ = std::make_unique<softhand::HandModel>(
         softhand::buildHand(scene_.hand, softhand::SolverSettings{}, softhand::HandBuildOptions{}));
     hand_ = std::make_unique<softhand::TrackedHand>(*model_, scene_.hand);
+    // The skin of every simulated phalanx at rest, in its bone's frame (the model is still in
+    // its build pose), for the user's finger penetration.
+    const softhand::Simulation& sim = model_->simulation;
+    for (std::size_t b = 0; b < model_->bones.size(); ++b) {
+        const softhand::BoneInfo& bone = model_->bones[b];
+        if (!bone.finger || bone.node_count == 0) {
+            continue;
+        }
+        const softhand::Vec3& centre = sim.bodyPosition(bone.body);
+        const softhand::Mat3& rotation = sim.bodyRotation(bone.body);
+        auto& points = skin_[static_cast<std::size_t>(*bone.finger)];
+        for (int node = bone.first_node; node < bone.first_node + bone.node_count; ++node) {
+            points.push_back({b, rotation.transpose() * (sim.nodePosition(node) - centre)});
+        }
+    }
+    // Moving objects are where handsim's physics puts them, which the user does not know.
+    for (const config::SceneObject& object : scene_.objects) {
+        if (object.isStatic() || object.shapeType() == config::ShapeType::kPlane) {
+            obstacles_.push_back(
+                {softhand::colliderShape(object),
+                 softhand::Vec3(object.pose.position_m[0], object.pose.position_m[1],
+                                object.pose.position_m[2]),
+                 softhand::rotationFromRpy(object.pose.rpy_rad)});
+        }
+    }
     const config::TrackingConfig& tracking = scene_.tracking;
     switch (tracking.source) {
         case config::TrackingSource::kScripted:
@@ -82,17 +109,20 @@ void VirtualUser::wear(const config::DeviceConfig& device, DeviceEmulator& emula
         throw std::invalid_argument("virtual user: device '" + device.name +
                                     "' is not bound to a finger in scene '" + scene_.name + "'");
     }
+    const config::Finger finger = binding->second.finger;
     ExoskeletonModel* exoskeleton = emulator.exoskeletonModel();
     if (exoskeleton == nullptr) {
         // A thimble moves no joint of the hand: it indents the pad.
         const ThimbleModel* thimble = emulator.thimbleModel();
         if (thimble != nullptr) {
             thimbles_.push_back({thimble, UserPad(device.thimble(), pad_)});
-            felt_.push_back({device.name, FeltPadContact{}});
+            worn_.push_back({finger, static_cast<int>(thimbles_.size()) - 1});
+            felt_.push_back({device.name, 0.0, FeltPadContact{}});
         }
         return;
     }
-    const config::Finger finger = binding->second.finger;
+    worn_.push_back({finger, -1});
+    felt_.push_back({device.name, 0.0, FeltPadContact{}});
     const softhand::HandPoseInput start = intent(0.0);
     const std::size_t first = firstAngle(finger);
     const std::array<double, 3> q{start.flexion_rad[first], start.flexion_rad[first + 1],
@@ -115,11 +145,36 @@ void VirtualUser::drive(double t_s) {
     }
 }
 
-const std::vector<VirtualUser::FeltPad>& VirtualUser::feelThimbles() {
-    for (std::size_t i = 0; i < thimbles_.size(); ++i) {
-        felt_[i].contact = thimbles_[i].pad.feel(thimbles_[i].model->angleRad());
+const std::vector<VirtualUser::Felt>& VirtualUser::feel(double t_s) {
+    const softhand::HandPoseInput pose = actualPose(t_s);
+    for (std::size_t i = 0; i < worn_.size(); ++i) {
+        felt_[i].finger_penetration_m = fingerPenetrationM(worn_[i].finger, pose);
+        if (worn_[i].thimble >= 0) {
+            WornThimble& thimble = thimbles_[static_cast<std::size_t>(worn_[i].thimble)];
+            felt_[i].pad = thimble.pad.feel(thimble.model->angleRad());
+        }
     }
     return felt_;
+}
+
+double VirtualUser::fingerPenetrationM(config::Finger finger,
+                                       const softhand::HandPoseInput& pose) const {
+    const auto& points = skin_[static_cast<std::size_t>(finger)];
+    if (points.empty()) {
+        return std::nan("");
+    }
+    hand_->bonePoses(pose, bone_poses_);
+    double deepest = 0.0;
+    for (const SkinPoint& point : points) {
+        const softhand::BonePose& bone = bone_poses_[point.bone];
+        const softhand::Vec3 p_world = bone.position_m + bone.rotation * point.offset_m;
+        for (const Obstacle& obstacle : obstacles_) {
+            const softhand::SurfaceQuery query = softhand::querySurface(
+                obstacle.shape, obstacle.rotation.transpose() * (p_world - obstacle.position_m));
+            deepest = std::max(deepest, -query.phi_m);
+        }
+    }
+    return deepest;
 }
 
 softhand::HandPoseInput VirtualUser::actualPose(double t_s) const {

@@ -89,18 +89,6 @@ BulletCoupling::BulletCoupling(const std::vector<config::SceneObject>& objects, 
                                                          scalar(2.0 * c.half_height_m));
             }
         };
-        struct ColliderVisitor {
-            ColliderShape operator()(const config::PlaneShape&) const { return HalfSpace{}; }
-            ColliderShape operator()(const config::BoxShape& b) const {
-                return Box{toEigen(b.half_extents_m)};
-            }
-            ColliderShape operator()(const config::SphereShape& s) const {
-                return Sphere{s.radius_m};
-            }
-            ColliderShape operator()(const config::CapsuleShape& c) const {
-                return Capsule{c.radius_m, c.half_height_m};
-            }
-        };
         const Vec3 position = toEigen(object.pose.position_m);
         const Mat3 rotation = rotationFromRpy(object.pose.rpy_rad);
         auto shape = std::visit(ShapeVisitor{}, object.shape);
@@ -123,8 +111,7 @@ BulletCoupling::BulletCoupling(const std::vector<config::SceneObject>& objects, 
 
         Object entry;
         entry.engine_index = static_cast<int>(engine_->bodies.size());
-        ColliderDesc collider{std::visit(ColliderVisitor{}, object.shape), position, rotation,
-                              object.friction, -1};
+        ColliderDesc collider{colliderShape(object), position, rotation, object.friction, -1};
         if (dynamic) {
             RigidBodyDesc duplicate;
             duplicate.mass_kg = mass;

@@ -63,4 +63,18 @@ SurfaceQuery querySurface(const ColliderShape& shape, const Vec3& p) {
     return std::visit(Visitor{p}, shape);
 }
 
+ColliderShape colliderShape(const config::SceneObject& object) {
+    struct Visitor {
+        ColliderShape operator()(const config::PlaneShape&) const { return HalfSpace{}; }
+        ColliderShape operator()(const config::BoxShape& b) const {
+            return Box{Vec3(b.half_extents_m[0], b.half_extents_m[1], b.half_extents_m[2])};
+        }
+        ColliderShape operator()(const config::SphereShape& s) const { return Sphere{s.radius_m}; }
+        ColliderShape operator()(const config::CapsuleShape& c) const {
+            return Capsule{c.radius_m, c.half_height_m};
+        }
+    };
+    return std::visit(Visitor{}, object.shape);
+}
+
 }  // namespace haptic::softhand

@@ -10,6 +10,7 @@
 // actual pose, sampled at its rate and delivered after its latency, with noise.
 // No I/O: hapticemu's main publishes what track() returns.
 
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -24,6 +25,7 @@
 #include "haptic/emu/device_emulator.hpp"
 #include "haptic/emu/user_pad.hpp"
 #include "haptic/msgs/messages.hpp"
+#include "haptic/softhand/collider.hpp"
 #include "haptic/softhand/hand_builder.hpp"
 #include "haptic/softhand/tracking_input.hpp"
 
@@ -45,13 +47,21 @@ class VirtualUser {
     // thimble's plate presses on the user's pad (config pad).
     void wear(const config::DeviceConfig& device, DeviceEmulator& emulator);
 
-    // What the pad under each worn thimble feels with its plate where the thimble's model
-    // has it now (wear() order).
-    struct FeltPad {
+    // What the user feels of each worn device at t_s (wear() order): how deep the finger it is
+    // worn on reaches into the scene's static objects (its skin at the actual pose, as rigid
+    // as its bones: the penetration of the user's own finger into where the virtual object
+    // is; NaN for a finger the hand model does not simulate), and for a thimble the pad under
+    // its plate where the thimble's model has it now.
+    struct Felt {
         std::string device;
-        FeltPadContact contact;
+        double finger_penetration_m{0.0};
+        FeltPadContact pad;  // pose_known false for a device that is not a thimble
     };
-    [[nodiscard]] const std::vector<FeltPad>& feelThimbles();
+    [[nodiscard]] const std::vector<Felt>& feel(double t_s);
+    // The deepest reach of `finger`'s skin into the scene's static objects at `pose` (0 when
+    // clear of them; NaN when the hand model has no tissue on that finger).
+    [[nodiscard]] double fingerPenetrationM(config::Finger finger,
+                                            const softhand::HandPoseInput& pose) const;
 
     // Before the devices' models step at t_s (seconds since start): the worn exoskeletons'
     // fingers aim for the intent of that instant.
@@ -77,6 +87,19 @@ class VirtualUser {
         const ThimbleModel* model;
         UserPad pad;
     };
+    struct WornDevice {
+        config::Finger finger;
+        int thimble{-1};  // index in thimbles_, -1: not a thimble
+    };
+    struct Obstacle {
+        softhand::ColliderShape shape;
+        softhand::Vec3 position_m;
+        softhand::Mat3 rotation;
+    };
+    struct SkinPoint {
+        std::size_t bone;         // index in the hand model's bones
+        softhand::Vec3 offset_m;  // rest position in the bone's frame
+    };
     using Script = std::variant<softhand::PressSlideEdgeScript, softhand::GraspLiftPlacePushScript,
                                 softhand::ReplayTrack>;
 
@@ -89,7 +112,11 @@ class VirtualUser {
     std::unique_ptr<Script> script_;
     std::vector<WornExoskeleton> exoskeletons_;
     std::vector<WornThimble> thimbles_;
-    std::vector<FeltPad> felt_;  // parallel to thimbles_
+    std::vector<WornDevice> worn_;
+    std::vector<Felt> felt_;                      // parallel to worn_
+    std::vector<Obstacle> obstacles_;             // the scene's static objects
+    std::array<std::vector<SkinPoint>, 5> skin_;  // per finger: its phalanges' tissue nodes
+    mutable std::vector<softhand::BonePose> bone_poses_;
 
     std::mt19937 noise_engine_;
     std::normal_distribution<double> unit_normal_{0.0, 1.0};

@@ -5,6 +5,7 @@
 
 #include <variant>
 
+#include "haptic/config/scene.hpp"
 #include "haptic/softhand/rotation.hpp"
 
 namespace haptic::softhand {
@@ -30,5 +31,8 @@ struct SurfaceQuery {
 };
 
 [[nodiscard]] SurfaceQuery querySurface(const ColliderShape& shape, const Vec3& p_object_m);
+
+// The shape of a scene file's object, in its own frame (the object's pose places it).
+[[nodiscard]] ColliderShape colliderShape(const config::SceneObject& object);
 
 }  // namespace haptic::softhand
