@@ -320,6 +320,24 @@ std::map<std::string, FeltSeries, std::less<>> readFeltLog(std::string_view csv)
     return out;
 }
 
+std::size_t completeFeltLogRows(std::string_view csv) {
+    std::size_t rows = 0;
+    bool header_seen = false;
+    while (!csv.empty()) {
+        const bool complete = csv.find('\n') != std::string_view::npos;
+        const std::string_view line = nextLine(csv);
+        if (!complete || line.starts_with('#')) {
+            continue;
+        }
+        if (!header_seen) {
+            header_seen = true;
+            continue;
+        }
+        ++rows;
+    }
+    return rows;
+}
+
 std::vector<std::string> attachFeltLog(std::map<int, DeviceColumns>& devices,
                                        const RecordingInfo& recording,
                                        const std::map<std::string, FeltSeries, std::less<>>& felt) {

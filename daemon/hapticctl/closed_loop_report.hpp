@@ -137,6 +137,8 @@ struct FeltSeries {
 };
 // Throws std::runtime_error when the text is not a felt log.
 [[nodiscard]] std::map<std::string, FeltSeries, std::less<>> readFeltLog(std::string_view csv);
+// Data lines after the header that end in a newline (the header is gnuplot's point 0).
+[[nodiscard]] std::size_t completeFeltLogRows(std::string_view csv);
 
 // Adds finger_penetration_m to each device of `devices` the log names, and felt_force_{x,y,z}_n
 // and felt_indentation_m to each such thimble (NaN where the log has no row within 20 ms

@@ -411,6 +411,7 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
             return kExitError;
         }
         felt_plot.path = felt_path;
+        felt_plot.complete_rows = haptic::ctl::completeFeltLogRows(*felt_text);
         felt_plot.origin_ns = recording.origin_ns;
         for (const auto& [index, device] : devices) {
             const auto& time = device.column("time_s");

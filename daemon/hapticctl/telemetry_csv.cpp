@@ -219,12 +219,14 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
         // force x, y, z, ...; each thimble's rows with a known pose, over the recording's span.
         for (const std::string& device : felt->devices) {
             script += fmt::format(
-                ", {log} every ::1 using (strcol(2) eq {device} && $4 == 1 && $1 >= {origin} && "
+                ", {log} every ::1::{last} using (strcol(2) eq {device} && $4 == 1 && "
+                "$1 >= {origin} && "
                 "($1 - {origin}) * 1e-9 <= {end} ? ($1 - {origin}) * 1e-9 : 1/0):"
                 "(sqrt($6**2 + $7**2 + $8**2)) axes x1y2 with lines lw 2 "
                 "title {title}",
                 fmt::arg("log", quoted(felt->path)), fmt::arg("device", quoted(device)),
-                fmt::arg("origin", felt->origin_ns), fmt::arg("end", felt->end_s),
+                fmt::arg("last", felt->complete_rows), fmt::arg("origin", felt->origin_ns),
+                fmt::arg("end", felt->end_s),
                 fmt::arg("title",
                          quoted("|felt pad force| " + device + " (virtual user, --felt-log)")));
         }

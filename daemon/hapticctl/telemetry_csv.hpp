@@ -36,6 +36,9 @@ struct FeltLogPlot {
     std::string path;
     std::int64_t origin_ns{0};
     double end_s{0.0};
+    // Complete data lines after the header: the plot reads no further (a log still being
+    // written can end inside a line, which gnuplot's strcol() fails on).
+    std::size_t complete_rows{0};
     std::vector<std::string> devices;  // the log's thimbles in the recording, one line each
 };
 std::string telemetryPlotScript(const std::string& csv_path, const std::string& png_path,

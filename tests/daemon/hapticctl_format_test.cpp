@@ -410,14 +410,15 @@ TEST(TelemetryCsv, GapsInEachDevicesTickNumbersCountAsMissingSamples) {
 // The felt pad force comes from the felt log, on the recording's time axis: its stamps less
 // the recording's origin. Columns 5-7 are force_x_n..force_z_n, the header readFeltLog checks.
 TEST(TelemetryCsv, PlotScriptPutsTheFeltLogOnTheRecordingsTimeAxis) {
-    const FeltLogPlot felt{"/tmp/felt.csv", 7'000'000'000'123, 12.5, {"left", "right"}};
+    const FeltLogPlot felt{"/tmp/felt.csv", 7'000'000'000'123, 12.5, 3456, {"left", "right"}};
     const auto script = telemetryPlotScript("t.csv", "t.png", 10.0, 1.5, &felt);
     for (const std::string device : {"left", "right"}) {
         // One line per device, only its rows with a known pose, over the recording's span.
-        EXPECT_THAT(script, HasSubstr("'/tmp/felt.csv' every ::1 using (strcol(2) eq '" + device +
-                                      "' && $4 == 1 && $1 >= 7000000000123 && ($1 - "
-                                      "7000000000123) * 1e-9 <= 12.5 ? ($1 - 7000000000123) * "
-                                      "1e-9 : 1/0):(sqrt($6**2 + $7**2 + $8**2)) axes x1y2"));
+        EXPECT_THAT(script,
+                    HasSubstr("'/tmp/felt.csv' every ::1::3456 using (strcol(2) eq '" + device +
+                              "' && $4 == 1 && $1 >= 7000000000123 && ($1 - "
+                              "7000000000123) * 1e-9 <= 12.5 ? ($1 - 7000000000123) * "
+                              "1e-9 : 1/0):(sqrt($6**2 + $7**2 + $8**2)) axes x1y2"));
     }
     EXPECT_THAT(telemetryPlotScript("t.csv", "t.png"), Not(HasSubstr("felt pad force")));
 }
@@ -546,6 +547,8 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
     // and a line with fewer than the eleven fields is skipped.
     felt_log += fmt::format("{},pad_device,0.002,1,0.001,0.0,0.0,-0.2", origin_ns + 70'500'000);
 
+    // 76 whole rows after the header; the cut last line is not one.
+    EXPECT_EQ(completeFeltLogRows(felt_log), 76U);
     auto devices = readTelemetryCsv(csv);
     const auto felt = readFeltLog(felt_log);
     ASSERT_EQ(felt.at("pad_device").stamp_ns.size(), 76U);
