@@ -181,14 +181,16 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
     const auto& time = device.column("time_s");
     report.ticks = time.size();
     report.felt_attached = device.values.contains("felt_force_x_n");
-    // |felt| per tick for the chatter and limit figures, an unknown tick holding the last known
-    // value: dropping it would join the ticks either side into one moving average.
+    // |felt| per tick for the chatter and limit figures, from the first to the last tick with
+    // a known value, an unknown tick in between holding the last known one (dropping it would
+    // join the ticks either side into one moving average).
     std::vector<double> felt_held;
     double reference_sum = 0.0;
     double reference_on_felt_sum = 0.0;
     double felt_sum = 0.0;
     double squared_error_sum = 0.0;
     double last_felt = 0.0;
+    std::size_t held_end = 0;  // past the last known value
     for (std::size_t i = 0; i < time.size(); ++i) {
         const double reference = norm3(device, "thimble_reference_force_", "_n", i);
         report.peak_reference_force_n = std::max(report.peak_reference_force_n, reference);
@@ -209,7 +211,12 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
                 report.peak_indentation_m =
                     std::max(report.peak_indentation_m, device.column("felt_indentation_m")[i]);
             }
-            felt_held.push_back(last_felt);
+            if (std::isfinite(felt) || !felt_held.empty()) {
+                felt_held.push_back(last_felt);
+            }
+            if (std::isfinite(felt)) {
+                held_end = felt_held.size();
+            }
         }
         const bool felt_known = std::isfinite(felt);
         if (reference > settings.contact_threshold_n ||
@@ -233,6 +240,7 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
         report.mean_felt_force_n = felt_sum / n;
         report.mean_reference_on_felt_ticks_n = reference_on_felt_sum / n;
         report.rms_error_n = std::sqrt(squared_error_sum / n);
+        felt_held.resize(held_end);
         report.felt_quality = contactQuality(felt_held, settings);
     }
     return report;
@@ -447,6 +455,11 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
         const FingerPenetration p = fingerPenetration(device);
         if (p.known == 0) {
             return std::string();
+        }
+        if (p.inside == 0) {
+            return fmt::format(
+                "  the user's finger never inside the scene's static objects ({} ticks)\n",
+                p.known);
         }
         return fmt::format(
             "  the user's finger inside the scene's static objects on {:.1f}% of {} ticks; "

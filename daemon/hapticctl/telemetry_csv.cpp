@@ -214,15 +214,17 @@ std::string telemetryPlotScript(const std::string& csv_path, const std::string& 
         fmt::arg("y", columnNumber("thimble_reference_force_y_n")),
         fmt::arg("z", columnNumber("thimble_reference_force_z_n")),
         fmt::arg("model", columnNumber("thimble_pad_force_model_n")));
-    if (felt != nullptr) {
+    if (felt != nullptr && felt->complete_rows > 0) {
         // The felt log: stamp_ns, device, finger_penetration_m, pose_known, indentation_m,
         // force x, y, z, ...; each thimble's rows with a known pose, over the recording's span.
+        // Points, not lines: the other devices' rows in between are 1/0, which breaks a line
+        // at every row.
         for (const std::string& device : felt->devices) {
             script += fmt::format(
                 ", {log} every ::1::{last} using (strcol(2) eq {device} && $4 == 1 && "
                 "$1 >= {origin} && "
                 "($1 - {origin}) * 1e-9 <= {end} ? ($1 - {origin}) * 1e-9 : 1/0):"
-                "(sqrt($6**2 + $7**2 + $8**2)) axes x1y2 with lines lw 2 "
+                "(sqrt($6**2 + $7**2 + $8**2)) axes x1y2 with points pt 7 ps 0.3 "
                 "title {title}",
                 fmt::arg("log", quoted(felt->path)), fmt::arg("device", quoted(device)),
                 fmt::arg("last", felt->complete_rows), fmt::arg("origin", felt->origin_ns),

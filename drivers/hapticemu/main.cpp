@@ -135,7 +135,7 @@ class CommandReader {
     std::string pending_;
 };
 
-// The virtual user's log of what its pads felt, one row per worn thimble per tick. stamp_ns is
+// The virtual user's log of what it felt, one row per worn device per tick. stamp_ns is
 // CLOCK_MONOTONIC, the clock of hapticd's telemetry stamps, so a recording on the same host
 // lines up with it (hapticctl plot --felt).
 class FeltLog {

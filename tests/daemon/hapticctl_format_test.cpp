@@ -421,6 +421,10 @@ TEST(TelemetryCsv, PlotScriptPutsTheFeltLogOnTheRecordingsTimeAxis) {
                               "1e-9 : 1/0):(sqrt($6**2 + $7**2 + $8**2)) axes x1y2"));
     }
     EXPECT_THAT(telemetryPlotScript("t.csv", "t.png"), Not(HasSubstr("felt pad force")));
+    // A log with no complete row yet plots nothing from it (every ::1::0 would be an error).
+    const FeltLogPlot empty{"/tmp/felt.csv", 1, 12.5, 0, {"left"}};
+    EXPECT_THAT(telemetryPlotScript("t.csv", "t.png", 10.0, 1.5, &empty),
+                Not(HasSubstr("felt pad force")));
 }
 
 TEST(TelemetryCsv, PlotScriptQuotesPathsForGnuplot) {
@@ -587,20 +591,21 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
     EXPECT_NEAR(report.errorFraction(), rms / 0.5, 1e-9);
     EXPECT_NEAR(report.peak_error_n, 0.5, 1e-9);
     EXPECT_NEAR(report.peak_indentation_m, 0.0015, 1e-12);
-    // The unknown ticks hold the last known |felt| (tick 30: 0 N; 90-99: 0.4 N), so the
-    // chatter and limit figures see 0 N up to tick 49 and 0.4 N from tick 50 to the end: one
-    // step, never at the 1.5 N limit.
-    std::vector<double> held(100, 0.0);
+    // Tick 30 (unknown) holds the last known |felt| (0 N); the ticks after the last known one
+    // (89) are left out. So the chatter and limit figures see 0 N up to tick 49 and 0.4 N on
+    // 50-89: one step, never at the 1.5 N limit.
+    std::vector<double> held(90, 0.0);
     std::fill(held.begin() + 50, held.end(), 0.4);
     const ContactQuality expected = contactQuality(held, thimble_settings);
-    EXPECT_EQ(report.felt_quality.contact_ticks, 50U);
+    EXPECT_EQ(report.felt_quality.ticks, 90U);
+    EXPECT_EQ(report.felt_quality.contact_ticks, 40U);
     EXPECT_EQ(report.felt_quality.clamp_ticks, 0U);
     EXPECT_DOUBLE_EQ(report.felt_quality.chatter_rms_n, expected.chatter_rms_n);
     EXPECT_DOUBLE_EQ(report.felt_quality.mean_contact_force_n, 0.4);
     const std::string text = formatReport(devices, {}, thimble_settings);
     EXPECT_THAT(text, HasSubstr("felt vs reference, 50 contact ticks with a felt value"));
     EXPECT_THAT(text, HasSubstr("pad indented up to 1.50 mm"));
-    EXPECT_THAT(text, HasSubstr("felt above 0.05 N on 50 ticks"));
+    EXPECT_THAT(text, HasSubstr("felt above 0.05 N on 40 ticks"));
     EXPECT_THAT(text, HasSubstr("the user's finger inside the scene's static objects on 50.0% "
                                 "of 90 ticks; there p50 2.50 mm"));
 
@@ -628,6 +633,9 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
     ASSERT_EQ(attachFeltLog(no_felt_in_contact, readRecordingInfo(csv), early_log).size(), 1U);
     EXPECT_THAT(formatReport(no_felt_in_contact, {}, thimble_settings),
                 HasSubstr("the felt log has no value on any contact tick"));
+    // Its one row stands for the ticks up to 20 ms after it: 0-20.
+    EXPECT_THAT(formatReport(no_felt_in_contact, {}, thimble_settings),
+                HasSubstr("the user's finger never inside the scene's static objects (21 ticks)"));
 }
 
 TEST(ContactQuality, AHeldContactForceHasNoChatterAndIsNotAtTheClamp) {

@@ -44,6 +44,10 @@ VirtualUser::VirtualUser(const config::VirtualUserConfig& config, std::string_vi
     // The skin of every simulated phalanx at rest, in its bone's frame (the model is still in
     // its build pose), for the user's finger penetration.
     const softhand::Simulation& sim = model_->simulation;
+    std::vector<bool> on_skin(static_cast<std::size_t>(sim.nodeCount()), false);
+    for (const int node : sim.skinNodes()) {
+        on_skin[static_cast<std::size_t>(node)] = true;
+    }
     for (std::size_t b = 0; b < model_->bones.size(); ++b) {
         const softhand::BoneInfo& bone = model_->bones[b];
         if (!bone.finger || bone.node_count == 0) {
@@ -53,7 +57,10 @@ VirtualUser::VirtualUser(const config::VirtualUserConfig& config, std::string_vi
         const softhand::Mat3& rotation = sim.bodyRotation(bone.body);
         auto& points = skin_[static_cast<std::size_t>(*bone.finger)];
         for (int node = bone.first_node; node < bone.first_node + bone.node_count; ++node) {
-            points.push_back({b, rotation.transpose() * (sim.nodePosition(node) - centre)});
+            // Only the surface can be deepest: an inner node lies behind a skin node.
+            if (on_skin[static_cast<std::size_t>(node)]) {
+                points.push_back({b, rotation.transpose() * (sim.nodePosition(node) - centre)});
+            }
         }
     }
     // Moving objects are where handsim's physics puts them, which the user does not know.
@@ -147,8 +154,16 @@ void VirtualUser::drive(double t_s) {
 
 const std::vector<VirtualUser::Felt>& VirtualUser::feel(double t_s) {
     const softhand::HandPoseInput pose = actualPose(t_s);
+    // Once per finger, however many devices it wears.
+    std::array<double, 5> depth{};
+    std::array<bool, 5> done{};
     for (std::size_t i = 0; i < worn_.size(); ++i) {
-        felt_[i].finger_penetration_m = fingerPenetrationM(worn_[i].finger, pose);
+        const auto finger = static_cast<std::size_t>(worn_[i].finger);
+        if (!done[finger]) {
+            depth[finger] = fingerPenetrationM(worn_[i].finger, pose);
+            done[finger] = true;
+        }
+        felt_[i].finger_penetration_m = depth[finger];
         if (worn_[i].thimble >= 0) {
             WornThimble& thimble = thimbles_[static_cast<std::size_t>(worn_[i].thimble)];
             felt_[i].pad = thimble.pad.feel(thimble.model->angleRad());
