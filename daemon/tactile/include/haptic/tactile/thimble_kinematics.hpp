@@ -131,7 +131,8 @@ class ThimbleKinematics {
                                         bool check_workspace = true) const noexcept;
 
     // Newton on xi such that IK(xi) = measured, from `guess` (the last estimate; the centre
-    // of the workspace if none). Converges to |residual| < 1e-13 rad or reports an error.
+    // of the workspace if none), then, if that fails, from the centre and from the retract
+    // pose. Converges to |residual| < 1e-13 rad or reports an error.
     [[nodiscard]] ForwardResult forward(const ServoAngles& measured_rad,
                                         const PlatformDofs& guess) const noexcept;
     [[nodiscard]] ForwardResult forward(const ServoAngles& measured_rad) const noexcept {
@@ -165,6 +166,9 @@ class ThimbleKinematics {
     [[nodiscard]] PlatformDofs projectToWorkspace(const PlatformDofs& dofs) const noexcept;
 
   private:
+    // One Newton solve from `guess` (forward() tries up to three starts).
+    [[nodiscard]] ForwardResult forwardFrom(const ServoAngles& measured_rad,
+                                            const PlatformDofs& guess) const noexcept;
     struct LegSolution {
         double servo_rad{0.0};
         double reach_ratio{0.0};  // |kappa| / rho, <= 1 when the leg closes
