@@ -31,16 +31,6 @@ std::string_view nextLine(std::string_view& text) {
     return line;
 }
 
-double norm3(const DeviceColumns& device, std::string_view prefix, std::string_view suffix,
-             std::size_t row) {
-    double sum = 0.0;
-    for (const char* axis : {"x", "y", "z"}) {
-        const double v = device.column(fmt::format("{}{}{}", prefix, axis, suffix))[row];
-        sum += v * v;
-    }
-    return std::sqrt(sum);
-}
-
 }  // namespace
 
 const std::vector<double>& DeviceColumns::column(std::string_view name) const {
@@ -181,6 +171,25 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
     const auto& time = device.column("time_s");
     report.ticks = time.size();
     report.felt_attached = device.values.contains("felt_force_x_n");
+    // The columns once, not per tick: thimble_reference_force_{x,y,z}_n, and felt_force_* when
+    // a felt log is attached.
+    std::array<const std::vector<double>*, 3> reference_axes{};
+    std::array<const std::vector<double>*, 3> felt_axes{};
+    const std::vector<double>* indentation = nullptr;
+    for (std::size_t k = 0; k < 3; ++k) {
+        const char axis = "xyz"[k];
+        reference_axes[k] = &device.column(fmt::format("thimble_reference_force_{}_n", axis));
+        if (report.felt_attached) {
+            felt_axes[k] = &device.column(fmt::format("felt_force_{}_n", axis));
+        }
+    }
+    if (report.felt_attached) {
+        indentation = &device.column("felt_indentation_m");
+    }
+    const auto magnitude = [](const std::array<const std::vector<double>*, 3>& axes,
+                              std::size_t i) {
+        return std::hypot((*axes[0])[i], (*axes[1])[i], (*axes[2])[i]);
+    };
     // |felt| per tick for the chatter and limit figures, from the first to the last tick with
     // a known value, an unknown tick in between holding the last known one (dropping it would
     // join the ticks either side into one moving average).
@@ -192,24 +201,18 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
     double last_felt = 0.0;
     std::size_t held_end = 0;  // past the last known value
     for (std::size_t i = 0; i < time.size(); ++i) {
-        const double reference = norm3(device, "thimble_reference_force_", "_n", i);
+        const double reference = magnitude(reference_axes, i);
         report.peak_reference_force_n = std::max(report.peak_reference_force_n, reference);
         double felt = std::nan("");
         double error = 0.0;
         if (report.felt_attached) {
-            felt = norm3(device, "felt_force_", "_n", i);
+            felt = magnitude(felt_axes, i);
             if (std::isfinite(felt)) {
-                double squared = 0.0;
-                for (const char* axis : {"x", "y", "z"}) {
-                    const double d =
-                        device.column(fmt::format("felt_force_{}_n", axis))[i] -
-                        device.column(fmt::format("thimble_reference_force_{}_n", axis))[i];
-                    squared += d * d;
-                }
-                error = std::sqrt(squared);
+                error = std::hypot((*felt_axes[0])[i] - (*reference_axes[0])[i],
+                                   (*felt_axes[1])[i] - (*reference_axes[1])[i],
+                                   (*felt_axes[2])[i] - (*reference_axes[2])[i]);
                 last_felt = felt;
-                report.peak_indentation_m =
-                    std::max(report.peak_indentation_m, device.column("felt_indentation_m")[i]);
+                report.peak_indentation_m = std::max(report.peak_indentation_m, (*indentation)[i]);
             }
             if (std::isfinite(felt) || !felt_held.empty()) {
                 felt_held.push_back(last_felt);

@@ -344,18 +344,13 @@ std::optional<std::string> readWholeFile(const std::string& path) {
     return text.str();
 }
 
-// Prints the end-to-end figures of the recording (closed_loop_report.hpp), with the felt pad
-// forces of `felt` attached to the thimbles.
-void printReport(const std::string& csv, double clamp_n, double thimble_max_force_n,
-                 const std::map<std::string, haptic::ctl::FeltSeries, std::less<>>* felt) {
+// Prints the end-to-end figures of the recording (closed_loop_report.hpp).
+void printReport(const std::map<int, haptic::ctl::DeviceColumns>& devices, double clamp_n,
+                 double thimble_max_force_n) {
     haptic::ctl::ContactQualitySettings settings;
     settings.clamp_n = clamp_n;
     haptic::ctl::ContactQualitySettings thimble_settings;
     thimble_settings.clamp_n = thimble_max_force_n;
-    auto devices = haptic::ctl::readTelemetryCsv(csv);
-    if (felt != nullptr) {
-        (void)haptic::ctl::attachFeltLog(devices, haptic::ctl::readRecordingInfo(csv), *felt);
-    }
     std::fputs(haptic::ctl::formatReport(devices, settings, thimble_settings).c_str(), stdout);
 }
 
@@ -369,9 +364,11 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
         std::fprintf(stderr, "hapticctl: cannot read '%s'\n", csv_path.c_str());
         return kExitError;
     }
-    // The felt log is read and matched before gnuplot runs: a log that cannot be used is an
-    // error, not a plot without it.
-    std::optional<std::map<std::string, haptic::ctl::FeltSeries, std::less<>>> felt;
+    // The recording's columns, read once for the felt log and the report. With a felt log
+    // they are read, and the log matched, before gnuplot runs: a log that cannot be used is an
+    // error, not a plot without it. Without one, after (as before the felt log existed).
+    std::optional<std::map<int, haptic::ctl::DeviceColumns>> devices;
+    bool with_felt = false;
     haptic::ctl::FeltLogPlot felt_plot;
     if (!felt_path.empty()) {
         const auto felt_text = readWholeFile(felt_path);
@@ -380,7 +377,6 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
             return kExitError;
         }
         haptic::ctl::RecordingInfo recording;
-        std::map<int, haptic::ctl::DeviceColumns> devices;
         std::vector<std::string> attached;
         try {
             recording = haptic::ctl::readRecordingInfo(*csv);
@@ -390,20 +386,17 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
             return kExitError;
         }
         try {
-            felt = haptic::ctl::readFeltLog(*felt_text);
-            attached = haptic::ctl::attachFeltLog(devices, recording, *felt);
-            for (const std::string& name : attached) {
-                for (const auto& [index, device] : devices) {
-                    const auto named = recording.device_names.find(index);
-                    if (device.kind == "thimble" && named != recording.device_names.end() &&
-                        named->second == name) {
-                        felt_plot.devices.push_back(name);
-                    }
-                }
-            }
+            attached = haptic::ctl::attachFeltLog(*devices, recording,
+                                                  haptic::ctl::readFeltLog(*felt_text));
         } catch (const std::runtime_error& e) {
             std::fprintf(stderr, "hapticctl: %s: %s\n", felt_path.c_str(), e.what());
             return kExitError;
+        }
+        // The thimbles among them got the pad's columns: one plot line each.
+        for (const auto& [index, device] : *devices) {
+            if (device.values.contains("felt_force_x_n")) {
+                felt_plot.devices.push_back(recording.device_names.at(index));
+            }
         }
         if (attached.empty()) {
             std::fprintf(stderr, "hapticctl: '%s' names no device of the recording '%s'\n",
@@ -413,7 +406,8 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
         felt_plot.path = felt_path;
         felt_plot.complete_rows = haptic::ctl::completeFeltLogRows(*felt_text);
         felt_plot.origin_ns = recording.origin_ns;
-        for (const auto& [index, device] : devices) {
+        with_felt = true;
+        for (const auto& [index, device] : *devices) {
             const auto& time = device.column("time_s");
             felt_plot.end_s =
                 time.empty() ? felt_plot.end_s : std::max(felt_plot.end_s, time.back());
@@ -441,7 +435,7 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
         return kExitError;
     }
     const std::string script = haptic::ctl::telemetryPlotScript(
-        csv_path, png_path, clamp_n, thimble_max_force_n, felt ? &felt_plot : nullptr);
+        csv_path, png_path, clamp_n, thimble_max_force_n, with_felt ? &felt_plot : nullptr);
     const bool written =
         ::write(pipe_fds[1], script.data(), script.size()) == static_cast<ssize_t>(script.size());
     ::close(pipe_fds[1]);
@@ -452,7 +446,10 @@ int plotTelemetry(const std::string& csv_path, std::string png_path, double clam
         return kExitError;
     }
     std::printf("%s\n", png_path.c_str());
-    printReport(*csv, clamp_n, thimble_max_force_n, felt ? &*felt : nullptr);
+    if (!devices) {
+        devices = haptic::ctl::readTelemetryCsv(*csv);
+    }
+    printReport(*devices, clamp_n, thimble_max_force_n);
     return EXIT_SUCCESS;
 }
 

@@ -1,9 +1,9 @@
 #include "haptic/emu/user_pad.hpp"
 
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 
+#include "haptic/softhand/bullet_coupling.hpp"
 #include "haptic/tactile/thimble_kinematics.hpp"
 
 namespace haptic::emu {
@@ -14,13 +14,8 @@ UserPad::UserPad(const config::ThimbleConfig& thimble, const config::UserPadConf
       plate_radius_m_(thimble.plate_radius_m) {
     // The sphere's centre is the distal phalanx's: the finger frame's origin, where the device
     // sits by T_finger_device (p_finger = R p_device + t), so at -R^T t in the device frame.
-    // R from roll, pitch, yaw about fixed x, y, z: the convention of every pose in the files.
     const config::Transform& mount = thimble.finger_calibration.T_finger_device;
-    const Eigen::Matrix3d rotation =
-        (Eigen::AngleAxisd(mount.rpy_rad[2], Eigen::Vector3d::UnitZ()) *
-         Eigen::AngleAxisd(mount.rpy_rad[1], Eigen::Vector3d::UnitY()) *
-         Eigen::AngleAxisd(mount.rpy_rad[0], Eigen::Vector3d::UnitX()))
-            .toRotationMatrix();
+    const Eigen::Matrix3d rotation = softhand::rotationFromRpy(mount.rpy_rad);
     centre_ =
         -rotation.transpose() *
         Eigen::Vector3d(mount.translation_m[0], mount.translation_m[1], mount.translation_m[2]);
