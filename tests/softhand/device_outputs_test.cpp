@@ -196,6 +196,12 @@ TEST(KinestheticOutput, FingertipModelHasNoJointsForAnExoskeleton) {
     EXPECT_THROW(KinestheticOutput(tip, kinematics, config::Finger::kIndex), std::invalid_argument);
 }
 
+// The fingertip model's one bone as the sim has it: the tracked pose where tracking holds it.
+BonePose simulatedBone(const HandModel& hand) {
+    const int body = hand.bones.front().body;
+    return {hand.simulation.bodyPosition(body), hand.simulation.bodyRotation(body)};
+}
+
 class TactileOutputTest : public ::testing::Test {
   protected:
     HandModel model = buildHand(handConfig(config::HandModel::kFingertip), SolverSettings{});
@@ -212,7 +218,7 @@ TEST_F(TactileOutputTest, StraightFingertipOverTableMatchesHandGeometry) {
     const TactileOutput output(model, config::Finger::kIndex, finger_from_device, material,
                                settings);
     msgs::ContactSurface surface;
-    output.fill(model.simulation, surface);
+    output.fill(model.simulation, simulatedBone(model), surface);
     ASSERT_GT(surface.samples.size(), 5U);
     EXPECT_LE(surface.samples.size(), 40U);
     // D: origin 12 mm above the bone axis (world z = +0.012), z_D = -z_W, y_D = -y_W.
@@ -258,7 +264,7 @@ TEST_F(TactileOutputTest, PitchedFingertipPressingTableReportsPenetrationAndTilt
             node, centre + rotation * (model.simulation.nodePosition(node) - centre));
     }
     msgs::ContactSurface surface;
-    output.fill(model.simulation, surface);
+    output.fill(model.simulation, simulatedBone(model), surface);
     ASSERT_FALSE(surface.samples.empty());
     for (const auto& s : surface.samples) {
         EXPECT_GE(s.signed_distance_m, 0.0) << "in contact on a pad the sim presses nowhere";
@@ -266,10 +272,10 @@ TEST_F(TactileOutputTest, PitchedFingertipPressingTableReportsPenetrationAndTilt
 
     model.simulation.setTrackingTarget(body, centre, rotation);
     (void)model.simulation.step(0.001);
-    output.fill(model.simulation, surface);
+    output.fill(model.simulation, simulatedBone(model), surface);
     ASSERT_FALSE(surface.samples.empty());
     double deepest = 1.0;
-    const BonePose device = output.deviceFrame(model.simulation);
+    const BonePose device = output.deviceFrame(simulatedBone(model));
     // The table's normal in D: (-sin, 0, -cos) of the pitch, less the little the contact
     // turned the bone in the step.
     const Vec3 up = device.rotation.transpose() * Vec3::UnitZ();
@@ -302,7 +308,7 @@ TEST_F(TactileOutputTest, WhereTheSkinPressesBeforeTheRigidPadTheSampleTakesTheS
                                          model.simulation.nodePosition(node) - Vec3(0, 0, kBulge));
     }
     const auto rigidDistance = [&](const msgs::ContactSample& s) {
-        const BonePose device = output.deviceFrame(model.simulation);
+        const BonePose device = output.deviceFrame(simulatedBone(model));
         const Vec3 p_world =
             device.position_m +
             device.rotation * Vec3(s.p_device_m[0], s.p_device_m[1], s.p_device_m[2]);
@@ -311,7 +317,7 @@ TEST_F(TactileOutputTest, WhereTheSkinPressesBeforeTheRigidPadTheSampleTakesTheS
     // No step yet: no contact force anywhere, although the bulged skin is inside the table.
     ASSERT_TRUE(model.simulation.contactForces().empty());
     msgs::ContactSurface surface;
-    output.fill(model.simulation, surface);
+    output.fill(model.simulation, simulatedBone(model), surface);
     for (const auto& s : surface.samples) {
         ASSERT_GT(rigidDistance(s), 0.0) << "the rigid pad is 1 mm or more above the table";
         EXPECT_NEAR(s.signed_distance_m, rigidDistance(s), 1e-12);
@@ -331,7 +337,7 @@ TEST_F(TactileOutputTest, WhereTheSkinPressesBeforeTheRigidPadTheSampleTakesTheS
         }
     }
     ASSERT_FALSE(pressed_depths.empty()) << "one step leaves pressed skin inside the table";
-    output.fill(model.simulation, surface);
+    output.fill(model.simulation, simulatedBone(model), surface);
     int touching = 0;
     int clear = 0;
     for (const auto& s : surface.samples) {
@@ -348,7 +354,7 @@ TEST_F(TactileOutputTest, WhereTheSkinPressesBeforeTheRigidPadTheSampleTakesTheS
             << s.signed_distance_m << " is neither the rigid point's nor a pressed skin node's";
         // The table's normal, world +z, seen in the device frame (the step tilted the bone a
         // little).
-        const Vec3 up = output.deviceFrame(model.simulation).rotation.transpose() * Vec3::UnitZ();
+        const Vec3 up = output.deviceFrame(simulatedBone(model)).rotation.transpose() * Vec3::UnitZ();
         for (int i = 0; i < 3; ++i) {
             EXPECT_NEAR(s.normal_device[static_cast<std::size_t>(i)], up[i], 1e-12);
         }
@@ -377,7 +383,7 @@ TEST_F(TactileOutputTest, TheReferenceCountsTheContactOnThePadOnly) {
         }
         const TactileOutput output(hand, config::Finger::kIndex, finger_from_device, material);
         msgs::ContactSurface surface;
-        output.fill(hand.simulation, surface);
+        output.fill(hand.simulation, simulatedBone(hand), surface);
         const auto& f = surface.reference_force_device_n;
         return std::pair{hand.simulation.forceOnCollider(collider).norm(),
                          std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])};
@@ -401,6 +407,64 @@ TEST_F(TactileOutputTest, TheReferenceCountsTheContactOnThePadOnly) {
     EXPECT_LT(wall_pad_n, 0.3 * wall_n) << "a tip-first contact counted as the pad's";
     ASSERT_GT(table_n, 0.05) << "the pad does not touch the table";
     EXPECT_NEAR(table_pad_n, table_n, 0.2 * table_n) << "the pad's contact left out";
+}
+
+// The device is strapped to the user's finger: where the tracked finger is 1.5 mm deeper than
+// the simulated one the contact holds back, every pad sample lies 1.5 mm deeper against the
+// object (the plate presses 1.5 mm further), while the reference, the sim's contact on its
+// pad, is the same force and moment about the device.
+TEST_F(TactileOutputTest, TheSamplesLieOnTheTrackedFingerNotOnTheSimulatedOne) {
+    const double table_top = table_z + 0.002;  // the pad 1 mm into it
+    model.simulation.addCollider({HalfSpace{}, Vec3(0, 0, table_top), Mat3::Identity(), 0.5});
+    const int bone = model.bones.front().body;
+    model.simulation.setTrackingTarget(bone, model.simulation.bodyPosition(bone),
+                                       model.simulation.bodyRotation(bone));
+    for (int i = 0; i < 20; ++i) {
+        (void)model.simulation.step(0.005);
+    }
+    const TactileOutput output(model, config::Finger::kIndex, finger_from_device, material);
+    EXPECT_EQ(output.bone(), 0U);
+    const BonePose simulated = simulatedBone(model);
+    constexpr double kDeeper = 0.0015;
+    const BonePose tracked{simulated.position_m - Vec3(0, 0, kDeeper), simulated.rotation};
+    msgs::ContactSurface on_simulated;
+    msgs::ContactSurface on_tracked;
+    output.fill(model.simulation, simulated, on_simulated);
+    output.fill(model.simulation, tracked, on_tracked);
+    ASSERT_EQ(on_simulated.samples.size(), on_tracked.samples.size());
+    // The table pushes the pad towards the nail: device -z.
+    ASSERT_LT(on_simulated.reference_force_device_n[2], -0.05) << "the sim presses its pad";
+    const BonePose device = output.deviceFrame(tracked);
+    EXPECT_NEAR((device.position_m - output.deviceFrame(simulated).position_m).z(), -kDeeper,
+                1e-15);
+    double deepest_simulated = 1.0;
+    double deepest_tracked = 1.0;
+    double deepest_rigid = 1.0;
+    for (std::size_t i = 0; i < on_tracked.samples.size(); ++i) {
+        const auto& s = on_tracked.samples[i];
+        for (std::size_t k = 0; k < 3; ++k) {
+            EXPECT_NEAR(s.p_device_m[k], on_simulated.samples[i].p_device_m[k], 1e-12)
+                << "the pad is rigid with the device";
+        }
+        const Vec3 p_world =
+            device.position_m +
+            device.rotation * Vec3(s.p_device_m[0], s.p_device_m[1], s.p_device_m[2]);
+        const double rigid = p_world.z() - table_top;
+        EXPECT_LE(s.signed_distance_m, rigid + 1e-12);
+        deepest_rigid = std::min(deepest_rigid, rigid);
+        deepest_tracked = std::min(deepest_tracked, s.signed_distance_m);
+        deepest_simulated = std::min(deepest_simulated, on_simulated.samples[i].signed_distance_m);
+    }
+    std::printf("deepest pad sample: %.3f mm on the simulated finger, %.3f mm on the tracked\n",
+                deepest_simulated * 1e3, deepest_tracked * 1e3);
+    EXPECT_NEAR(deepest_tracked, deepest_rigid, 1e-12);
+    EXPECT_LE(deepest_tracked, deepest_simulated - kDeeper + 1e-9);
+    for (std::size_t k = 0; k < 3; ++k) {
+        EXPECT_NEAR(on_tracked.reference_force_device_n[k], on_simulated.reference_force_device_n[k],
+                    1e-12);
+        EXPECT_NEAR(on_tracked.reference_moment_device_nm[k],
+                    on_simulated.reference_moment_device_nm[k], 1e-12);
+    }
 }
 
 }  // namespace

@@ -249,6 +249,74 @@ TEST(PadSafety, ThePlateApproachesAtMostAtMaxVelocityAndWithdrawsAtOnce) {
     EXPECT_EQ(withdraw.flags, 0);
 }
 
+// Servo angles to a plate height, for judgeStep: every radian of the mean angle brings the
+// plate 5 mm nearer the pad; past `known_up_to_rad` there is no pose (the servos' own rate
+// limits can leave the angles off the platform's assembly).
+auto servoForward(double known_up_to_rad) {
+    return [known_up_to_rad](const ServoAngles& angles, ForwardResult& result) {
+        const double mean = (angles[0] + angles[1] + angles[2]) / 3.0;
+        result = ForwardResult{};
+        if (mean > known_up_to_rad) {
+            result.error = KinematicsError::kParasiticNotConverged;
+            return;
+        }
+        result.pose = plateAt(kRetractZ - 0.005 * mean);
+    };
+}
+
+TEST(PadSafety, AServoStepThatKeepsTheLimitsIsSentWhole) {
+    const PadSafetyLimiter limiter(loose());
+    const msgs::ContactSurface pad = flatPad();
+    const auto sent = limiter.judgeStep({0.0, 0.0, 0.0}, {0.5, 0.4, 0.6}, &pad, servoForward(10.0));
+    EXPECT_FALSE(sent.shortened);
+    EXPECT_EQ(sent.servo_rad, (ServoAngles{0.5, 0.4, 0.6}));
+    ASSERT_TRUE(sent.forward.ok());
+    EXPECT_NEAR(sent.forward.pose.position_m.z(), kRetractZ - 0.0025, 1e-15);
+}
+
+// A step whose pose is unknown cannot be judged: only the part of it that can, and keeps the
+// limits, is sent; where none can, the servos hold. It never goes out unjudged.
+TEST(PadSafety, AServoStepWithNoPoseIsCutBackToWhatCanBeJudgedOrHeld) {
+    const PadSafetyLimiter limiter(loose());
+    const msgs::ContactSurface pad = flatPad();
+    const ServoAngles previous{0.1, 0.1, 0.1};
+    const auto cut = limiter.judgeStep(previous, {1.0, 1.0, 1.0}, &pad, servoForward(0.3));
+    EXPECT_TRUE(cut.shortened);
+    ASSERT_TRUE(cut.forward.ok());
+    for (double angle : cut.servo_rad) {
+        EXPECT_LE(angle, 0.3);
+        EXPECT_GT(angle, 0.3 - 1e-4) << "the whole known part is sent";
+    }
+    // Known only up to a hair past the angles held: no bisection step of the 0.9 rad is.
+    const auto held = limiter.judgeStep(previous, {1.0, 1.0, 1.0}, &pad, servoForward(0.1 + 1e-9));
+    EXPECT_TRUE(held.shortened);
+    EXPECT_EQ(held.servo_rad, previous);
+    ASSERT_TRUE(held.forward.ok());
+    EXPECT_NEAR(held.forward.pose.position_m.z(), kRetractZ - 0.0005, 1e-15);
+    // Not even the angles held have a pose now: held all the same, reported unknown.
+    const auto unknown = limiter.judgeStep(previous, {1.0, 1.0, 1.0}, &pad, servoForward(0.0));
+    EXPECT_EQ(unknown.servo_rad, previous);
+    EXPECT_FALSE(unknown.forward.ok());
+}
+
+// The finger pushed into the plate: the pose held last tick already breaks the force limit and
+// no part of the (withdrawing) step keeps it. The step goes on whole, towards the pose limit()
+// chose; holding would keep the plate pressing harder.
+TEST(PadSafety, AKnownStepThatNoFractionCanMendGoesOnWhole) {
+    PadSafetySettings settings = loose();
+    settings.max_force_n = 0.2;
+    const PadSafetyLimiter limiter(settings);
+    const msgs::ContactSurface pad = flatPad();
+    // Angles to heights: 3 mm and 2 mm into the pad (1.35 N and 0.9 N on nine 50 N/m patches).
+    const double deep = (kRetractZ - (kPadZ - 0.003)) / 0.005;
+    const double less_deep = (kRetractZ - (kPadZ - 0.002)) / 0.005;
+    const auto sent = limiter.judgeStep({deep, deep, deep}, {less_deep, less_deep, less_deep},
+                                        &pad, servoForward(10.0));
+    EXPECT_FALSE(sent.shortened);
+    EXPECT_EQ(sent.servo_rad, (ServoAngles{less_deep, less_deep, less_deep}));
+    EXPECT_TRUE(sent.forward.ok());
+}
+
 TEST(PadSafety, LimitingAllocatesNothing) {
     PadSafetySettings settings = loose();
     settings.max_force_n = 0.2;
@@ -261,6 +329,8 @@ TEST(PadSafety, LimitingAllocatesNothing) {
     testing::ScopedAllocationCounter counter;
     for (int i = 0; i < 1000; ++i) {
         sum += tick(limiter, (i % 100) / 99.0, &pad, blendTo(kPadZ - 0.002)).gain;
+        sum += limiter.judgeStep({0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}, &pad, servoForward(0.5))
+                   .servo_rad[0];
     }
     EXPECT_EQ(counter.allocations(), 0U);
     EXPECT_GT(sum, 0.0);

@@ -165,43 +165,22 @@ void ThimbleChannel::compute(daemon::DaemonCore& core, std::size_t index,
         limiter_.step(blend(pad_limit_.gain), settings_.period_s);
     // The servo limiter moves each servo on its own, and blend() falls back to blending the
     // angles where a pose has no inverse kinematics: the pose sent need not be the one judged.
-    // Judge it too, and shorten the whole servo step by one factor until it keeps the limits.
-    tactile::ForwardResult sent = kinematics_.forward(limited.servo_rad, sent_dofs_);
-    double force_n = 0.0;
-    if (sent.ok() && pad_limiter_.allows(sent.pose, surface, force_n) != 0) {
-        double low = 0.0;
-        double high = 1.0;
-        bool shortened = false;
-        tactile::ServoAngles shorter = previous_sent;
-        for (int i = 0; i < tactile::PadSafetyLimiter::kBisections; ++i) {
-            const double mid = 0.5 * (low + high);
-            tactile::ServoAngles angles;
-            for (std::size_t k = 0; k < angles.size(); ++k) {
-                angles[k] = previous_sent[k] + mid * (limited.servo_rad[k] - previous_sent[k]);
-            }
-            const tactile::ForwardResult fk = kinematics_.forward(angles, sent_dofs_);
-            if (fk.ok() && pad_limiter_.allows(fk.pose, surface, force_n) == 0) {
-                low = mid;
-                shorter = angles;
-                sent = fk;
-                shortened = true;
-            } else {
-                high = mid;
-            }
-        }
-        // Not even a short step keeps them when the finger itself pushed into the plate: then
-        // the servos go on towards the pose limit() chose, which does.
-        // (`sent` is still the forward kinematics of the full step then.)
-        if (shortened) {
-            limited.servo_rad = shorter;
-            limiter_.holdAt(shorter);
-            pad_limit_.flags |= static_cast<std::uint8_t>(tactile::PadFlag::kServoStep);
-        }
+    // Judge it too: shorten the whole servo step by one factor until it keeps the limits, and
+    // never send angles whose pose cannot be judged.
+    const tactile::PadSafetyLimiter::ServoStep sent = pad_limiter_.judgeStep(
+        previous_sent, limited.servo_rad, surface,
+        [this](const tactile::ServoAngles& angles, tactile::ForwardResult& result) {
+            result = kinematics_.forward(angles, sent_dofs_);
+        });
+    if (sent.shortened) {
+        limited.servo_rad = sent.servo_rad;
+        limiter_.holdAt(sent.servo_rad);
+        pad_limit_.flags |= static_cast<std::uint8_t>(tactile::PadFlag::kServoStep);
     }
     command_.servo_target_rad = limited.servo_rad;
-    if (sent.ok()) {
-        sent_dofs_ = sent.dofs;
-        pad_limit_.pad_force_n = pad_limiter_.commanded(sent.pose, surface);
+    if (sent.forward.ok()) {
+        sent_dofs_ = sent.forward.dofs;
+        pad_limit_.pad_force_n = pad_limiter_.commanded(sent.forward.pose, surface);
     }
 
     fillLinkReport(core.state(), gain, now_ns);

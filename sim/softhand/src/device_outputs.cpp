@@ -206,6 +206,7 @@ TactileOutput::TactileOutput(const HandModel& model, config::Finger finger,
                              const TissueMaterial& material, TactileOutputSettings settings) {
     const BoneInfo& bone = distalBone(model, finger);
     const Simulation& sim = model.simulation;
+    bone_ = static_cast<std::size_t>(&bone - model.bones.data());
     body_ = bone.body;
     nodes_ = {bone.first_node, bone.first_node + bone.node_count};
     const Mat3 finger_rotation_device = rotationFromRpy(finger_from_device.rpy_rad);
@@ -216,8 +217,8 @@ TactileOutput::TactileOutput(const HandModel& model, config::Finger finger,
     bone_from_device_translation_m_ = boneFromFinger() * finger_translation_device;
 
     // Pad radius and length from the rest skin: the largest distance from the bone axis.
-    const Vec3& centre = sim.bodyPosition(body_);
-    const Mat3& rotation = sim.bodyRotation(body_);
+    const Vec3& centre = sim.bodyPosition(bone.body);
+    const Mat3& rotation = sim.bodyRotation(bone.body);
     const double half_length = 0.5 * bone.length_m;
     double radius = 0.0;
     const std::vector<int> skin = skinOf(sim, bone);
@@ -264,17 +265,17 @@ TactileOutput::TactileOutput(const HandModel& model, config::Finger finger,
                                   : material.youngs_modulus_pa / (0.65 * radius);
 }
 
-BonePose TactileOutput::deviceFrame(const Simulation& sim) const {
-    const Mat3& rotation = sim.bodyRotation(body_);
-    return {sim.bodyPosition(body_) + rotation * bone_from_device_translation_m_,
-            rotation * bone_from_device_rotation_};
+BonePose TactileOutput::deviceFrame(const BonePose& finger_bone) const {
+    return {finger_bone.position_m + finger_bone.rotation * bone_from_device_translation_m_,
+            finger_bone.rotation * bone_from_device_rotation_};
 }
 
-void TactileOutput::fill(const Simulation& sim, msgs::ContactSurface& out) const {
+void TactileOutput::fill(const Simulation& sim, const BonePose& finger_bone,
+                         msgs::ContactSurface& out) const {
     out.samples.clear();
-    const Mat3& bone_rotation = sim.bodyRotation(body_);
-    const Vec3& bone_position = sim.bodyPosition(body_);
-    const BonePose device = deviceFrame(sim);
+    const Mat3& bone_rotation = finger_bone.rotation;
+    const Vec3& bone_position = finger_bone.position_m;
+    const BonePose device = deviceFrame(finger_bone);
     const auto nearestSurface = [&sim](const Vec3& p_world) {
         SurfaceQuery nearest;
         nearest.phi_m = std::numeric_limits<double>::infinity();
@@ -291,6 +292,10 @@ void TactileOutput::fill(const Simulation& sim, msgs::ContactSurface& out) const
     std::fill(pressed_.begin(), pressed_.end(), 0);
     Vec3 force = Vec3::Zero();
     Vec3 moment = Vec3::Zero();
+    // Moment arms: the pressed skin's place on the simulated pad, carried to the same place on
+    // the user's (tracked) pad.
+    const Mat3 tracked_from_sim = finger_bone.rotation * sim.bodyRotation(body_).transpose();
+    const Vec3& sim_bone_position = sim.bodyPosition(body_);
     for (const Simulation::ContactForce& contact : sim.contactForces()) {
         if (contact.node >= nodes_.first && contact.node < nodes_.second &&
             on_pad_[static_cast<std::size_t>(contact.node - nodes_.first)] != 0) {
@@ -298,7 +303,9 @@ void TactileOutput::fill(const Simulation& sim, msgs::ContactSurface& out) const
             if (contact.force_n.norm() > kMinPressForceN) {
                 pressed_[static_cast<std::size_t>(contact.node - nodes_.first)] = 1;
             }
-            moment += (sim.nodePosition(contact.node) - device.position_m).cross(contact.force_n);
+            const Vec3 on_user_pad =
+                bone_position + tracked_from_sim * (sim.nodePosition(contact.node) - sim_bone_position);
+            moment += (on_user_pad - device.position_m).cross(contact.force_n);
         }
     }
     const bool pad_pressed = std::find(pressed_.begin(), pressed_.end(), 1) != pressed_.end();

@@ -97,7 +97,8 @@ void SceneSimulation::fill(std::size_t device, msgs::ConstraintSet& out) {
 }
 
 void SceneSimulation::fill(std::size_t device, msgs::ContactSurface& out) const {
-    tactile_.at(device).value().fill(model_.simulation, out);
+    const TactileOutput& output = tactile_.at(device).value();
+    output.fill(model_.simulation, tracking_->trackedPoses().at(output.bone()), out);
 }
 
 const KinestheticOutput* SceneSimulation::kinesthetic(std::size_t device) const {

@@ -129,6 +129,61 @@ class PadSafetyLimiter {
         return found(result, low_pose);
     }
 
+    // The servo step actually sent: the servos are rate-limited each on its own, so the angles
+    // sent leave the line limit() judged, and may have no plate pose at all.
+    struct ServoStep {
+        ServoAngles servo_rad{};
+        ForwardResult forward{};  // of servo_rad; not ok(): no pose known for it
+        bool shortened{false};    // cut back from the step asked, or held where it was
+    };
+
+    // Judges the step from `previous` (the angles sent last tick, themselves judged) to `step`.
+    // `forward(angles, result)` fills the forward kinematics of servo angles (result.ok()
+    // false: none). A step whose pose keeps the limits is sent whole. Otherwise the longest
+    // fraction of it whose pose is known and keeps them, by bisection (kBisections). When no
+    // fraction does:
+    //  - a step whose pose is known goes on whole: the finger itself pushed into the plate, so
+    //    that even the previous angles break a limit now, and the servos move towards the pose
+    //    limit() chose, which keeps them;
+    //  - a step with no known pose is not sent (fail closed: a pose that cannot be judged may
+    //    press anywhere): the servos hold at `previous`.
+    template <class Forward>
+    [[nodiscard]] ServoStep judgeStep(const ServoAngles& previous, const ServoAngles& step,
+                                      const msgs::ContactSurface* surface,
+                                      Forward&& forward) const noexcept {
+        ServoStep result{step, {}, false};
+        forward(step, result.forward);
+        double force_n = 0.0;
+        if (result.forward.ok() && allows(result.forward.pose, surface, force_n) == 0) {
+            return result;
+        }
+        double low = 0.0;
+        double high = 1.0;
+        ForwardResult fraction;
+        for (int i = 0; i < kBisections; ++i) {
+            const double mid = 0.5 * (low + high);
+            ServoAngles angles;
+            for (std::size_t k = 0; k < angles.size(); ++k) {
+                angles[k] = previous[k] + mid * (step[k] - previous[k]);
+            }
+            forward(angles, fraction);
+            if (fraction.ok() && allows(fraction.pose, surface, force_n) == 0) {
+                low = mid;
+                result.servo_rad = angles;
+                result.forward = fraction;
+                result.shortened = true;
+            } else {
+                high = mid;
+            }
+        }
+        if (!result.shortened && !result.forward.ok()) {
+            result.servo_rad = previous;
+            forward(previous, result.forward);
+            result.shortened = true;
+        }
+        return result;
+    }
+
     // Which limits `pose` would break against the reference (PadFlag bits, 0: none); `force_n`
     // gets the pad model's force there.
     [[nodiscard]] std::uint8_t allows(const PlatformPose& pose, const msgs::ContactSurface* surface,

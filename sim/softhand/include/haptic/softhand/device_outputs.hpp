@@ -13,9 +13,10 @@
 // simulated skin with (docs/softhand.md, "Exoskeleton: ConstraintSet").
 //
 // Tactile (thimble on the fingertip): the finger-pad skin nodes, carried rigidly by the
-// distal phalanx (the undeformed pad), in the device base frame D, with their signed distance
-// to the nearest object (negative = penetrating), that object's outward normal in D, and
-// weight = sample area x pad stiffness per area (N/m).
+// user's distal phalanx as tracked (the undeformed pad on the finger the device is strapped
+// to), in the device base frame D, with their signed distance to the nearest object
+// (negative = penetrating), that object's outward normal in D, and weight = sample area x pad
+// stiffness per area (N/m).
 
 #include <optional>
 #include <vector>
@@ -89,10 +90,17 @@ class TactileOutput {
                   TactileOutputSettings settings = {});
 
     [[nodiscard]] int sampleCount() const { return static_cast<int>(samples_.size()); }
-    // Device base frame in the world at the current state.
-    [[nodiscard]] BonePose deviceFrame(const Simulation& sim) const;
-    // Fills everything but the header.
-    void fill(const Simulation& sim, msgs::ContactSurface& out) const;
+    // The distal phalanx the device is worn on (index into HandModel::bones).
+    [[nodiscard]] std::size_t bone() const { return bone_; }
+    // Device base frame in the world for a pose of that phalanx.
+    [[nodiscard]] BonePose deviceFrame(const BonePose& finger_bone) const;
+    // Fills everything but the header. `finger_bone` is the user's distal phalanx as tracked
+    // (ElasticTracking::trackedPoses): the device is strapped to the user's finger, not to the
+    // simulated one, which the objects hold back (docs/algorithms.md §3.2, the bone
+    // kinematically attached to the tracked finger frame F). The samples' depths are where the
+    // virtual object lies against the user's pad; the reference is the sim's contact on its pad,
+    // the coupling force between the tracked and the simulated finger there.
+    void fill(const Simulation& sim, const BonePose& finger_bone, msgs::ContactSurface& out) const;
 
   private:
     struct Sample {
@@ -100,7 +108,8 @@ class TactileOutput {
         double area_m2;
         int node;  // the skin node it was taken from
     };
-    int body_{-1};
+    std::size_t bone_{0};
+    int body_{-1};  // the simulated distal phalanx
     std::pair<int, int> nodes_{};  // [first, end) node ids of the distal phalanx
     // Per node of the distal phalanx (from nodes_.first): 1 for a sampled pad node, the skin
     // the thimble's plate can press on; the reference counts the contacts there only.
