@@ -1,7 +1,8 @@
 // The virtual user's pad under the thimble (UserPad): the plate where the measured servo angles
-// put it, pressing a Hertz sphere. The plate poses come from the thimble's inverse kinematics
-// and the expected indentations from sampling the sphere's surface, so the test shares no
-// formula with the pad's own geometry.
+// put it, pressing the distal phalanx (a sphere at half-length 0, the scene's phalanx
+// otherwise). The plate poses come from the thimble's inverse kinematics and the expected
+// indentations from sampling the pad's surface, so the test shares no formula with the pad's
+// own geometry.
 
 #include "haptic/emu/user_pad.hpp"
 
@@ -9,8 +10,10 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 
 #include "haptic/config/device.hpp"
@@ -56,10 +59,43 @@ tactile::InverseResult plateAt(const config::ThimbleConfig& thimble, double heig
     return kinematics.inverse({height_m, tilt_x_rad, tilt_y_rad}, false);
 }
 
+// The deepest point of the phalanx's surface (a cylinder of `radius` about `axis` over
+// [-half, half] from `centre`, flat at -half, and the round tip at +half) that lies over the
+// plate's disc, past the plate's plane, by sampling the surface: the indentation, the slow way.
+double deepestPhalanxSample(const Eigen::Vector3d& centre, const Eigen::Vector3d& axis, double half,
+                            double radius, const tactile::PlatformPose& plate,
+                            double plate_radius) {
+    const Eigen::Vector3d normal = plate.plateNormal();
+    const Eigen::Vector3d side_u = axis.unitOrthogonal();
+    const Eigen::Vector3d side_v = axis.cross(side_u);
+    double deepest = -std::numeric_limits<double>::infinity();
+    const auto sample = [&](const Eigen::Vector3d& point) {
+        const Eigen::Vector3d offset = point - plate.position_m;
+        if ((offset - offset.dot(normal) * normal).norm() <= plate_radius) {
+            deepest = std::max(deepest, -offset.dot(normal));
+        }
+    };
+    constexpr int kAround = 720;
+    constexpr int kAlong = 4000;
+    for (int i = 0; i < kAround; ++i) {
+        const double angle = 2.0 * std::numbers::pi * i / kAround;
+        const Eigen::Vector3d radial = std::cos(angle) * side_u + std::sin(angle) * side_v;
+        for (int j = 0; j <= kAlong; ++j) {
+            sample(centre + (-half + 2.0 * half * j / kAlong) * axis + radius * radial);
+        }
+        for (int j = 0; j <= kAround / 4; ++j) {  // the tip's hemisphere
+            const double polar = 0.5 * std::numbers::pi * j / (kAround / 4);
+            sample(centre + half * axis +
+                   radius * (std::cos(polar) * axis + std::sin(polar) * radial));
+        }
+    }
+    return deepest;
+}
+
 TEST(UserPad, ALevelPlateIndentsThePadByItsHeightPastFirstContact) {
     const auto thimble = shippedThimble();
     const auto pad = shippedPad();
-    UserPad user_pad(thimble, pad);
+    UserPad user_pad(thimble, pad, 0.0);
     // The pad's outermost point: the phalanx's centre 12 mm from the device origin
     // (T_finger_device) plus the fingertip's 8 mm radius.
     const double first_contact = user_pad.firstContactHeightM();
@@ -85,7 +121,7 @@ TEST(UserPad, ALevelPlateIndentsThePadByItsHeightPastFirstContact) {
 TEST(UserPad, ATiltedPlateIndentsAsDeepAsTheSphereReachesPastIt) {
     const auto thimble = shippedThimble();
     const auto pad = shippedPad();
-    UserPad user_pad(thimble, pad);
+    UserPad user_pad(thimble, pad, 0.0);
     const double first_contact = user_pad.firstContactHeightM();
     const Eigen::Vector3d centre(0.0, 0.0, 0.012);  // -T_finger_device's translation
     int pressed = 0;
@@ -127,14 +163,14 @@ TEST(UserPad, AnOffAxisTurnedMountMovesThePadWhereTheTransformPutsIt) {
     mount.translation_m = {0.0015, -0.001, -0.0125};
     mount.rpy_rad = {0.05, -0.04, 0.6};
     const auto pad = shippedPad();
-    UserPad user_pad(thimble, pad);
+    UserPad user_pad(thimble, pad, 0.0);
     const Eigen::Matrix3d rotation = (Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ()) *
                                       Eigen::AngleAxisd(-0.04, Eigen::Vector3d::UnitY()) *
                                       Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitX()))
                                          .toRotationMatrix();
     const Eigen::Vector3d t(0.0015, -0.001, -0.0125);
     // The finger's origin maps from the device point c: R c + t = 0.
-    const Eigen::Vector3d& c = user_pad.sphereCentreDeviceM();
+    const Eigen::Vector3d& c = user_pad.centreDeviceM();
     EXPECT_NEAR((rotation * c + t).norm(), 0.0, 1e-15);
     // A transposed rotation would put it elsewhere: the test can tell the two apart.
     EXPECT_GT((rotation.transpose() * c + t).norm(), 1e-4);
@@ -153,7 +189,7 @@ TEST(UserPad, AnOffAxisTurnedMountMovesThePadWhereTheTransformPutsIt) {
 
 TEST(UserPad, TheRetractedPlateAndAPlateBesideThePadFeelNothing) {
     const auto thimble = shippedThimble();
-    UserPad user_pad(thimble, shippedPad());
+    UserPad user_pad(thimble, shippedPad(), 0.0);
     const tactile::ThimbleKinematics kinematics(thimble);
     const auto retracted = kinematics.inverse(kinematics.retractPose(), false);
     ASSERT_TRUE(retracted.ok());
@@ -165,7 +201,7 @@ TEST(UserPad, TheRetractedPlateAndAPlateBesideThePadFeelNothing) {
     // A small plate tilted far enough that the point under the sphere's centre is past its rim.
     config::ThimbleConfig small_plate = thimble;
     small_plate.plate_radius_m = 0.002;
-    UserPad beside(small_plate, shippedPad());
+    UserPad beside(small_plate, shippedPad(), 0.0);
     const auto tilted = plateAt(small_plate, beside.firstContactHeightM() - 0.001, 0.35, 0.0);
     ASSERT_TRUE(tilted.ok());
     const FeltPadContact rim = beside.feel(tilted.servo_rad);
@@ -176,7 +212,7 @@ TEST(UserPad, TheRetractedPlateAndAPlateBesideThePadFeelNothing) {
 
 TEST(UserPad, AnglesWithNoPoseFeelNothingAndTheNextPoseIsFoundAgain) {
     const auto thimble = shippedThimble();
-    UserPad user_pad(thimble, shippedPad());
+    UserPad user_pad(thimble, shippedPad(), 0.0);
     const double nan = std::numeric_limits<double>::quiet_NaN();
     const FeltPadContact none = user_pad.feel({nan, 0.9, 0.9});
     EXPECT_FALSE(none.pose_known);
@@ -186,6 +222,86 @@ TEST(UserPad, AnglesWithNoPoseFeelNothingAndTheNextPoseIsFoundAgain) {
     const FeltPadContact felt = user_pad.feel(plate.servo_rad);
     EXPECT_TRUE(felt.pose_known);
     EXPECT_NEAR(felt.indentation_m, 0.001, 1e-9);
+}
+
+// The scene's phalanx (half-length 11.5 mm, longer than the 8 mm plate's radius): a level
+// plate meets its side along the disc, as deep as the sphere's and pressing at the middle;
+// pitched, the plate meets it nearer one end, as deep as its surface reaches over the disc.
+TEST(UserPad, ThePhalanxIsPressedAsDeepAsItsSurfaceReachesOverThePlate) {
+    const auto thimble = shippedThimble();
+    const auto pad = shippedPad();
+    constexpr double kHalf = 0.0115;
+    UserPad user_pad(thimble, pad, kHalf);
+    const Eigen::Vector3d centre(0.0, 0.0, 0.012);  // -T_finger_device's translation
+    ASSERT_TRUE(user_pad.centreDeviceM().isApprox(centre, 1e-15));
+    ASSERT_TRUE(user_pad.axisDevice().isApprox(Eigen::Vector3d::UnitX(), 1e-15));
+    const double first_contact = user_pad.firstContactHeightM();
+    EXPECT_NEAR(first_contact, 0.020, 1e-12);
+    {
+        const auto plate = plateAt(thimble, first_contact - 0.001, 0.0, 0.0);
+        ASSERT_TRUE(plate.ok());
+        const FeltPadContact felt = user_pad.feel(plate.servo_rad);
+        EXPECT_NEAR(felt.indentation_m, 0.001, 1e-9);
+        EXPECT_NEAR(felt.force_device_n.z(), -user_pad.forceAt(0.001), 1e-9);
+        EXPECT_NEAR(felt.point_device_m.head<2>().norm(), 0.0, 1e-9) << "the line's middle";
+    }
+    int pressed = 0;
+    double largest_gain_m = 0.0;  // over the sphere at the centre
+    double worst_excess_m = 0.0;
+    double worst_shortfall_m = 0.0;
+    for (const double pitch_deg : {-12.0, -5.0, 3.0, 8.0, 15.0}) {
+        for (const double roll_deg : {0.0, 6.0}) {
+            for (const double depth : {0.0003, 0.0015}) {
+                const double pitch = pitch_deg * std::numbers::pi / 180.0;
+                const double roll = roll_deg * std::numbers::pi / 180.0;
+                const auto plate = plateAt(thimble, first_contact - depth, roll, pitch);
+                ASSERT_TRUE(plate.ok()) << pitch_deg << " " << roll_deg;
+                const FeltPadContact felt = user_pad.feel(plate.servo_rad);
+                ASSERT_TRUE(felt.pose_known);
+                const double expected = std::max(
+                    0.0, deepestPhalanxSample(centre, Eigen::Vector3d::UnitX(), kHalf, pad.radius_m,
+                                              plate.pose, thimble.plate_radius_m));
+                // The model takes the side's line nearest the plate; over the disc's curved rim
+                // a point beside that line can reach a little further (measured up to 2.9 um
+                // here). The grid's spacing along the axis (5.75 um) lets the sampled surface
+                // fall short of the rim by up to 5.75 um x sin(tilt), 1.5 um.
+                EXPECT_NEAR(felt.indentation_m, expected, 4e-6)
+                    << pitch_deg << " " << roll_deg << " " << depth;
+                worst_excess_m = std::max(worst_excess_m, felt.indentation_m - expected);
+                worst_shortfall_m = std::max(worst_shortfall_m, expected - felt.indentation_m);
+                EXPECT_NEAR(felt.force_device_n.norm(), user_pad.forceAt(felt.indentation_m),
+                            1e-12);
+                if (felt.indentation_m > 0.0) {
+                    ++pressed;
+                    EXPECT_NEAR(felt.force_device_n.normalized().dot(plate.pose.plateNormal()), 1.0,
+                                1e-12);
+                    EXPECT_NEAR(
+                        (felt.point_device_m - plate.pose.position_m).dot(plate.pose.plateNormal()),
+                        0.0, 1e-12);
+                    EXPECT_LE((felt.point_device_m - plate.pose.position_m).norm(),
+                              thimble.plate_radius_m + 1e-12);
+                    EXPECT_TRUE(felt.moment_device_nm.isApprox(
+                        felt.point_device_m.cross(felt.force_device_n), 1e-12));
+                }
+                largest_gain_m = std::max(
+                    largest_gain_m,
+                    felt.indentation_m -
+                        std::max(0.0, deepestSphereSample(centre, pad.radius_m, plate.pose)));
+            }
+        }
+    }
+    std::printf("against the sampled surface: up to %.2f um deeper, %.2f um shallower\n",
+                worst_excess_m * 1e6, worst_shortfall_m * 1e6);
+    EXPECT_LE(worst_excess_m, 1.5e-6) << "deeper than the surface reaches";
+    EXPECT_GE(pressed, 16);
+    // A pitched plate reaches the phalanx's length: up to 1 mm deeper than a sphere's.
+    std::printf("the phalanx pressed up to %.3f mm deeper than a sphere at its centre\n",
+                largest_gain_m * 1e3);
+    EXPECT_GT(largest_gain_m, 0.0005);
+}
+
+TEST(UserPad, ANegativeHalfLengthIsRefused) {
+    EXPECT_THROW(UserPad(shippedThimble(), shippedPad(), -0.001), std::invalid_argument);
 }
 
 }  // namespace

@@ -282,8 +282,8 @@ TEST_F(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitch
         pressing, pressed_ticks,
         100.0 * static_cast<double>(pressing) / static_cast<double>(pressed_ticks));
     EXPECT_GT(static_cast<double>(pressing), 0.9 * static_cast<double>(pressed_ticks));
-    // And it presses: the force its pad model gives the plate commanded (the finger's own
-    // pad is not measured). Far below the reference on average (#21: the stand-in pad).
+    // And it presses: the force its pad model gives the plate commanded (hapticd's model, a
+    // linear pad; what the user's own pad feels is below).
     std::printf(
         "thimble: pad model force above 0.01 N on %.1f %% of those ticks, mean %.3f N against "
         "a mean reference of %.3f N\n",
@@ -298,10 +298,12 @@ TEST_F(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitch
         << first_raised_s << " s of the recording";
 
     // What the user's pad felt: the plate on it while the sim's pad is pressed, off it while
-    // the sim's pad is free. Touching, not the force level: the plate renders the object's
-    // surface relative to the simulated bone, and the user's pad (a Hertz sphere of the FEM's
-    // material) feels a few hundredths of the sim's 0.3 N there (docs/benchmarks.md, "Closed
-    // loop", thimble row).
+    // the sim's pad is free, and a force of the reference's order: the plate renders the
+    // object's surface where it lies against the user's (tracked) finger, and the user's pad
+    // (the phalanx under Hertz's law, the FEM's material) feels about two thirds of the sim's
+    // force there (demo, 2026-11-28: 0.198 N against 0.319 N; 0.2075 N against 0.321 N here).
+    // It felt 0.005 N while the plate took the object's surface from the simulated finger,
+    // which the object holds back (docs/benchmarks.md, "Closed loop", thimble row).
     const ctl::DeviceColumns& felt_thimble = felt_devices.at(1);
     std::size_t felt_pressed = 0, felt_free = 0, felt_unknown = 0;
     double largest_free_felt = 0.0, sum_felt = 0.0;
@@ -328,7 +330,8 @@ TEST_F(ClosedLoop, TheLoopClosesWithForceOnlyInContactNoClampAndLiveMethodSwitch
         100.0 * static_cast<double>(felt_pressed) / static_cast<double>(pressed_ticks),
         sum_felt / static_cast<double>(pressed_ticks));
     EXPECT_LT(felt_unknown, servo.size() / 100) << "the felt log does not cover the recording";
-    EXPECT_GT(static_cast<double>(felt_pressed), 0.5 * static_cast<double>(pressed_ticks));
+    EXPECT_GT(static_cast<double>(felt_pressed), 0.7 * static_cast<double>(pressed_ticks));
+    EXPECT_GT(sum_felt, 0.4 * sum_reference) << "the user's pad feels too little of the contact";
     EXPECT_GT(felt_free, 1000U);
 
     // The exoskeleton holds the user's finger back: the script's intent takes the pad 3 mm

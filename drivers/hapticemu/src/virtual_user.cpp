@@ -97,6 +97,17 @@ VirtualUser::VirtualUser(const config::VirtualUserConfig& config, std::string_vi
 
 VirtualUser::~VirtualUser() = default;
 
+double VirtualUser::distalPhalanxLengthM(config::Finger finger) const {
+    for (const softhand::BoneInfo& bone : model_->bones) {
+        if (bone.finger == finger && bone.segment == softhand::Segment::kDistal) {
+            return bone.length_m;
+        }
+    }
+    throw std::invalid_argument("virtual user: scene '" + scene_.name + "' does not simulate the " +
+                                std::string(config::toString(finger)) +
+                                " finger's distal phalanx, where its thimble sits");
+}
+
 softhand::HandPoseInput VirtualUser::intent(double t_s) const {
     const bool loop = scene_.tracking.loop;
     return std::visit(
@@ -122,7 +133,8 @@ void VirtualUser::wear(const config::DeviceConfig& device, DeviceEmulator& emula
         // A thimble moves no joint of the hand: it indents the pad.
         const ThimbleModel* thimble = emulator.thimbleModel();
         if (thimble != nullptr) {
-            thimbles_.push_back({thimble, UserPad(device.thimble(), pad_)});
+            thimbles_.push_back(
+                {thimble, UserPad(device.thimble(), pad_, 0.5 * distalPhalanxLengthM(finger))});
             worn_.push_back({finger, static_cast<int>(thimbles_.size()) - 1});
             felt_.push_back({device.name, 0.0, FeltPadContact{}});
         }

@@ -1,16 +1,23 @@
 #pragma once
 
 // The virtual user's finger pad under a thimble (docs/drivers.md, "Virtual user"): what the
-// user feels from where the plate is. The pad is a Hertz sphere of radius R about the distal
-// phalanx's centre (the finger frame's origin; the device sits on the finger by the thimble
-// file's T_finger_device, as in handsim, so the user's pad is where the simulated one is);
-// the plate is the flat disc of the platform pose the measured servo angles give (forward
-// kinematics). The file's contact_height_m is hapticd's belief about where the pad begins,
-// a calibration; the user's pad does not read it. Indented by delta along the plate normal,
-// the pad feels F = 4/3 E* sqrt(R) delta^(3/2), normal to the plate, at the point of the plate
-// nearest the sphere's centre. The plate's rim is not modelled: a sphere whose nearest plate
-// point lies outside the disc feels nothing. Friction is not modelled either (the plate does
-// not slide on the pad in the thimble's motion: it presses and tilts).
+// user feels from where the plate is. The pad is the user's distal phalanx as the scene's hand
+// shapes it (the skin the virtual user measures its finger's penetration with): radius R about
+// the phalanx's axis from its flat proximal end to the centre of its round tip, `half_length`
+// either side of the phalanx's centre (the finger frame's origin; the device sits on the finger
+// by the thimble file's T_finger_device, as in handsim, so the user's pad is where the
+// simulated one is). Half-length 0 is a sphere about the centre. The plate is the flat disc of
+// the platform pose the measured servo angles give (forward kinematics). The file's
+// contact_height_m is hapticd's belief about where the pad begins, a calibration; the user's
+// pad does not read it.
+//
+// The indentation delta is how far the deepest point of the pad's surface that lies over the
+// plate's disc reaches past the plate's plane: on the side of the phalanx facing the plate
+// along its length, or on its round tip. The pad feels Hertz's sphere law at that point,
+// F = 4/3 E* sqrt(R) delta^(3/2), normal to the plate, at the plate point under it: exact on
+// the tip, an approximation along the side (a cylinder's line contact is stiffer; a
+// pitched plate, the usual case, meets the phalanx near one end). Friction is not modelled
+// (the plate does not slide on the pad in the thimble's motion: it presses and tilts).
 //
 // This is the user's pad, independent of the tactile optimiser's model (an exponential pad
 // law over the contact surface's samples): the felt force judges the rendering.
@@ -38,7 +45,9 @@ struct FeltPadContact {
 
 class UserPad {
   public:
-    UserPad(const config::ThimbleConfig& thimble, const config::UserPadConfig& pad);
+    // `half_length_m`: half the distal phalanx's length (HandModel's BoneInfo::length_m / 2).
+    UserPad(const config::ThimbleConfig& thimble, const config::UserPadConfig& pad,
+            double half_length_m);
     ~UserPad();
     UserPad(UserPad&&) noexcept;
     UserPad& operator=(UserPad&&) noexcept;
@@ -49,8 +58,12 @@ class UserPad {
 
     // Hertz's law alone: the force at an indentation (0 for delta <= 0).
     [[nodiscard]] double forceAt(double indentation_m) const noexcept;
-    [[nodiscard]] const Eigen::Vector3d& sphereCentreDeviceM() const noexcept { return centre_; }
-    // The height at which a level plate first touches the pad (device z of its outermost point).
+    // The phalanx's centre (the finger frame's origin) in the device frame.
+    [[nodiscard]] const Eigen::Vector3d& centreDeviceM() const noexcept { return centre_; }
+    // Its axis in the device frame, from the flat proximal end to the tip's centre (unit).
+    [[nodiscard]] const Eigen::Vector3d& axisDevice() const noexcept { return axis_; }
+    // The height at which a level plate first touches the pad under its centre (device z of the
+    // pad's surface there; the axis level, as the shipped mount has it).
     [[nodiscard]] double firstContactHeightM() const noexcept {
         return centre_.z() + pad_.radius_m;
     }
@@ -60,6 +73,8 @@ class UserPad {
     config::UserPadConfig pad_;
     double plate_radius_m_{0.0};
     Eigen::Vector3d centre_{Eigen::Vector3d::Zero()};
+    Eigen::Vector3d axis_{Eigen::Vector3d::UnitX()};
+    double half_length_m_{0.0};
     std::array<double, 3> last_dofs_{};  // height, tilt_x, tilt_y of the last pose found
     bool have_last_{false};
 };

@@ -79,6 +79,8 @@ class VirtualUser {
     [[nodiscard]] std::uint64_t samplesPublished() const noexcept { return seq_; }
 
   private:
+    // The scene hand's distal phalanx of the finger (throws std::invalid_argument without one).
+    [[nodiscard]] double distalPhalanxLengthM(config::Finger finger) const;
     struct WornExoskeleton {
         config::Finger finger;
         ExoskeletonModel* model;
