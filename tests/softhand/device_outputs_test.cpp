@@ -354,7 +354,8 @@ TEST_F(TactileOutputTest, WhereTheSkinPressesBeforeTheRigidPadTheSampleTakesTheS
             << s.signed_distance_m << " is neither the rigid point's nor a pressed skin node's";
         // The table's normal, world +z, seen in the device frame (the step tilted the bone a
         // little).
-        const Vec3 up = output.deviceFrame(simulatedBone(model)).rotation.transpose() * Vec3::UnitZ();
+        const Vec3 up =
+            output.deviceFrame(simulatedBone(model)).rotation.transpose() * Vec3::UnitZ();
         for (int i = 0; i < 3; ++i) {
             EXPECT_NEAR(s.normal_device[static_cast<std::size_t>(i)], up[i], 1e-12);
         }
@@ -460,8 +461,8 @@ TEST_F(TactileOutputTest, TheSamplesLieOnTheTrackedFingerNotOnTheSimulatedOne) {
     EXPECT_NEAR(deepest_tracked, deepest_rigid, 1e-12);
     EXPECT_LE(deepest_tracked, deepest_simulated - kDeeper + 1e-9);
     for (std::size_t k = 0; k < 3; ++k) {
-        EXPECT_NEAR(on_tracked.reference_force_device_n[k], on_simulated.reference_force_device_n[k],
-                    1e-12);
+        EXPECT_NEAR(on_tracked.reference_force_device_n[k],
+                    on_simulated.reference_force_device_n[k], 1e-12);
         EXPECT_NEAR(on_tracked.reference_moment_device_nm[k],
                     on_simulated.reference_moment_device_nm[k], 1e-12);
     }

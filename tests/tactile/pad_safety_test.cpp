@@ -310,8 +310,8 @@ TEST(PadSafety, AKnownStepThatNoFractionCanMendGoesOnWhole) {
     // Angles to heights: 3 mm and 2 mm into the pad (1.35 N and 0.9 N on nine 50 N/m patches).
     const double deep = (kRetractZ - (kPadZ - 0.003)) / 0.005;
     const double less_deep = (kRetractZ - (kPadZ - 0.002)) / 0.005;
-    const auto sent = limiter.judgeStep({deep, deep, deep}, {less_deep, less_deep, less_deep},
-                                        &pad, servoForward(10.0));
+    const auto sent = limiter.judgeStep({deep, deep, deep}, {less_deep, less_deep, less_deep}, &pad,
+                                        servoForward(10.0));
     EXPECT_FALSE(sent.shortened);
     EXPECT_EQ(sent.servo_rad, (ServoAngles{less_deep, less_deep, less_deep}));
     EXPECT_TRUE(sent.forward.ok());

@@ -304,7 +304,8 @@ void TactileOutput::fill(const Simulation& sim, const BonePose& finger_bone,
                 pressed_[static_cast<std::size_t>(contact.node - nodes_.first)] = 1;
             }
             const Vec3 on_user_pad =
-                bone_position + tracked_from_sim * (sim.nodePosition(contact.node) - sim_bone_position);
+                bone_position +
+                tracked_from_sim * (sim.nodePosition(contact.node) - sim_bone_position);
             moment += (on_user_pad - device.position_m).cross(contact.force_n);
         }
     }

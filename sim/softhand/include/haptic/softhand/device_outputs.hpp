@@ -109,7 +109,7 @@ class TactileOutput {
         int node;  // the skin node it was taken from
     };
     std::size_t bone_{0};
-    int body_{-1};  // the simulated distal phalanx
+    int body_{-1};                 // the simulated distal phalanx
     std::pair<int, int> nodes_{};  // [first, end) node ids of the distal phalanx
     // Per node of the distal phalanx (from nodes_.first): 1 for a sampled pad node, the skin
     // the thimble's plate can press on; the reference counts the contacts there only.
