@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -121,6 +122,46 @@ TEST(ExoskeletonSafetyKeys, AForceDrivingTheRodFasterThanMaxVelocityFades) {
     EXPECT_GT(slow_pushing, 50) << "the force returns when the rod slows down";
     std::printf("fast ticks: %d driving (faded), %d resisting (kept)\n", driving_fast,
                 resisting_fast);
+}
+
+// The same fade while the method changes every 150 ticks, so every tick lies inside a
+// switch's bumpless window (200 ticks): the window bounds how fast the strategy's force may
+// move, never the fade. (It was applied after the fade and held a faded force up, letting it
+// fall by the 0.5 N rate limit per tick.)
+TEST(ExoskeletonSafetyKeys, AMethodSwitchNeverHoldsUpTheVelocityFade) {
+    const double limit = 0.004;
+    auto rig = exoRig(15000.0, limit);
+    rig->offerContact();
+    rig->ticks(20);
+    ASSERT_TRUE(rig->command(msgs::CommandKind::kEnable));
+    const std::array<const char*, 6> methods{"standard", "naive",       "nullspace",
+                                             "subspace", "anisotropic", "linearized_subspace"};
+    int driving_fast = 0;
+    int slow_pushing = 0;
+    for (int i = 0; i < 3000; ++i) {
+        if (i % 150 == 0) {
+            ASSERT_TRUE(rig->command(msgs::CommandKind::kSetMethod, methods[(i / 150) % 6]));
+        }
+        if (i % 10 == 0) {
+            placeWall(*rig, 0.03);
+        }
+        rig->tick();
+        const auto& channel = exoChannel(*rig);
+        if (i < 200 || !channel.renderOutput().in_contact) {
+            continue;
+        }
+        const double rendered_n = channel.renderOutput().actuator_force[0];
+        const double velocity = channel.rodVelocity();
+        if (std::abs(velocity) > 2.0 * limit && rendered_n * velocity > 0.0) {
+            ++driving_fast;
+            EXPECT_EQ(rig->exoForce(), 0.0) << "tick " << i << ", rod at " << velocity << " m/s";
+        } else if (std::abs(velocity) < 0.5 * limit && std::abs(rig->exoForce()) > 0.1) {
+            ++slow_pushing;
+        }
+    }
+    EXPECT_EQ(rig->core.state(), msgs::DaemonState::kRendering);
+    EXPECT_GT(driving_fast, 20);
+    EXPECT_GT(slow_pushing, 50) << "the force returns when the rod slows down";
 }
 
 struct ForceRun {

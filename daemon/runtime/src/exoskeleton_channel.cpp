@@ -209,6 +209,15 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
         if (estimator_) {
             desired_n += probeForce();
         }
+        // A method switch is bumpless: the new strategy's force moves from the force last sent
+        // by at most the rate limit per tick. On the strategy's output only, before the safety
+        // limits below: a render fault (its force 0) and the velocity fade cut the force at
+        // once, switch or not.
+        if (transition_ticks_left_ > 0 && out_.fault == kinesthetic::RenderFault::kNone &&
+            !heldSafe() && core.outputGain(index) >= 1.0) {
+            desired_n = std::clamp(desired_n, command_.force_n - max_force_step_n_,
+                                   command_.force_n + max_force_step_n_);
+        }
         std::uint8_t limits = kinesthetic::kPortOk;
         if (renderer_.parameters().tracking_stiffness < tracking_stiffness_) {
             limits |= kinesthetic::kPortStiffnessLimited;
@@ -231,10 +240,6 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
     const double gain = heldSafe() ? 0.0 : core.outputGain(index);
     if (transition_ticks_left_ > 0) {
         --transition_ticks_left_;
-        if (gain >= 1.0) {
-            desired_n = std::clamp(desired_n, command_.force_n - max_force_step_n_,
-                                   command_.force_n + max_force_step_n_);
-        }
     }
     const kinesthetic::PortCommand port = guard_.apply(desired_n, stroke_m_, state_fresh, gain);
     const double force_n = port.force_n;

@@ -30,7 +30,9 @@
 // A method switch (allowed while RENDERING) is bumpless: for kMethodTransitionTicks after it,
 // the new strategy's force may move from the force last sent by at most the rate limit per
 // tick in either direction. (Otherwise the guard lets a force drop to zero at once, the safe
-// direction; a switch must not make the finger feel a step either way.)
+// direction; a switch must not make the finger feel a step either way.) That bound holds the
+// strategy's output only: the safety limits after it (the velocity fade, a render fault's
+// zero force, the guard's own fades and the output gain) still cut the force at once.
 
 #include <cstdint>
 #include <limits>
