@@ -22,33 +22,6 @@ namespace {
 
 using ::testing::HasSubstr;
 
-// Enables rendering and runs until the exoskeleton's force has ramped up (100 ms fade-in).
-void renderWithContact(RuntimeRig& rig) {
-    rig.offerContact();
-    rig.ticks(20);  // devices heard, state fresh
-    ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
-    for (int i = 0; i < 300; ++i) {
-        if (i % 10 == 0) {
-            rig.offerContact();  // a 100 Hz sim
-        }
-        rig.tick();
-    }
-    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
-}
-
-double distance(const std::array<double, 3>& a, const tactile::ServoAngles& b) {
-    double sum = 0.0;
-    for (std::size_t i = 0; i < 3; ++i) {
-        sum += (a[i] - b[i]) * (a[i] - b[i]);
-    }
-    return std::sqrt(sum);
-}
-
-const tactile::ServoAngles& retract(RuntimeRig& rig) {
-    return static_cast<runtime::ThimbleChannel&>(rig.runtime.channel(kThimble))
-        .retractServoAngles();
-}
-
 TEST(DeviceRuntime, DevicesComeOnlineAndRenderContactWhileRendering) {
     RuntimeRig rig;
     rig.offerContact();

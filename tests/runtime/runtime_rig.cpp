@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
+#include "haptic/runtime/thimble_channel.hpp"
+
 namespace haptic::testing {
 namespace {
 
@@ -132,6 +136,32 @@ bool RuntimeRig::command(msgs::CommandKind kind, const char* argument) {
 void RuntimeRig::emulatorFault(std::size_t device, const char* line) {
     std::string error;
     ASSERT_TRUE(emulators[device]->faults().command(line, error)) << error;
+}
+
+void renderWithContact(RuntimeRig& rig) {
+    rig.offerContact();
+    rig.ticks(20);  // devices heard, state fresh
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
+    for (int i = 0; i < 300; ++i) {
+        if (i % 10 == 0) {
+            rig.offerContact();  // a 100 Hz sim
+        }
+        rig.tick();
+    }
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
+}
+
+double distance(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < 3; ++i) {
+        sum += (a[i] - b[i]) * (a[i] - b[i]);
+    }
+    return std::sqrt(sum);
+}
+
+const std::array<double, 3>& retract(RuntimeRig& rig) {
+    return static_cast<runtime::ThimbleChannel&>(rig.runtime.channel(kThimble))
+        .retractServoAngles();
 }
 
 double RuntimeRig::exoForce() const {

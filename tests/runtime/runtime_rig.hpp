@@ -5,6 +5,7 @@
 // both shipped devices on the other end. Time is synthetic (1 ms per tick), so tests are
 // exact and fast.
 
+#include <array>
 #include <functional>
 #include <memory>
 #include <string>
@@ -69,5 +70,13 @@ class RuntimeRig {
     std::int64_t now{1'000 * kMs};
     std::uint64_t tick_count{0};
 };
+
+// Enables rendering and runs until the exoskeleton's force has ramped up (100 ms fade-in),
+// contact offered at 100 Hz.
+void renderWithContact(RuntimeRig& rig);
+// Euclidean distance between two sets of servo angles.
+[[nodiscard]] double distance(const std::array<double, 3>& a, const std::array<double, 3>& b);
+// The thimble channel's retract angles.
+[[nodiscard]] const std::array<double, 3>& retract(RuntimeRig& rig);
 
 }  // namespace haptic::testing
