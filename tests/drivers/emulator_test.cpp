@@ -158,8 +158,14 @@ TEST(FaultInjector, ParsesCommandsAndExplainsBadOnes) {
     EXPECT_FALSE(faults.takeFaultChange());
     EXPECT_TRUE(faults.command("busoff", error));
     EXPECT_TRUE(faults.busOff());
+    EXPECT_TRUE(faults.command("state stop", error));
+    EXPECT_TRUE(faults.stateStopped());
+    EXPECT_TRUE(faults.command("state start", error));
+    EXPECT_FALSE(faults.stateStopped());
+    EXPECT_TRUE(faults.command("state stop", error));
     EXPECT_TRUE(faults.command("clear", error));
     EXPECT_FALSE(faults.heartbeatStopped());
+    EXPECT_FALSE(faults.stateStopped());
     EXPECT_FALSE(faults.busOff());
     EXPECT_EQ(faults.deviceFault(), 0);
     EXPECT_FALSE(faults.command("drop many", error));

@@ -152,6 +152,11 @@ void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noe
     if (first_supervise_ns_ == 0) {
         first_supervise_ns_ = now_ns;
     }
+    if (linkStateFresh()) {
+        last_fresh_ns_ = now_ns;
+    }
+    state_lost_ = now_ns - (last_fresh_ns_ > 0 ? last_fresh_ns_ : first_supervise_ns_) >
+                  heartbeat_timeout_ns_;
     std::uint32_t active = link_bits_ & kLatchingFaults;
     // A command timeout the device reports within heartbeat_timeout_ms of this daemon's first
     // command is the silence of the host before it (a crashed or stopped hapticd): the device

@@ -95,6 +95,12 @@ void DeviceRuntime::compute(daemon::DaemonCore& core, std::int64_t now_ns) noexc
     }
     for (std::size_t i = 0; i < channels_.size(); ++i) {
         channels_[i]->supervise(core, now_ns);
+        // A device lost while RENDERING (its state stale past its heartbeat timeout, or never
+        // heard since the enable) renders again only after an operator's `enable`: force
+        // must not come back by itself after an outage of any length.
+        if (channels_[i]->stateLost()) {
+            core.requireEnable(i);
+        }
     }
     for (std::size_t i = 0; i < channels_.size(); ++i) {
         channels_[i]->compute(core, i, now_ns);

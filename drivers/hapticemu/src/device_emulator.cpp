@@ -66,7 +66,7 @@ void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
         }
         // State once per model tick, as the device does: tick() also runs whenever a frame
         // wakes the emulator's loop, which must not multiply the state rate.
-        if (stepped) {
+        if (stepped && !faults_.stateStopped()) {
             sendState(now_ns);
         }
     }

@@ -112,6 +112,8 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
         corrupt_next_ = number;
     } else if (verb == "heartbeat" && (argument == "stop" || argument == "start")) {
         heartbeat_stopped_ = argument == "stop";
+    } else if (verb == "state" && (argument == "stop" || argument == "start")) {
+        state_stopped_ = argument == "stop";
     } else if (verb == "busoff" && argument.empty()) {
         bus_off_ = true;
         pending_bus_report_ = true;
@@ -137,6 +139,7 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
         delay_ns_ = 0;
         corrupt_next_ = 0;
         heartbeat_stopped_ = false;
+        state_stopped_ = false;
         stuck_enable_ = false;
         stuck_servo_ = 0;
         echo_offset_ = 0;
@@ -151,7 +154,8 @@ bool FaultInjector::command(std::string_view line, std::string& error) {
         }
     } else {
         error = "unknown fault command '" + std::string(line) +
-                "' (drop N, drop-every N, delay MS, corrupt N, heartbeat stop|start, busoff, "
+                "' (drop N, drop-every N, delay MS, corrupt N, heartbeat stop|start, state "
+                "stop|start, busoff, "
                 "recover, fault CODE, reboot, stuck-enable on|off, force-percent P, servo-stuck N, "
                 "echo-offset N, "
                 "clear)";

@@ -182,6 +182,14 @@ class DaemonCore {
     [[nodiscard]] bool awaitingEnable(std::size_t device) const noexcept {
         return devices_[device].awaiting_enable;
     }
+    // The device itself was lost while RENDERING (its state stale longer than its heartbeat
+    // timeout, or never heard): like a long sim outage, its force returns only after an
+    // operator's `enable`. No effect outside RENDERING.
+    void requireEnable(std::size_t device) noexcept {
+        if (machine_.rendering()) {
+            devices_[device].awaiting_enable = true;
+        }
+    }
 
   private:
     // The offsets (arrival minus stamp) of the first messages since the sim's clock was

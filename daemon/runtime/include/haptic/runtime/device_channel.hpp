@@ -94,6 +94,10 @@ class DeviceChannel {
     [[nodiscard]] std::uint32_t latchedFaults() const noexcept { return latched_; }
     // Whether the device must send no force (thimble: retract), whatever the daemon state.
     [[nodiscard]] bool heldSafe() const noexcept;
+    // Whether, at the last supervise(), the device's state had not been fresh for longer than
+    // its can.heartbeat_timeout_ms (counted from the first supervise() if it never was): a
+    // device lost, not a late frame.
+    [[nodiscard]] bool stateLost() const noexcept { return state_lost_; }
 
   protected:
     DeviceChannel(const config::DeviceConfig& device, can::CanBus& bus,
@@ -131,6 +135,8 @@ class DeviceChannel {
     int heartbeat_timeout_ms_;
     std::int64_t heartbeat_timeout_ns_;
     std::int64_t first_supervise_ns_{0};
+    std::int64_t last_fresh_ns_{0};  // the last supervise() whose link state was fresh
+    bool state_lost_{false};
     std::uint32_t link_bits_{devices::kNoHeartbeatYet};
     std::uint32_t latched_{0};
     int failed_transmits_{0};

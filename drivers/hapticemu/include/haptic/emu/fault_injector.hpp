@@ -41,6 +41,9 @@ class FaultInjector {
     bool command(std::string_view line, std::string& error);
 
     [[nodiscard]] bool heartbeatStopped() const noexcept { return heartbeat_stopped_; }
+    // `state stop`: the device goes on with its heartbeat but sends no state frames (a stuck
+    // sensor board, a firmware task that hung).
+    [[nodiscard]] bool stateStopped() const noexcept { return state_stopped_; }
     [[nodiscard]] bool busOff() const noexcept { return bus_off_; }
     [[nodiscard]] std::uint8_t deviceFault() const noexcept { return device_fault_; }
     // Set when a fault frame must go out (fault raised or cleared); the emulator resets it.
@@ -71,6 +74,7 @@ class FaultInjector {
     std::int64_t delay_ns_{0};
     std::uint32_t corrupt_next_{0};
     bool heartbeat_stopped_{false};
+    bool state_stopped_{false};
     bool bus_off_{false};
     bool pending_bus_report_{false};
     bool pending_restart_report_{false};
