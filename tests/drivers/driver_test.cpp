@@ -453,5 +453,30 @@ TEST(LinkMonitor, AnUptimeThatGoesBackIsARestartAWrapIsNot) {
     EXPECT_EQ(running.rebootCount(), 0U);
 }
 
+// A fault frame followed in the same poll by a heartbeat that names no fault (sent before the
+// device faulted) is reported once, not lost to the heartbeat; a fault that lasts stays.
+TEST(LinkMonitor, AFaultFrameIsNotLostToAHeartbeatReadInTheSamePoll) {
+    const auto device = exoskeletonDevice();
+    constexpr std::int64_t kMsNs = 1'000'000;
+    LinkMonitor link(device.can);
+    protocol::Heartbeat healthy;
+    healthy.uptime_ms = 100;
+    link.onHeartbeat(healthy, 0);
+    EXPECT_EQ(link.faults(0, can::BusState::kErrorActive) & kDeviceFault, 0U);
+    protocol::FaultReport fault;
+    fault.active = true;
+    fault.code = protocol::DeviceFaultCode::kOvercurrent;
+    link.onFaultReport(fault);
+    healthy.uptime_ms = 101;
+    link.onHeartbeat(healthy, 1 * kMsNs);
+    EXPECT_NE(link.faults(1 * kMsNs, can::BusState::kErrorActive) & kDeviceFault, 0U);
+    EXPECT_EQ(link.faults(2 * kMsNs, can::BusState::kErrorActive) & kDeviceFault, 0U)
+        << "reported once: the daemon latches it";
+    link.onFaultReport(fault);
+    EXPECT_NE(link.faults(3 * kMsNs, can::BusState::kErrorActive) & kDeviceFault, 0U);
+    EXPECT_NE(link.faults(4 * kMsNs, can::BusState::kErrorActive) & kDeviceFault, 0U)
+        << "a standing fault stays";
+}
+
 }  // namespace
 }  // namespace haptic::devices

@@ -64,6 +64,18 @@ TEST(EstopRelayProtocol, AStatusDecodesAndEveryCorruptionIsRejectedByReason) {
     EXPECT_EQ(button, EstopButton::kReleased) << "no rejected frame changed the button";
 }
 
+// A short press whose pressed and released statuses are both read in one poll (the loop late
+// by a relay period) is reported once, at the next evaluate(); it was lost to the release.
+TEST(EstopRelayMonitor, APressAndAReleaseReadInOnePollAreStillAPress) {
+    EstopRelayMonitor monitor(kId, 30 * kMs);
+    EXPECT_TRUE(monitor.handleFrame(status(EstopButton::kReleased, 0), 0));
+    EXPECT_EQ(monitor.evaluate(0), EstopInput::kReleased);
+    EXPECT_TRUE(monitor.handleFrame(status(EstopButton::kPressed, 1), 10 * kMs));
+    EXPECT_TRUE(monitor.handleFrame(status(EstopButton::kReleased, 2), 20 * kMs));
+    EXPECT_EQ(monitor.evaluate(20 * kMs), EstopInput::kPressed);
+    EXPECT_EQ(monitor.evaluate(21 * kMs), EstopInput::kReleased) << "reported once";
+}
+
 TEST(EstopRelayMonitor, ReleasedWhileHeardPressedUntilReleasedSilentAfterTheTimeout) {
     EstopRelayMonitor monitor(kId, 30 * kMs);
     EXPECT_EQ(monitor.evaluate(0), EstopInput::kAwaitingFirstStatus);

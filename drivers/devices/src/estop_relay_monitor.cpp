@@ -9,6 +9,10 @@ bool EstopRelayMonitor::handleFrame(const can::CanFrame& frame, std::int64_t now
     protocol::EstopButton button = protocol::EstopButton::kPressed;
     if (decoder_.decode(frame, button)) {
         button_ = button;
+        // A press is held until evaluate() has reported it: a press and a release read in the
+        // same poll (a loop late by a relay period) must still stop the devices.
+        pressed_since_evaluate_ =
+            pressed_since_evaluate_ || button == protocol::EstopButton::kPressed;
         last_status_ns_ = now_ns;
     }
     return true;
@@ -25,8 +29,9 @@ EstopInput EstopRelayMonitor::evaluate(std::int64_t now_ns) noexcept {
     if (last_status_ns_ < 0) {
         return EstopInput::kAwaitingFirstStatus;  // hapticd may start before the relay
     }
-    return button_ == protocol::EstopButton::kPressed ? EstopInput::kPressed
-                                                      : EstopInput::kReleased;
+    const bool pressed = button_ == protocol::EstopButton::kPressed || pressed_since_evaluate_;
+    pressed_since_evaluate_ = false;
+    return pressed ? EstopInput::kPressed : EstopInput::kReleased;
 }
 
 }  // namespace haptic::devices

@@ -47,6 +47,7 @@ void LinkMonitor::onHeartbeat(const protocol::Heartbeat& heartbeat, std::int64_t
     heartbeat_seen_ = true;
     last_heartbeat_ns_ = now_ns;
     device_fault_ = heartbeat.mode == protocol::DeviceMode::kFault || heartbeat.active_fault != 0;
+    fault_since_poll_ = fault_since_poll_ || device_fault_;
 }
 
 void LinkMonitor::onState(std::int64_t now_ns) noexcept {
@@ -77,9 +78,10 @@ std::uint32_t LinkMonitor::evaluate(std::int64_t now_ns) noexcept {
 
 std::uint32_t LinkMonitor::faults(std::int64_t now_ns, can::BusState bus_state) noexcept {
     std::uint32_t faults = evaluate(now_ns);
-    if (device_fault_) {
+    if (device_fault_ || fault_since_poll_) {
         faults |= kDeviceFault;
     }
+    fault_since_poll_ = false;
     if (bus_state == can::BusState::kBusOff) {
         faults |= kBusOff;
     }

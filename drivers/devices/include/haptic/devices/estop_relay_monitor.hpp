@@ -41,6 +41,7 @@ class EstopRelayMonitor {
     std::int64_t first_evaluate_ns_{-1};
     std::int64_t last_status_ns_{-1};
     protocol::EstopButton button_{protocol::EstopButton::kPressed};
+    bool pressed_since_evaluate_{false};  // a pressed status read since the last evaluate()
 };
 
 }  // namespace haptic::devices

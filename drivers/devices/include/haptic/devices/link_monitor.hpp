@@ -56,6 +56,7 @@ class LinkMonitor {
     void onState(std::int64_t now_ns) noexcept;
     void onFaultReport(const protocol::FaultReport& fault) noexcept {
         device_fault_ = fault.active;
+        fault_since_poll_ = fault_since_poll_ || fault.active;
     }
     void onTransmit(can::IoResult result) noexcept {
         transmit_failed_ = result != can::IoResult::kOk;
@@ -85,6 +86,9 @@ class LinkMonitor {
     std::int64_t last_state_ns_{0};
     std::uint32_t previous_{kNoHeartbeatYet};
     bool device_fault_{false};
+    // A fault seen since the last faults(): a fault frame followed in the same poll by a
+    // heartbeat without one is still reported once.
+    bool fault_since_poll_{false};
     bool transmit_failed_{false};
     std::uint64_t heartbeat_losses_{0};
     std::uint64_t stale_events_{0};
