@@ -134,8 +134,13 @@ Safety readSafety(MapReader safety, DeviceType type) {
                                 "and max_velocity_m_per_s)"));
             }
         }
+        out.min_pad_stiffness_n_per_m =
+            safety.required("min_pad_stiffness_n_per_m", Real::closed(1.0, 1e6));
         safety.finish();
         return Safety{out, std::move(max_force_field), std::nullopt, std::move(max_velocity_field)};
+    }
+    if (const auto field = safety.take("min_pad_stiffness_n_per_m")) {
+        field->failWith("not an exoskeleton key: the thimble's only (the floor of its pad model)");
     }
     auto [max_stiffness, max_stiffness_field] =
         safety.requiredWithField("max_stiffness_n_per_m", Real::positive(20'000.0));

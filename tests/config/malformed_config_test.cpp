@@ -451,6 +451,19 @@ TEST(ConfigMissingKeys, AThimbleRefusesTheExoskeletonsSafetyKeys) {
                  "not a thimble key"});
 }
 
+// The thimble's floor under the sim's pad model is its key only, and a floor below 1 N/m would
+// guard nothing.
+TEST(ConfigMissingKeys, ThePadStiffnessFloorIsTheThimblesAndAtLeast1NPerM) {
+    const auto on_exo = kDataDir / "devices/pad_floor_on_exoskeleton.yaml";
+    expectError(deviceError("pad_floor_on_exoskeleton.yaml"),
+                {on_exo.string(), lineOf(on_exo, "min_pad_stiffness_n_per_m"), 30,
+                 "safety.min_pad_stiffness_n_per_m", "not an exoskeleton key"});
+    const auto too_low = kDataDir / "devices/pad_floor_too_low.yaml";
+    expectError(deviceError("pad_floor_too_low.yaml"),
+                {too_low.string(), lineOf(too_low, "min_pad_stiffness_n_per_m"), 30,
+                 "safety.min_pad_stiffness_n_per_m", "expected a number in [1, 1e+06], got 0.5"});
+}
+
 TEST(ConfigMissingKeys, ReplayNeedsAFile) {
     const auto file = kDataDir / "scenes/script_keys_on_replay.yaml";
     expectError(

@@ -190,6 +190,7 @@ TEST(ShippedConfig, Thimble) {
     ASSERT_TRUE(cfg.isThimble());
     EXPECT_EQ(cfg.can.command_id, 0x102U);
     EXPECT_DOUBLE_EQ(cfg.safety.max_force_n, 1.5);
+    EXPECT_DOUBLE_EQ(cfg.safety.min_pad_stiffness_n_per_m, 1000.0);
 
     const ThimbleConfig& thimble = cfg.thimble();
     EXPECT_DOUBLE_EQ(thimble.geometry.base_radius_m, 0.012);

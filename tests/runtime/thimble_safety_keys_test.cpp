@@ -1,7 +1,8 @@
 // The thimble's safety keys in hapticd's channel, each changed from the shipped value and its
 // effect read off the channel and the emulated device: the pad force limit
-// (safety.max_force_n), its rise (safety.max_force_rate_n_per_s) and the plate's approach
-// speed (safety.max_velocity_m_per_s). The limiter itself: tactile_test's PadSafety.*.
+// (safety.max_force_n), its rise (safety.max_force_rate_n_per_s), the plate's approach
+// speed (safety.max_velocity_m_per_s) and the floor under the sim's pad model
+// (safety.min_pad_stiffness_n_per_m). The limiter itself: tactile_test's PadSafety.*.
 
 #include <gtest/gtest.h>
 
@@ -104,6 +105,39 @@ TEST(ThimbleSafetyKeys, MaxForceCapsThePadModelsForce) {
     };
     EXPECT_LT(distance(*tight), distance(*shipped));
     EXPECT_GT(distance(*tight), 0.0) << "still pressing";
+}
+
+// A sim whose weights came out a million times too small (a unit slip: 1e-6 N/m per patch
+// here) would leave the force limit nothing to judge: the plate presses as if the pad were
+// air. The device file's floor on the pad model's total stiffness keeps the limit acting.
+TEST(ThimbleSafetyKeys, MinPadStiffnessKeepsTheForceLimitOnASimWithTinyWeights) {
+    const auto withFloor = [](double floor_n_per_m) {
+        auto rig = std::make_unique<RuntimeRig>([=](std::vector<config::DeviceConfig>& devices) {
+            devices[kThimble].safety.max_force_n = 0.2;
+            devices[kThimble].safety.max_force_rate_n_per_s = 1e5;
+            devices[kThimble].safety.max_velocity_m_per_s = 5.0;
+            devices[kThimble].safety.min_pad_stiffness_n_per_m = floor_n_per_m;
+        });
+        for (auto& sample : rig->contact_surface.samples) {
+            sample.weight = 1e-6;
+        }
+        return rig;
+    };
+    auto shipped = withFloor(1000.0);
+    auto lowest = withFloor(1.0);  // the schema's least
+    const PlateRun shipped_run = renderContact(*shipped);
+    const PlateRun lowest_run = renderContact(*lowest);
+    // 64 patches at 1 kN/m in total, the object 0.5 mm in: 0.5 N at the object, held at 0.2 N.
+    EXPECT_TRUE(shipped_run.flags_seen & static_cast<std::uint8_t>(tactile::PadFlag::kForce));
+    EXPECT_LE(shipped_run.peak_force_n, 0.2 + 1e-9);
+    EXPECT_GT(shipped_run.peak_force_n, 0.15) << "held at the limit";
+    // 1 N/m in total: 0.5 mN at the object, never limited; the plate goes all the way.
+    EXPECT_FALSE(lowest_run.flags_seen & static_cast<std::uint8_t>(tactile::PadFlag::kForce));
+    EXPECT_LT(lowest_run.peak_force_n, 0.001);
+    const auto retract = thimbleChannel(*shipped).retractServoAngles();
+    EXPECT_LT(distance(shipped->thimbleTargets(), retract),
+              distance(lowest->thimbleTargets(), retract))
+        << "the floor held the plate back";
 }
 
 TEST(ThimbleSafetyKeys, MaxForceRateLimitsHowFastThePadForceRises) {

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "haptic/config/device.hpp"
 #include "haptic/config/scene.hpp"
 #include "haptic/softhand/scene_simulation.hpp"
 
@@ -70,6 +71,43 @@ TEST(SceneSize, TheWholeHandSceneBuildsFiveFingers) {
     EXPECT_EQ(built.size.bone_names.size(), 16U);
     EXPECT_EQ(built.fingers.size(), 5U);
     EXPECT_EQ(built.size.joints, 15);
+}
+
+// hapticd judges the thimble's force limits with the pad model the sim sends (its samples'
+// weights) but never softer in total than the device file's safety.min_pad_stiffness_n_per_m.
+// That floor is a guard against a sim gone wrong, so every shipped scene's pad must be well
+// above it (twice), or the floor would be the model.
+TEST(SceneSize, EveryShippedThimblePadIsStifferThanTheDevicesFloor) {
+    const config::DeviceConfig thimble =
+        config::loadDeviceConfig(std::string(HAPTIC_SOURCE_DIR) + "/config/devices/thimble.yaml");
+    const double floor = thimble.safety.min_pad_stiffness_n_per_m;
+    ASSERT_GT(floor, 0.0);
+    int checked = 0;
+    for (const char* file :
+         {"default.yaml", "thimble_only.yaml", "grasp_box.yaml", "whole_hand.yaml"}) {
+        const config::SceneConfig scene =
+            config::loadSceneConfig(std::string(HAPTIC_SOURCE_DIR) + "/config/scenes/" + file);
+        const auto binding = scene.devices.find("thimble");
+        if (binding == scene.devices.end()) {
+            continue;
+        }
+        const SceneSimulation sim(scene,
+                                  {{"thimble", binding->second.finger, false,
+                                    thimble.thimble().finger_calibration.T_finger_device,
+                                    thimble.thimble().optimiser.pad_samples}},
+                                  realtimeSceneSettings(scene.solver));
+        msgs::ContactSurface surface;
+        sim.fill(0, surface);
+        double total = 0.0;
+        for (const auto& sample : surface.samples) {
+            total += sample.weight;
+        }
+        std::printf("%s: the thimble's pad model %.0f N/m in total (floor %.0f N/m)\n", file, total,
+                    floor);
+        EXPECT_GT(total, 2.0 * floor) << file;
+        ++checked;
+    }
+    EXPECT_GE(checked, 2);
 }
 
 }  // namespace

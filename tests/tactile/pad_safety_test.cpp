@@ -100,6 +100,23 @@ TEST(PadSafety, ThePadModelPressesBackWithTheStiffnessOfEveryPatchThePlatePasses
                 7 * kWeight * 0.001, 1e-12);
 }
 
+// The floor under the pad model's total stiffness: a softer surface is judged as if each
+// patch were stiffened by one factor, a surface of no stiffness as if the floor were shared
+// evenly; a stiffer one as it is.
+TEST(PadSafety, APadSofterThanTheFloorIsJudgedAtTheFloor) {
+    msgs::ContactSurface soft = flatPad();  // nine patches of 50 N/m: 450 N/m in total
+    const PlatformPose pressed = plateAt(kPadZ - 0.001);
+    EXPECT_NEAR(padForceN(pressed, soft, kPlateRadius, kRimBlend, 300.0), 0.45, 1e-12);
+    EXPECT_NEAR(padForceN(pressed, soft, kPlateRadius, kRimBlend, 900.0), 0.9, 1e-12);
+    soft.samples[0].weight = 0.0;  // 400 N/m, the missing patch stays out
+    EXPECT_NEAR(padForceN(pressed, soft, kPlateRadius, kRimBlend, 800.0), 0.8, 1e-12);
+    for (auto& sample : soft.samples) {
+        sample.weight = 0.0;
+    }
+    EXPECT_EQ(padForceN(pressed, soft, kPlateRadius, kRimBlend), 0.0);
+    EXPECT_NEAR(padForceN(pressed, soft, kPlateRadius, kRimBlend, 900.0), 0.9, 1e-12);
+}
+
 TEST(PadSafety, WithinTheLimitsThePlateGoesWhereItIsAsked) {
     PadSafetyLimiter limiter(loose());
     (void)limiter.commanded(plateAt(kRetractZ), nullptr);

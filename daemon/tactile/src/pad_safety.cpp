@@ -21,19 +21,33 @@ double plateRimWeight(double in_plane_radius_sq_m2, double plate_radius_m,
 }
 
 double padForceN(const PlatformPose& pose, const msgs::ContactSurface& surface,
-                 double plate_radius_m, double rim_blend_m) noexcept {
+                 double plate_radius_m, double rim_blend_m,
+                 double min_total_weight_n_per_m) noexcept {
     const Eigen::Vector3d normal = pose.plateNormal();
+    double total_weight = 0.0;
+    for (const msgs::ContactSample& sample : surface.samples) {
+        total_weight += sample.weight > 0.0 ? sample.weight : 0.0;
+    }
+    // Softer in total than the floor: every patch stiffened by one factor (a pad with no
+    // stiffness at all gets the floor shared evenly).
+    const bool even = !(total_weight > 0.0) && min_total_weight_n_per_m > 0.0;
+    const double scale = total_weight > 0.0 && total_weight < min_total_weight_n_per_m
+                             ? min_total_weight_n_per_m / total_weight
+                             : 1.0;
+    const double even_weight =
+        even ? min_total_weight_n_per_m / static_cast<double>(surface.samples.size()) : 0.0;
     double force_n = 0.0;
     for (const msgs::ContactSample& sample : surface.samples) {
         const Eigen::Vector3d rel =
             Eigen::Vector3d(sample.p_device_m[0], sample.p_device_m[1], sample.p_device_m[2]) -
             pose.position_m;
         const double d = normal.dot(rel);  // positive: the patch is still on the finger side
-        if (!(d < 0.0) || !(sample.weight > 0.0)) {
+        const double weight = even ? even_weight : sample.weight * scale;
+        if (!(d < 0.0) || !(weight > 0.0)) {
             continue;
         }
-        force_n += sample.weight * -d *
-                   plateRimWeight(rel.squaredNorm() - d * d, plate_radius_m, rim_blend_m);
+        force_n +=
+            weight * -d * plateRimWeight(rel.squaredNorm() - d * d, plate_radius_m, rim_blend_m);
     }
     return force_n;
 }
@@ -46,6 +60,7 @@ PadSafetySettings PadSafetySettings::fromConfig(const config::DeviceConfig& devi
     settings.max_approach_speed_m_per_s = device.safety.max_velocity_m_per_s;
     settings.period_s = period_s;
     settings.plate_radius_m = device.thimble().plate_radius_m;
+    settings.min_pad_stiffness_n_per_m = device.safety.min_pad_stiffness_n_per_m;
     return settings;
 }
 
@@ -54,7 +69,8 @@ std::uint8_t PadSafetyLimiter::allows(const PlatformPose& pose, const msgs::Cont
     std::uint8_t violated = 0;
     force_n = surface == nullptr
                   ? 0.0
-                  : padForceN(pose, *surface, settings_.plate_radius_m, settings_.rim_blend_m);
+                  : padForceN(pose, *surface, settings_.plate_radius_m, settings_.rim_blend_m,
+                              settings_.min_pad_stiffness_n_per_m);
     if (!(force_n <= settings_.max_force_n)) {
         violated |= static_cast<std::uint8_t>(PadFlag::kForce);
     }

@@ -92,6 +92,10 @@ struct SafetyLimits {
     // Exoskeleton only (0 for a thimble, whose file may not carry them):
     double max_stiffness_n_per_m{0.0};  // the coupling along the actuator is clamped to it
     int fade_out_ms{0};                 // ramp to zero force on a stale device state
+    // Thimble only (0 for an exoskeleton): the pad model the force limits judge with (the sim's
+    // sample weights) is never taken softer than this in total (the sum of the weights, N/m):
+    // a sim that sent weights too small by a unit (mm^2 for m^2) would switch the limits off.
+    double min_pad_stiffness_n_per_m{0.0};
 };
 
 // --- exoskeleton (docs/algorithms.md §5.8)

@@ -10,7 +10,9 @@
 // The pad model is the one the contact surface carries: its samples are the undeformed pad in
 // the device frame and each weight is its patch's stiffness (N/m: area times the pad's
 // stiffness per area); a sample the plate passes by delta presses back with w delta, faded out
-// over the plate's rim as in the optimiser. A linear pad: the sim's weights assume one.
+// over the plate's rim as in the optimiser. A linear pad: the sim's weights assume one. The
+// weights come from the sim, so the device file sets a floor on their total
+// (safety.min_pad_stiffness_n_per_m): a pad model softer than that is stiffened to it.
 //
 // Rate and speed are judged against the reference: the pose last sent (commanded()). Each
 // tick, limit() searches the line from the retract pose (gain 0) to the caller's pose (its
@@ -33,8 +35,11 @@ namespace haptic::tactile {
                                     double rim_blend_m) noexcept;
 
 // The net force (N, along the plate normal) the pad model predicts for the plate at `pose`.
+// A surface whose weights sum to less than `min_total_weight_n_per_m` is judged as if each
+// were scaled up to that total (safety.min_pad_stiffness_n_per_m).
 [[nodiscard]] double padForceN(const PlatformPose& pose, const msgs::ContactSurface& surface,
-                               double plate_radius_m, double rim_blend_m) noexcept;
+                               double plate_radius_m, double rim_blend_m,
+                               double min_total_weight_n_per_m = 0.0) noexcept;
 
 struct PadSafetySettings {
     double max_force_n{1.5};
@@ -42,7 +47,8 @@ struct PadSafetySettings {
     double max_approach_speed_m_per_s{0.1};
     double period_s{1e-3};
     double plate_radius_m{0.008};
-    double rim_blend_m{0.001};  // as the optimiser's
+    double rim_blend_m{0.001};              // as the optimiser's
+    double min_pad_stiffness_n_per_m{0.0};  // floor of the surface's total weight
 
     [[nodiscard]] static PadSafetySettings fromConfig(const config::DeviceConfig& device,
                                                       double period_s);
@@ -104,10 +110,10 @@ class PadSafetyLimiter {
         }
         const bool has_low = low > 0.0 || pose_at(0.0, low_pose);
         if (low == 0.0) {
-            low_force =
-                has_low && surface != nullptr
-                    ? padForceN(low_pose, *surface, settings_.plate_radius_m, settings_.rim_blend_m)
-                    : 0.0;
+            low_force = has_low && surface != nullptr
+                            ? padForceN(low_pose, *surface, settings_.plate_radius_m,
+                                        settings_.rim_blend_m, settings_.min_pad_stiffness_n_per_m)
+                            : 0.0;
         }
         for (int i = 0; i < kBisections && gain > 0.0; ++i) {
             const double mid = 0.5 * (low + high);
@@ -195,7 +201,8 @@ class PadSafetyLimiter {
         previous_pose_ = pose;
         previous_force_n_ = surface == nullptr ? 0.0
                                                : padForceN(pose, *surface, settings_.plate_radius_m,
-                                                           settings_.rim_blend_m);
+                                                           settings_.rim_blend_m,
+                                                           settings_.min_pad_stiffness_n_per_m);
         has_previous_ = true;
         return previous_force_n_;
     }
