@@ -318,8 +318,8 @@ TEST(PadSafety, AServoStepWithNoPoseIsCutBackToWhatCanBeJudgedOrHeld) {
 
 // The finger pushed into the plate: the pose held last tick already breaks the force limit and
 // no part of the (withdrawing) step keeps it. The step goes on whole, towards the pose limit()
-// chose; holding would keep the plate pressing harder.
-TEST(PadSafety, AKnownStepThatNoFractionCanMendGoesOnWhole) {
+// chose; holding would keep the plate pressing harder. One that presses harder still is held.
+TEST(PadSafety, AKnownStepThatNoFractionCanMendGoesOnWholeUnlessItPressesHarder) {
     PadSafetySettings settings = loose();
     settings.max_force_n = 0.2;
     const PadSafetyLimiter limiter(settings);
@@ -332,6 +332,13 @@ TEST(PadSafety, AKnownStepThatNoFractionCanMendGoesOnWhole) {
     EXPECT_FALSE(sent.shortened);
     EXPECT_EQ(sent.servo_rad, (ServoAngles{less_deep, less_deep, less_deep}));
     EXPECT_TRUE(sent.forward.ok());
+    // A step from there that would press harder still is held.
+    const double deeper = (kRetractZ - (kPadZ - 0.004)) / 0.005;
+    const auto held =
+        limiter.judgeStep({deep, deep, deep}, {deeper, deeper, deeper}, &pad, servoForward(10.0));
+    EXPECT_TRUE(held.shortened);
+    EXPECT_EQ(held.servo_rad, (ServoAngles{deep, deep, deep}));
+    EXPECT_TRUE(held.forward.ok());
 }
 
 TEST(PadSafety, LimitingAllocatesNothing) {

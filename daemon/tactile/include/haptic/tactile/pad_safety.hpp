@@ -148,11 +148,13 @@ class PadSafetyLimiter {
     // false: none). A step whose pose keeps the limits is sent whole. Otherwise the longest
     // fraction of it whose pose is known and keeps them, by bisection (kBisections). When no
     // fraction does:
-    //  - a step whose pose is known goes on whole: the finger itself pushed into the plate, so
-    //    that even the previous angles break a limit now, and the servos move towards the pose
-    //    limit() chose, which keeps them;
-    //  - a step with no known pose is not sent (fail closed: a pose that cannot be judged may
-    //    press anywhere): the servos hold at `previous`.
+    //  - a step whose pose is known and whose pad force is no higher than at `previous` goes
+    //    on whole: the finger itself pushed into the plate, so that even the previous angles
+    //    break a limit now, and the servos move towards the pose limit() chose, which keeps
+    //    them;
+    //  - a step that would press harder still, or has no known pose, is not sent (fail
+    //    closed: a pose that cannot be judged may press anywhere): the servos hold at
+    //    `previous`.
     template <class Forward>
     [[nodiscard]] ServoStep judgeStep(const ServoAngles& previous, const ServoAngles& step,
                                       const msgs::ContactSurface* surface,
@@ -182,10 +184,21 @@ class PadSafetyLimiter {
                 high = mid;
             }
         }
-        if (!result.shortened && !result.forward.ok()) {
-            result.servo_rad = previous;
-            forward(previous, result.forward);
-            result.shortened = true;
+        if (!result.shortened) {
+            ForwardResult at_previous;
+            forward(previous, at_previous);
+            const auto force = [&](const ForwardResult& fk) {
+                return surface == nullptr
+                           ? 0.0
+                           : padForceN(fk.pose, *surface, settings_.plate_radius_m,
+                                       settings_.rim_blend_m, settings_.min_pad_stiffness_n_per_m);
+            };
+            if (!result.forward.ok() || !at_previous.ok() ||
+                force(result.forward) > force(at_previous)) {
+                result.servo_rad = previous;
+                result.forward = at_previous;
+                result.shortened = true;
+            }
         }
         return result;
     }
