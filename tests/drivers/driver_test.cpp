@@ -470,6 +470,7 @@ TEST(LinkMonitor, AFaultFrameIsNotLostToAHeartbeatReadInTheSamePoll) {
     healthy.uptime_ms = 101;
     link.onHeartbeat(healthy, 1 * kMsNs);
     EXPECT_NE(link.faults(1 * kMsNs, can::BusState::kErrorActive) & kDeviceFault, 0U);
+    EXPECT_EQ(link.lastFaultCode(), 1U) << "what it was, for the fault's message";
     EXPECT_EQ(link.faults(2 * kMsNs, can::BusState::kErrorActive) & kDeviceFault, 0U)
         << "reported once: the daemon latches it";
     link.onFaultReport(fault);

@@ -80,7 +80,9 @@ std::uint8_t ExoskeletonChannel::deviceFaultCode() const noexcept {
     if (state.last_fault.active) {
         return static_cast<std::uint8_t>(state.last_fault.code);
     }
-    return state.heartbeat.active_fault;
+    // A fault seen and gone within one poll is still raised (LinkMonitor): name what it was.
+    return state.heartbeat.active_fault != 0 ? state.heartbeat.active_fault
+                                             : driver_.link().lastFaultCode();
 }
 
 std::uint32_t ExoskeletonChannel::plausibilityFaults(std::int64_t now_ns) noexcept {

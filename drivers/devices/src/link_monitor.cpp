@@ -48,6 +48,9 @@ void LinkMonitor::onHeartbeat(const protocol::Heartbeat& heartbeat, std::int64_t
     last_heartbeat_ns_ = now_ns;
     device_fault_ = heartbeat.mode == protocol::DeviceMode::kFault || heartbeat.active_fault != 0;
     fault_since_poll_ = fault_since_poll_ || device_fault_;
+    if (heartbeat.active_fault != 0) {
+        last_fault_code_ = heartbeat.active_fault;
+    }
 }
 
 void LinkMonitor::onState(std::int64_t now_ns) noexcept {

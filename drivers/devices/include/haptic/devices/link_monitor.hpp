@@ -57,7 +57,13 @@ class LinkMonitor {
     void onFaultReport(const protocol::FaultReport& fault) noexcept {
         device_fault_ = fault.active;
         fault_since_poll_ = fault_since_poll_ || fault.active;
+        if (fault.active) {
+            last_fault_code_ = static_cast<std::uint8_t>(fault.code);
+        }
     }
+    // The code of the last active fault the device reported (fault frame or heartbeat), 0 if
+    // none yet: what a fault seen and gone within one poll was.
+    [[nodiscard]] std::uint8_t lastFaultCode() const noexcept { return last_fault_code_; }
     void onTransmit(can::IoResult result) noexcept {
         transmit_failed_ = result != can::IoResult::kOk;
     }
@@ -89,6 +95,7 @@ class LinkMonitor {
     // A fault seen since the last faults(): a fault frame followed in the same poll by a
     // heartbeat without one is still reported once.
     bool fault_since_poll_{false};
+    std::uint8_t last_fault_code_{0};
     bool transmit_failed_{false};
     std::uint64_t heartbeat_losses_{0};
     std::uint64_t stale_events_{0};
