@@ -822,7 +822,19 @@ TEST_F(DaemonCoreTest, ForceGainFollowsTheFadeOnlyWhileRendering) {
     msgs::HapticCommandReply reply;
     command.kind = msgs::CommandKind::kEnable;
     ASSERT_TRUE(sut.applyCommand(command, t, reply).accepted);
+    // An enable fades in as a sim that comes back does: from 0, never a step (it jumped to 1).
+    EXPECT_THAT(sut.outputGain(0), Eq(0.0));
+    double previous = 0.0;
+    int ticks = 0;
+    while (sut.outputGain(0) < 1.0 && ticks < 1000) {
+        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index", t), t);
+        t = runTicks(t, 1);
+        ++ticks;
+        EXPECT_LE(sut.outputGain(0) - previous, 0.01 + 1e-12) << "tick " << ticks;
+        previous = sut.outputGain(0);
+    }
     EXPECT_THAT(sut.outputGain(0), Eq(1.0));
+    EXPECT_NEAR(ticks, 100, 1) << "over loop.fade_in_ms";
     command.kind = msgs::CommandKind::kEstop;
     ASSERT_TRUE(sut.applyCommand(command, t, reply).accepted);
     EXPECT_THAT(sut.outputGain(0), Eq(0.0)) << "E-STOP drops force at once";

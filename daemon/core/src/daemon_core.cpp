@@ -334,6 +334,7 @@ void DaemonCore::update(std::int64_t now_ns, const TickTiming& timing) noexcept 
                              1.0);
         // Falling follows the target at once; rising is rate limited so force never steps up.
         slot.fade = std::min(target, slot.fade + dt_s / fade_in_s);
+        slot.armed = machine_.rendering() ? std::min(1.0, slot.armed + dt_s / fade_in_s) : 0.0;
         late = late || (target > 0.0 && target < 1.0);
     }
     // A sim that delivers slower than the fade start modulates the force at its own rate

@@ -8,6 +8,7 @@
 // State machine: see state_machine.hpp. Commands reach the core through applyCommand() on
 // the RT thread (hapticd hands them over through a lock-free queue).
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -172,10 +173,11 @@ class DaemonCore {
         machine_.raiseFault(code, device_id, message);
     }
 
-    // The factor on the device's rendered force: the sim fade while RENDERING, 0 otherwise,
+    // The factor on the device's rendered force: the sim fade while RENDERING (and the ramp
+    // from an enable, loop.fade_in_ms), 0 otherwise,
     // so IDLE, FAULT and E-STOP hold every device at zero force.
     [[nodiscard]] double outputGain(std::size_t device) const noexcept {
-        return machine_.rendering() ? devices_[device].fade : 0.0;
+        return machine_.rendering() ? std::min(devices_[device].fade, devices_[device].armed) : 0.0;
     }
     // The device lost its sim input for longer than sim_rearm_after_ns while RENDERING and
     // waits for an operator's `enable` (its gain stays 0 until then).
@@ -220,6 +222,9 @@ class DaemonCore {
         std::array<std::uint64_t, static_cast<std::size_t>(InputRejection::kCount_)> rejected_by{};
         std::uint64_t state_seq{0};
         double fade{0.0};
+        // 0 outside RENDERING, rising to 1 over loop.fade_in_ms after an enable: the force
+        // fades in after an enable as after a sim outage (the sim fade alone is 1 in IDLE).
+        double armed{0.0};
         bool fed_while_rendering{false};  // fresh input arrived since the last enable
         bool awaiting_enable{false};      // see CoreSettings::sim_rearm_after_ns
         DeviceReport report{};
