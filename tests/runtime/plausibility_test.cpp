@@ -174,6 +174,30 @@ TEST(Plausibility, AThimbleServoThatDoesNotFollowItsTargetRaisesItsOwnFault) {
     EXPECT_THAT(message, HasSubstr(" deg expected for 5"));
 }
 
+// After a device fault that was raised, cleared by the device and by the operator, the servo
+// check runs again: it judges only while the device reports no fault, and the code of the
+// fault that had gone must not read as a standing one (it did, for the rest of the run).
+TEST(Plausibility, TheServoCheckRunsAgainAfterADeviceFaultHasGone) {
+    RuntimeRig rig;
+    renderWithForce(rig);
+    rig.emulatorFault(kThimble, "fault 2");
+    renderTicks(rig, 20);
+    EXPECT_THAT(onlyFault(rig, runtime::kFaultDeviceReported, "thimble"), HasSubstr("fault 2"));
+    rig.emulatorFault(kThimble, "clear");
+    renderTicks(rig, 30);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kClearFault)) << rig.reply.message.view();
+    renderTicks(rig, 20);
+    ASSERT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
+    renderTicks(rig, 400);
+    ASSERT_EQ(rig.core.stateMachine().faultCount(), 0U);
+    rig.emulatorFault(kThimble, "servo-stuck 2");
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kDisable));
+    renderTicks(rig, 400);
+    EXPECT_THAT(onlyFault(rig, runtime::kFaultImplausibleFeedback, "thimble"),
+                HasSubstr("servo 2 at "));
+}
+
 // servos.angle_tolerance_deg decides: with 90 degrees the stuck servo above passes.
 TEST(Plausibility, TheServoAngleToleranceKeyDecidesWhatIsImplausible) {
     RuntimeRig rig([](std::vector<config::DeviceConfig>& devices) {

@@ -284,7 +284,8 @@ auto servoForward(double known_up_to_rad) {
 TEST(PadSafety, AServoStepThatKeepsTheLimitsIsSentWhole) {
     const PadSafetyLimiter limiter(loose());
     const msgs::ContactSurface pad = flatPad();
-    const auto sent = limiter.judgeStep({0.0, 0.0, 0.0}, {0.5, 0.4, 0.6}, &pad, servoForward(10.0));
+    const auto sent =
+        limiter.judgeStep({0.0, 0.0, 0.0}, {0.5, 0.4, 0.6}, &pad, false, servoForward(10.0));
     EXPECT_FALSE(sent.shortened);
     EXPECT_EQ(sent.servo_rad, (ServoAngles{0.5, 0.4, 0.6}));
     ASSERT_TRUE(sent.forward.ok());
@@ -297,7 +298,7 @@ TEST(PadSafety, AServoStepWithNoPoseIsCutBackToWhatCanBeJudgedOrHeld) {
     const PadSafetyLimiter limiter(loose());
     const msgs::ContactSurface pad = flatPad();
     const ServoAngles previous{0.1, 0.1, 0.1};
-    const auto cut = limiter.judgeStep(previous, {1.0, 1.0, 1.0}, &pad, servoForward(0.3));
+    const auto cut = limiter.judgeStep(previous, {1.0, 1.0, 1.0}, &pad, false, servoForward(0.3));
     EXPECT_TRUE(cut.shortened);
     ASSERT_TRUE(cut.forward.ok());
     for (double angle : cut.servo_rad) {
@@ -305,40 +306,61 @@ TEST(PadSafety, AServoStepWithNoPoseIsCutBackToWhatCanBeJudgedOrHeld) {
         EXPECT_GT(angle, 0.3 - 1e-4) << "the whole known part is sent";
     }
     // Known only up to a hair past the angles held: no bisection step of the 0.9 rad is.
-    const auto held = limiter.judgeStep(previous, {1.0, 1.0, 1.0}, &pad, servoForward(0.1 + 1e-9));
+    const auto held =
+        limiter.judgeStep(previous, {1.0, 1.0, 1.0}, &pad, false, servoForward(0.1 + 1e-9));
     EXPECT_TRUE(held.shortened);
     EXPECT_EQ(held.servo_rad, previous);
     ASSERT_TRUE(held.forward.ok());
     EXPECT_NEAR(held.forward.pose.position_m.z(), kRetractZ - 0.0005, 1e-15);
     // Not even the angles held have a pose now: held all the same, reported unknown.
-    const auto unknown = limiter.judgeStep(previous, {1.0, 1.0, 1.0}, &pad, servoForward(0.0));
+    const auto unknown =
+        limiter.judgeStep(previous, {1.0, 1.0, 1.0}, &pad, false, servoForward(0.0));
     EXPECT_EQ(unknown.servo_rad, previous);
     EXPECT_FALSE(unknown.forward.ok());
 }
 
 // The finger pushed into the plate: the pose held last tick already breaks the force limit and
 // no part of the (withdrawing) step keeps it. The step goes on whole, towards the pose limit()
-// chose; holding would keep the plate pressing harder. One that presses harder still is held.
+// chose; holding would keep the plate pressing harder. One that presses harder by more than
+// the rate limit allows in a tick is held, unless it heads for the retract pose, which nothing
+// holds up.
 TEST(PadSafety, AKnownStepThatNoFractionCanMendGoesOnWholeUnlessItPressesHarder) {
     PadSafetySettings settings = loose();
     settings.max_force_n = 0.2;
+    settings.max_force_rate_n_per_s = 100.0;  // 0.1 N per tick
     const PadSafetyLimiter limiter(settings);
     const msgs::ContactSurface pad = flatPad();
     // Angles to heights: 3 mm and 2 mm into the pad (1.35 N and 0.9 N on nine 50 N/m patches).
     const double deep = (kRetractZ - (kPadZ - 0.003)) / 0.005;
     const double less_deep = (kRetractZ - (kPadZ - 0.002)) / 0.005;
     const auto sent = limiter.judgeStep({deep, deep, deep}, {less_deep, less_deep, less_deep}, &pad,
-                                        servoForward(10.0));
+                                        false, servoForward(10.0));
     EXPECT_FALSE(sent.shortened);
     EXPECT_EQ(sent.servo_rad, (ServoAngles{less_deep, less_deep, less_deep}));
     EXPECT_TRUE(sent.forward.ok());
     // A step from there that would press harder still is held.
     const double deeper = (kRetractZ - (kPadZ - 0.004)) / 0.005;
-    const auto held =
-        limiter.judgeStep({deep, deep, deep}, {deeper, deeper, deeper}, &pad, servoForward(10.0));
+    const auto held = limiter.judgeStep({deep, deep, deep}, {deeper, deeper, deeper}, &pad, false,
+                                        servoForward(10.0));
     EXPECT_TRUE(held.shortened);
     EXPECT_EQ(held.servo_rad, (ServoAngles{deep, deep, deep}));
     EXPECT_TRUE(held.forward.ok());
+    // 0.1 mm deeper: 0.045 N more, within the 0.1 N a tick may add. It goes on.
+    const double a_little_deeper = (kRetractZ - (kPadZ - 0.0031)) / 0.005;
+    const ServoAngles little{a_little_deeper, a_little_deeper, a_little_deeper};
+    const auto crept =
+        limiter.judgeStep({deep, deep, deep}, little, &pad, false, servoForward(10.0));
+    EXPECT_FALSE(crept.shortened);
+    EXPECT_EQ(crept.servo_rad, little);
+    // Heading for the retract pose: sent as it is, however it presses or whether its pose is
+    // known.
+    const ServoAngles deeper_step{deeper, deeper, deeper};
+    EXPECT_EQ(limiter.judgeStep({deep, deep, deep}, deeper_step, &pad, true, servoForward(10.0))
+                  .servo_rad,
+              deeper_step);
+    EXPECT_EQ(
+        limiter.judgeStep({deep, deep, deep}, deeper_step, &pad, true, servoForward(0.0)).servo_rad,
+        deeper_step);
 }
 
 TEST(PadSafety, LimitingAllocatesNothing) {
@@ -353,7 +375,7 @@ TEST(PadSafety, LimitingAllocatesNothing) {
     testing::ScopedAllocationCounter counter;
     for (int i = 0; i < 1000; ++i) {
         sum += tick(limiter, (i % 100) / 99.0, &pad, blendTo(kPadZ - 0.002)).gain;
-        sum += limiter.judgeStep({0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}, &pad, servoForward(0.5))
+        sum += limiter.judgeStep({0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}, &pad, false, servoForward(0.5))
                    .servo_rad[0];
     }
     EXPECT_EQ(counter.allocations(), 0U);

@@ -80,9 +80,12 @@ std::uint8_t ExoskeletonChannel::deviceFaultCode() const noexcept {
     if (state.last_fault.active) {
         return static_cast<std::uint8_t>(state.last_fault.code);
     }
-    // A fault seen and gone within one poll is still raised (LinkMonitor): name what it was.
-    return state.heartbeat.active_fault != 0 ? state.heartbeat.active_fault
-                                             : driver_.link().lastFaultCode();
+    if (state.heartbeat.active_fault != 0) {
+        return state.heartbeat.active_fault;
+    }
+    // A fault seen and gone within this poll is still raised (LinkMonitor): name what it was.
+    // Only then: a code kept after the fault cleared would read as a standing fault.
+    return (linkFaults() & devices::kDeviceFault) != 0 ? driver_.link().lastFaultCode() : 0;
 }
 
 std::uint32_t ExoskeletonChannel::plausibilityFaults(std::int64_t now_ns) noexcept {
@@ -211,15 +214,17 @@ void ExoskeletonChannel::compute(daemon::DaemonCore& core, std::size_t index,
         if (estimator_) {
             desired_n += probeForce();
         }
-        // A method switch is bumpless: the new strategy's force moves from the force last sent
-        // by at most the rate limit per tick. On the strategy's output only, before the safety
-        // limits below: a render fault (its force 0) and the velocity fade cut the force at
-        // once, switch or not.
+        // A method switch is bumpless: the new strategy's force moves from the strategy's force
+        // of the tick before by at most the rate limit per tick. On the strategy's output only,
+        // before the safety limits below: a render fault (its force 0) and the velocity fade
+        // cut the force at once, switch or not (and anchoring to the faded force sent would
+        // fade it twice).
         if (transition_ticks_left_ > 0 && out_.fault == kinesthetic::RenderFault::kNone &&
             !heldSafe() && core.outputGain(index) >= 1.0) {
-            desired_n = std::clamp(desired_n, command_.force_n - max_force_step_n_,
-                                   command_.force_n + max_force_step_n_);
+            desired_n = std::clamp(desired_n, strategy_force_n_ - max_force_step_n_,
+                                   strategy_force_n_ + max_force_step_n_);
         }
+        strategy_force_n_ = desired_n;
         std::uint8_t limits = kinesthetic::kPortOk;
         if (renderer_.parameters().tracking_stiffness < tracking_stiffness_) {
             limits |= kinesthetic::kPortStiffnessLimited;

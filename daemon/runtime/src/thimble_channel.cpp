@@ -97,9 +97,12 @@ std::uint8_t ThimbleChannel::deviceFaultCode() const noexcept {
     if (state.last_fault.active) {
         return static_cast<std::uint8_t>(state.last_fault.code);
     }
-    // A fault seen and gone within one poll is still raised (LinkMonitor): name what it was.
-    return state.heartbeat.active_fault != 0 ? state.heartbeat.active_fault
-                                             : driver_.link().lastFaultCode();
+    if (state.heartbeat.active_fault != 0) {
+        return state.heartbeat.active_fault;
+    }
+    // A fault seen and gone within this poll is still raised (LinkMonitor): name what it was.
+    // Only then: a code kept after the fault cleared would read as a standing fault.
+    return (linkFaults() & devices::kDeviceFault) != 0 ? driver_.link().lastFaultCode() : 0;
 }
 
 void ThimbleChannel::measure() noexcept {
@@ -170,7 +173,7 @@ void ThimbleChannel::compute(daemon::DaemonCore& core, std::size_t index,
     // Judge it too: shorten the whole servo step by one factor until it keeps the limits, and
     // never send angles whose pose cannot be judged.
     const tactile::PadSafetyLimiter::ServoStep sent = pad_limiter_.judgeStep(
-        previous_sent, limited.servo_rad, surface,
+        previous_sent, limited.servo_rad, surface, /*retracting=*/pad_limit_.gain <= 0.0,
         [this](const tactile::ServoAngles& angles, tactile::ForwardResult& result) {
             result = kinematics_.forward(angles, sent_dofs_);
         });

@@ -139,6 +139,7 @@ class ExoskeletonChannel final
     std::size_t max_constraints_;
     msgs::DeviceId applied_method_{};
     int transition_ticks_left_{0};
+    double strategy_force_n_{0.0};  // the strategy's force (with the probe) of the last fresh tick
     double max_force_step_n_{0.0};  // the rate limit over one period
     kinesthetic::ConfigVector q_;
     kinesthetic::ConfigVector q_dot_;

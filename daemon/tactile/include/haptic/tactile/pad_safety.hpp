@@ -145,22 +145,28 @@ class PadSafetyLimiter {
 
     // Judges the step from `previous` (the angles sent last tick, themselves judged) to `step`.
     // `forward(angles, result)` fills the forward kinematics of servo angles (result.ok()
-    // false: none). A step whose pose keeps the limits is sent whole. Otherwise the longest
-    // fraction of it whose pose is known and keeps them, by bisection (kBisections). When no
-    // fraction does:
-    //  - a step whose pose is known and whose pad force is no higher than at `previous` goes
-    //    on whole: the finger itself pushed into the plate, so that even the previous angles
-    //    break a limit now, and the servos move towards the pose limit() chose, which keeps
-    //    them;
-    //  - a step that would press harder still, or has no known pose, is not sent (fail
+    // false: none). `retracting`: the step heads for the retract pose (limit() chose gain 0:
+    // FAULT, a disable, a stale device, or no other pose keeps the limits); it is sent as it is,
+    // since the retract is always allowed and nothing may hold it up. Otherwise a step whose
+    // pose keeps the limits is sent whole, else the longest fraction of it whose pose is known
+    // and keeps them, by bisection (kBisections). When no fraction does:
+    //  - a step whose pose is known and whose pad force rises by at most the rate limit over
+    //    `previous` goes on whole: the finger itself pushed into the plate, so that even the
+    //    previous angles break a limit now, and the servos move towards the pose limit()
+    //    chose, which keeps them (limit() lowers its gain each tick until it reaches the
+    //    retract);
+    //  - a step that would press harder than that, or has no known pose, is not sent (fail
     //    closed: a pose that cannot be judged may press anywhere): the servos hold at
     //    `previous`.
     template <class Forward>
     [[nodiscard]] ServoStep judgeStep(const ServoAngles& previous, const ServoAngles& step,
-                                      const msgs::ContactSurface* surface,
+                                      const msgs::ContactSurface* surface, bool retracting,
                                       Forward&& forward) const noexcept {
         ServoStep result{step, {}, false};
         forward(step, result.forward);
+        if (retracting) {
+            return result;
+        }
         double force_n = 0.0;
         if (result.forward.ok() && allows(result.forward.pose, surface, force_n) == 0) {
             return result;
@@ -194,7 +200,8 @@ class PadSafetyLimiter {
                                        settings_.rim_blend_m, settings_.min_pad_stiffness_n_per_m);
             };
             if (!result.forward.ok() || !at_previous.ok() ||
-                force(result.forward) > force(at_previous)) {
+                !(force(result.forward) <=
+                  force(at_previous) + settings_.max_force_rate_n_per_s * settings_.period_s)) {
                 result.servo_rad = previous;
                 result.forward = at_previous;
                 result.shortened = true;
