@@ -835,6 +835,15 @@ TEST_F(DaemonCoreTest, ForceGainFollowsTheFadeOnlyWhileRendering) {
     }
     EXPECT_THAT(sut.outputGain(0), Eq(1.0));
     EXPECT_NEAR(ticks, 100, 1) << "over loop.fade_in_ms";
+    // A disable and an enable taken in the same tick fade in afresh too.
+    command.kind = msgs::CommandKind::kDisable;
+    ASSERT_TRUE(sut.applyCommand(command, t, reply).accepted);
+    command.kind = msgs::CommandKind::kEnable;
+    ASSERT_TRUE(sut.applyCommand(command, t, reply).accepted);
+    EXPECT_THAT(sut.outputGain(0), Eq(0.0));
+    (void)sut.offerConstraintSet(0, validConstraintSet("exo_index", t), t);
+    t = runTicks(t, 1);
+    EXPECT_NEAR(sut.outputGain(0), 0.01, 1e-12);
     command.kind = msgs::CommandKind::kEstop;
     ASSERT_TRUE(sut.applyCommand(command, t, reply).accepted);
     EXPECT_THAT(sut.outputGain(0), Eq(0.0)) << "E-STOP drops force at once";

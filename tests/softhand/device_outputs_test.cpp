@@ -466,6 +466,25 @@ TEST_F(TactileOutputTest, TheSamplesLieOnTheTrackedFingerNotOnTheSimulatedOne) {
         EXPECT_NEAR(on_tracked.reference_moment_device_nm[k],
                     on_simulated.reference_moment_device_nm[k], 1e-12);
     }
+    // Turned as well (8 degrees about the phalanx's axis and 5 about its side): the contact is
+    // carried rigidly onto the tracked pad, so in each finger's device frame the reference is
+    // the same force and moment.
+    const Mat3 turn =
+        (Eigen::AngleAxisd(0.14, Vec3::UnitX()) * Eigen::AngleAxisd(0.09, Vec3::UnitY()))
+            .toRotationMatrix();
+    const BonePose turned{tracked.position_m, turn * simulated.rotation};
+    msgs::ContactSurface on_turned;
+    output.fill(model.simulation, turned, on_turned);
+    ASSERT_GT(std::abs(on_simulated.reference_moment_device_nm[0]) +
+                  std::abs(on_simulated.reference_moment_device_nm[1]),
+              1e-6)
+        << "a moment to compare";
+    for (std::size_t k = 0; k < 3; ++k) {
+        EXPECT_NEAR(on_turned.reference_force_device_n[k], on_simulated.reference_force_device_n[k],
+                    1e-12);
+        EXPECT_NEAR(on_turned.reference_moment_device_nm[k],
+                    on_simulated.reference_moment_device_nm[k], 1e-12);
+    }
 }
 
 }  // namespace

@@ -86,9 +86,17 @@ CommandOutcome DaemonCore::applyCommand(const msgs::HapticCommand& command, std:
             }
         }
     }
+    const bool was_rendering = machine_.rendering();
     const CommandOutcome outcome = blocked != nullptr
                                        ? CommandOutcome{false, blocked}
                                        : machine_.apply(command.kind, command.argument.view());
+    // Leaving RENDERING, or entering it, starts the enable's fade-in afresh: two commands
+    // taken in one tick (disable then enable) must not skip it.
+    if (outcome.accepted && (!was_rendering || !machine_.rendering())) {
+        for (auto& slot : devices_) {
+            slot.armed = 0.0;
+        }
+    }
     // An accepted enable (also while RENDERING) is the operator's re-arm.
     if (outcome.accepted && command.kind == msgs::CommandKind::kEnable) {
         for (auto& slot : devices_) {

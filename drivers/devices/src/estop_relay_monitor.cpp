@@ -24,6 +24,7 @@ EstopInput EstopRelayMonitor::evaluate(std::int64_t now_ns) noexcept {
     }
     const std::int64_t heard_ns = last_status_ns_ >= 0 ? last_status_ns_ : first_evaluate_ns_;
     if (now_ns - heard_ns > timeout_ns_) {
+        pressed_since_evaluate_ = false;  // silence is reported, and stops the devices itself
         return EstopInput::kSilent;
     }
     if (last_status_ns_ < 0) {

@@ -95,18 +95,15 @@ FeltPadContact UserPad::feel(const std::array<double, 3>& servo_rad) {
         const double a = du.squaredNorm();
         const double b = u0.dot(du);
         const double c = u0.squaredNorm() - plate_radius_m_ * plate_radius_m_;
+        // a = |across|^2 > 0 here: the axis is not along the normal.
         double low = -half_length_m_;
         double high = half_length_m_;
         bool over = false;
-        if (a > 1e-24) {
-            const double discriminant = b * b - a * c;
-            if (discriminant >= 0.0) {
-                low = std::max(low, (-b - std::sqrt(discriminant)) / a);
-                high = std::min(high, (-b + std::sqrt(discriminant)) / a);
-                over = low <= high;
-            }
-        } else {
-            over = c <= 0.0;  // the axis along the normal: one in-plane point
+        const double discriminant = b * b - a * c;
+        if (discriminant >= 0.0) {
+            low = std::max(low, (-b - std::sqrt(discriminant)) / a);
+            high = std::min(high, (-b + std::sqrt(discriminant)) / a);
+            over = low <= high;
         }
         if (over) {
             const Eigen::Vector3d first = base + low * axis_;

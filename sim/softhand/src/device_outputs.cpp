@@ -292,21 +292,23 @@ void TactileOutput::fill(const Simulation& sim, const BonePose& finger_bone,
     std::fill(pressed_.begin(), pressed_.end(), 0);
     Vec3 force = Vec3::Zero();
     Vec3 moment = Vec3::Zero();
-    // Moment arms: the pressed skin's place on the simulated pad, carried to the same place on
-    // the user's (tracked) pad.
+    // The sim's pad contact carried rigidly onto the user's (tracked) pad: each force from the
+    // same place and in the same direction relative to the finger, so the reference is the
+    // contact as the simulated finger has it, whatever the two fingers' offset.
     const Mat3 tracked_from_sim = finger_bone.rotation * sim.bodyRotation(body_).transpose();
     const Vec3& sim_bone_position = sim.bodyPosition(body_);
     for (const Simulation::ContactForce& contact : sim.contactForces()) {
         if (contact.node >= nodes_.first && contact.node < nodes_.second &&
             on_pad_[static_cast<std::size_t>(contact.node - nodes_.first)] != 0) {
-            force += contact.force_n;
+            const Vec3 force_on_user_pad = tracked_from_sim * contact.force_n;
+            force += force_on_user_pad;
             if (contact.force_n.norm() > kMinPressForceN) {
                 pressed_[static_cast<std::size_t>(contact.node - nodes_.first)] = 1;
             }
             const Vec3 on_user_pad =
                 bone_position +
                 tracked_from_sim * (sim.nodePosition(contact.node) - sim_bone_position);
-            moment += (on_user_pad - device.position_m).cross(contact.force_n);
+            moment += (on_user_pad - device.position_m).cross(force_on_user_pad);
         }
     }
     const bool pad_pressed = std::find(pressed_.begin(), pressed_.end(), 1) != pressed_.end();
