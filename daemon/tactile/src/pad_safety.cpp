@@ -67,10 +67,7 @@ PadSafetySettings PadSafetySettings::fromConfig(const config::DeviceConfig& devi
 std::uint8_t PadSafetyLimiter::allows(const PlatformPose& pose, const msgs::ContactSurface* surface,
                                       double& force_n) const noexcept {
     std::uint8_t violated = 0;
-    force_n = surface == nullptr
-                  ? 0.0
-                  : padForceN(pose, *surface, settings_.plate_radius_m, settings_.rim_blend_m,
-                              settings_.min_pad_stiffness_n_per_m);
+    force_n = modelForceN(pose, surface);
     if (!(force_n <= settings_.max_force_n)) {
         violated |= static_cast<std::uint8_t>(PadFlag::kForce);
     }

@@ -110,10 +110,7 @@ class PadSafetyLimiter {
         }
         const bool has_low = low > 0.0 || pose_at(0.0, low_pose);
         if (low == 0.0) {
-            low_force = has_low && surface != nullptr
-                            ? padForceN(low_pose, *surface, settings_.plate_radius_m,
-                                        settings_.rim_blend_m, settings_.min_pad_stiffness_n_per_m)
-                            : 0.0;
+            low_force = has_low ? modelForceN(low_pose, surface) : 0.0;
         }
         for (int i = 0; i < kBisections && gain > 0.0; ++i) {
             const double mid = 0.5 * (low + high);
@@ -193,15 +190,10 @@ class PadSafetyLimiter {
         if (!result.shortened) {
             ForwardResult at_previous;
             forward(previous, at_previous);
-            const auto force = [&](const ForwardResult& fk) {
-                return surface == nullptr
-                           ? 0.0
-                           : padForceN(fk.pose, *surface, settings_.plate_radius_m,
-                                       settings_.rim_blend_m, settings_.min_pad_stiffness_n_per_m);
-            };
             if (!result.forward.ok() || !at_previous.ok() ||
-                !(force(result.forward) <=
-                  force(at_previous) + settings_.max_force_rate_n_per_s * settings_.period_s)) {
+                !(modelForceN(result.forward.pose, surface) <=
+                  modelForceN(at_previous.pose, surface) +
+                      settings_.max_force_rate_n_per_s * settings_.period_s)) {
                 result.servo_rad = previous;
                 result.forward = at_previous;
                 result.shortened = true;
@@ -219,10 +211,7 @@ class PadSafetyLimiter {
     // reference for the next tick's rate and speed limits. Returns the pad model's force.
     double commanded(const PlatformPose& pose, const msgs::ContactSurface* surface) noexcept {
         previous_pose_ = pose;
-        previous_force_n_ = surface == nullptr ? 0.0
-                                               : padForceN(pose, *surface, settings_.plate_radius_m,
-                                                           settings_.rim_blend_m,
-                                                           settings_.min_pad_stiffness_n_per_m);
+        previous_force_n_ = modelForceN(pose, surface);
         has_previous_ = true;
         return previous_force_n_;
     }
@@ -230,6 +219,16 @@ class PadSafetyLimiter {
     [[nodiscard]] const PadSafetySettings& settings() const noexcept { return settings_; }
 
   private:
+    // The pad model's force for the plate at `pose` (0 with no surface), with the settings' plate
+    // and the floor under the model's stiffness.
+    [[nodiscard]] double modelForceN(const PlatformPose& pose,
+                                     const msgs::ContactSurface* surface) const noexcept {
+        return surface == nullptr
+                   ? 0.0
+                   : padForceN(pose, *surface, settings_.plate_radius_m, settings_.rim_blend_m,
+                               settings_.min_pad_stiffness_n_per_m);
+    }
+
     PadLimit found(PadLimit result, const PlatformPose& pose) noexcept {
         previous_gain_ = result.gain;
         result.pose = pose;
