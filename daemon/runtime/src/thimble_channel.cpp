@@ -92,19 +92,6 @@ std::uint32_t ThimbleChannel::plausibilityFaults(std::int64_t now_ns) noexcept {
     return kImplausibleFeedback;
 }
 
-std::uint8_t ThimbleChannel::deviceFaultCode() const noexcept {
-    const auto& state = driver_.state();
-    if (state.last_fault.active) {
-        return static_cast<std::uint8_t>(state.last_fault.code);
-    }
-    if (state.heartbeat.active_fault != 0) {
-        return state.heartbeat.active_fault;
-    }
-    // A fault seen and gone within this poll is still raised (LinkMonitor): name what it was.
-    // Only then: a code kept after the fault cleared would read as a standing fault.
-    return (linkFaults() & devices::kDeviceFault) != 0 ? driver_.link().lastFaultCode() : 0;
-}
-
 void ThimbleChannel::measure() noexcept {
     const auto& state = driver_.state();
     if (state.state_updates == state_updates_) {

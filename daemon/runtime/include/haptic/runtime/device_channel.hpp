@@ -171,6 +171,18 @@ class DriverChannel : public DeviceChannel {
     [[nodiscard]] std::uint64_t rejectedFrames() const noexcept override {
         return driver_.codec().rejects().total();
     }
+    [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override {
+        const auto& state = driver_.state();
+        if (state.last_fault.active) {
+            return static_cast<std::uint8_t>(state.last_fault.code);
+        }
+        if (state.heartbeat.active_fault != 0) {
+            return state.heartbeat.active_fault;
+        }
+        // A fault seen and gone within this poll is still raised (LinkMonitor): name what it
+        // was. Only then: a code kept after the fault cleared would read as a standing fault.
+        return (linkFaults() & devices::kDeviceFault) != 0 ? driver_.link().lastFaultCode() : 0;
+    }
 
     Driver driver_;
     Command command_{};

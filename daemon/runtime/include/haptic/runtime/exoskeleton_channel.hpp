@@ -90,7 +90,6 @@ class ExoskeletonChannel final
     }
 
   protected:
-    [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
     // For longer than can.heartbeat_timeout_ms on a fresh state, the device reporting no fault
     // of its own: its enabled bit against the enable last commanded (a device that stays
     // enabled after a disable, or never enables), and, while enabled, the force it measures

@@ -44,7 +44,6 @@ class ThimbleChannel final
     [[nodiscard]] const tactile::PadLimit& padLimit() const noexcept { return pad_limit_; }
 
   protected:
-    [[nodiscard]] std::uint8_t deviceFaultCode() const noexcept override;
     void commandSafe() noexcept override { command_.servo_target_rad = retract_servo_rad_; }
     std::uint32_t plausibilityFaults(std::int64_t now_ns) noexcept override;
     [[nodiscard]] const char* implausibleMessage() const noexcept override {
