@@ -153,8 +153,22 @@ ExoskeletonReport exoskeletonReport(const DeviceColumns& device,
     if (!energy.empty()) {
         report.delivered_energy_j = -(energy.back() - energy.front());
         report.environment_work_j = environment.back() - environment.front();
+        // The observer's energy is the port's intake (-delivered) since the enable.
+        report.carried_in_budget_j = energy.front() + environment.front();
+        report.worst_balance_j = -report.carried_in_budget_j;
+        for (std::size_t i = 0; i < energy.size(); ++i) {
+            report.worst_balance_j =
+                std::max(report.worst_balance_j, -(energy[i] + environment[i]));
+        }
     }
     const auto& tick = device.column("tick");
+    for (std::size_t i = 1; i < energy.size(); ++i) {
+        const double delivered = -(energy[i] - energy[i - 1]);
+        if (tick[i] == tick[i - 1] + 1.0 && -(energy[i - 1] + environment[i - 1]) > 0.0 &&
+            delivered > 0.0) {
+            report.delivered_in_deficit_j += delivered;
+        }
+    }
     for (std::size_t i = 1; i < command.size(); ++i) {
         if (tick[i] != tick[i - 1] + 1.0) {
             continue;  // a telemetry sample was lost in between
@@ -479,14 +493,18 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
                 "  felt vs reference: mean |reference| {:.3f} N, error RMS {:.3f} N ({:.1f}% of "
                 "it), peak {:.3f} N\n"
                 "  ghost torque RMS {:.5f} N m; net energy delivered {:.6f} J, work of the "
-                "moving objects {:.6f} J (excess {:.6f} J)\n"
+                "moving objects {:.6f} J (excess {:.6f} J, with {:.6f} J of budget carried in); "
+                "since the port's enable, delivered minus work at most {:.3g} J; delivered in "
+                "deficit {:.3g} "
+                "J\n"
                 "  command: at the {:.1f} N clamp {:.1f}% of contact ticks ({:.1f}% while the "
                 "reference is below 80% of it); chatter {:.3f} N RMS = {:.1f}% of the mean "
                 "|command| {:.3f} N\n"
                 "  largest step of the command {:.3f} N; {} steps above the {:.2f} N rate limit\n",
                 index, q.ticks, r.contact_ticks, settings.contact_threshold_n, r.mean_reference_n,
                 r.rms_error_n, 100.0 * r.errorFraction(), r.peak_error_n, r.rms_ghost_torque_nm,
-                r.delivered_energy_j, r.environment_work_j, r.excessEnergy(), settings.clamp_n,
+                r.delivered_energy_j, r.environment_work_j, r.excessEnergy(), r.carried_in_budget_j,
+                r.worst_balance_j, r.delivered_in_deficit_j, settings.clamp_n,
                 100.0 * q.clampFraction(), 100.0 * r.clampBelowReferenceFraction(), q.chatter_rms_n,
                 100.0 * q.chatterFraction(), q.mean_contact_force_n, r.largest_step_n,
                 r.steps_over_rate_limit, settings.max_step_n);

@@ -77,12 +77,24 @@ struct ExoskeletonReport {
     double peak_error_n{0.0};
     double rms_ghost_torque_nm{0.0};
     std::size_t clamp_below_reference_ticks{0};
+    // Over the recording's first to last sample.
     double delivered_energy_j{0.0};
     double environment_work_j{0.0};
-    // Delivered beyond what the moving objects put in: > 0 means the rendering was active.
+    // Delivered beyond what the moving objects put in over the recording. It can be > 0 for a
+    // passive port: the port spends the budget it was given before the recording began.
     [[nodiscard]] double excessEnergy() const noexcept {
         return delivered_energy_j - environment_work_j;
     }
+    // The passivity balance, counted from the port's enable (the passivity controller's
+    // interval, port_safety.hpp): delivered minus the moving objects' work. At the first
+    // sample its negative is the budget carried into the recording; the largest over the
+    // samples > 0 means the device gave more than it was given at that moment (active).
+    double carried_in_budget_j{0.0};
+    double worst_balance_j{0.0};
+    // What the port delivered on ticks that began with the balance > 0 (in deficit, the
+    // passivity controller lets no force spend): the controller's failures. A deficit itself
+    // can arise without them, from the objects' motion debited after the tick.
+    double delivered_in_deficit_j{0.0};
     double largest_step_n{0.0};
     std::size_t steps_over_rate_limit{0};
     [[nodiscard]] double errorFraction() const noexcept {

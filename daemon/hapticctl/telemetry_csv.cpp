@@ -112,7 +112,9 @@ std::string telemetryCsvRow(const msgs::TelemetrySample& sample, std::int64_t or
     for (std::size_t i = 0; i < 3; ++i) {
         row += fmt::format(",{:.6f}", exo.ghost_torque_nm[i]);
     }
-    row += fmt::format(",{:.6f},{:.6f}", exo.energy_observer_j, exo.environment_work_j);
+    // To the nJ: the passivity balance is judged on these, and a recording's budget is
+    // tenths of a mJ.
+    row += fmt::format(",{:.9f},{:.9f}", exo.energy_observer_j, exo.environment_work_j);
     for (const double angle : sample.thimble.servo_angle_rad) {
         row += fmt::format(",{:.4f}", angle);
     }

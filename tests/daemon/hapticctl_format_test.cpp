@@ -277,8 +277,8 @@ TEST(TelemetryCsv, OneRowPerSampleWithTimeFromTheOriginAndEveryActuator) {
     const std::string row =
         "1234,2.500000,1,thimble,2.0000,1.5000,-0.2500,0.0000,7.30,55.50,3.25,2.50,"
         "0.000000,0.000000,0.000000,0.000000,0.000000,0.000000,0.0000,"
-        "0.000000,0.000000,0.000000,0.0000,0.000000,0.000000,0.000000,0.000000,"
-        "0.000000,0.0000,0.0000,0.0000,0.2500,0.0000,-1.0000,0.000000,0.001000,0.000000,"
+        "0.000000,0.000000,0.000000,0.0000,0.000000,0.000000,0.000000,0.000000000,"
+        "0.000000000,0.0000,0.0000,0.0000,0.2500,0.0000,-1.0000,0.000000,0.001000,0.000000,"
         "0.7500,3";
     EXPECT_EQ(telemetryCsvRow(sample, 1'000'000'000), row + ",,\n") << "a scripted hand";
     sample.tracking = {3'460'000'000, 3'481'500'000};
@@ -500,6 +500,9 @@ TEST(ClosedLoopReport, ReadsTheRecordingBackAndComparesFeltWithReference) {
     EXPECT_NEAR(exo.delivered_energy_j, 0.99, 1e-6);
     EXPECT_NEAR(exo.environment_work_j, 0.396, 1e-6);
     EXPECT_NEAR(exo.excessEnergy(), 0.594, 1e-6);
+    EXPECT_NEAR(exo.carried_in_budget_j, 0.0, 1e-9);
+    EXPECT_NEAR(exo.worst_balance_j, 0.594, 1e-9);        // active from the first tick on
+    EXPECT_NEAR(exo.delivered_in_deficit_j, 0.98, 1e-9);  // every tick after the first
     EXPECT_EQ(exo.clamp_below_reference_ticks, 0U);
     EXPECT_NEAR(exo.largest_step_n, 1.6, 1e-9);
     EXPECT_EQ(exo.steps_over_rate_limit, 1U);
@@ -510,6 +513,52 @@ TEST(ClosedLoopReport, ReadsTheRecordingBackAndComparesFeltWithReference) {
     const std::string text = formatReport(devices, {}, {});
     EXPECT_NE(text.find("error RMS 0.500 N (25.0% of it)"), std::string::npos) << text;
     EXPECT_THROW((void)readTelemetryCsv("time,tick\n1,2\n"), std::runtime_error);
+}
+
+// A passive port may give more in a recording than the objects put in while it spends the
+// budget it took before the recording began (a previous method's window): the report tells
+// that from an active port by the balance counted from the enable, to the nJ.
+TEST(ClosedLoopReport, APortSpendingABudgetCarriedInIsPassive) {
+    std::string csv = telemetryCsvHeader();
+    msgs::TelemetrySample sample;
+    sample.device_index = 0;
+    sample.device_kind = msgs::DeviceKind::kExoskeleton;
+    for (int i = 0; i < 100; ++i) {
+        sample.tick = static_cast<std::uint64_t>(i);
+        sample.stamp_ns = 1'000'000LL * i;
+        // Taken in before: 40 uJ; given back 0.25 uJ a tick, 10 uJ while the objects add 15.
+        sample.exoskeleton.energy_observer_j = 40e-6 - 0.25e-6 * i;
+        sample.exoskeleton.environment_work_j = 0.15e-6 * i;
+        csv += telemetryCsvRow(sample, 0);
+    }
+    const ExoskeletonReport passive = exoskeletonReport(readTelemetryCsv(csv).at(0), {});
+    EXPECT_NEAR(passive.excessEnergy(), 9.9e-6, 1e-12);
+    EXPECT_NEAR(passive.carried_in_budget_j, 40e-6, 1e-12);
+    EXPECT_NEAR(passive.worst_balance_j, -30.1e-6, 1e-12);
+    EXPECT_EQ(passive.delivered_in_deficit_j, 0.0);
+    EXPECT_NE(formatReport(readTelemetryCsv(csv), {}, {}).find("at most -3.01e-05 J"),
+              std::string::npos);
+
+    // The same budget overspent by 0.5 uJ at the end: active, though the excess is as small.
+    sample.exoskeleton.energy_observer_j = -0.5e-6;
+    sample.exoskeleton.environment_work_j = 0.0;
+    sample.tick = 100;
+    sample.stamp_ns = 100'000'000LL;
+    csv += telemetryCsvRow(sample, 0);
+    const ExoskeletonReport active = exoskeletonReport(readTelemetryCsv(csv).at(0), {});
+    EXPECT_NEAR(active.worst_balance_j, 0.5e-6, 1e-12);
+    EXPECT_EQ(active.delivered_in_deficit_j, 0.0) << "the deficit began on the last tick";
+
+    // A deficit booked by the objects (their work falls), then 0.25 uJ delivered in it.
+    sample.exoskeleton.environment_work_j = -1e-6;
+    sample.tick = 101;
+    csv += telemetryCsvRow(sample, 0);
+    sample.exoskeleton.energy_observer_j = -0.75e-6;
+    sample.tick = 102;
+    csv += telemetryCsvRow(sample, 0);
+    const ExoskeletonReport spending = exoskeletonReport(readTelemetryCsv(csv).at(0), {});
+    EXPECT_NEAR(spending.worst_balance_j, 1.75e-6, 1e-12);
+    EXPECT_NEAR(spending.delivered_in_deficit_j, 0.25e-6, 1e-12);
 }
 
 // A thimble recording and the virtual user's felt log of the same run, on one monotonic
