@@ -34,7 +34,7 @@ run_variant() {
   # iceoryx, which Debian ships uninstrumented, so TSan cannot judge them.
   local targets=() selection=()
   if [[ $variant == tsan ]]; then
-    targets=(daemon_core_test)
+    targets=(daemon_core_test softhand_helper_thread_test)
     selection=(-L threaded)
   fi
   ninja -C "$build" -j2 "${targets[@]}"

@@ -47,6 +47,7 @@ using bench::kPressReferenceLevel;
 using bench::kPressSteps;
 using bench::Sample;
 using bench::solverSettings;
+using haptic::bench::processCpuUs;
 using haptic::bench::threadCpuUs;
 constexpr int kFlexReferenceLevel = 3;
 
@@ -87,6 +88,8 @@ void run(benchmark::State& state, int reference_level, StepLimits limits) {
         config::SolverLimits budget;  // handsim's default Newton count, this row's PCG cap
         budget.pcg_max_iterations = static_cast<int>(state.range(1));
         scene.solver() = withRealtimeLimits(scene.solver(), budget);
+        // Third argument: 1 = with the helper thread, as handsim runs, 0 = without.
+        scene.solver().use_helper_thread = state.range(2) != 0;
     }
     std::vector<double> step_us;
     std::vector<double> cpu_us;
@@ -103,13 +106,16 @@ void run(benchmark::State& state, int reference_level, StepLimits limits) {
     double press_error2 = 0.0;
     double press_ref2 = 0.0;
     int step = 0;
+    double process_cpu_us = 0.0;
     for (auto _ : state) {
         scene.setInput(step);
         const double c0 = threadCpuUs();
+        const double p0 = processCpuUs();
         const auto t0 = std::chrono::steady_clock::now();
         const StepReport r = scene.step();
         const auto t1 = std::chrono::steady_clock::now();
         cpu_us.push_back(threadCpuUs() - c0);
+        process_cpu_us += processCpuUs() - p0;
         step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
         pcg_iterations += r.pcg_iterations;
         backtracks += r.backtracks;
@@ -138,6 +144,7 @@ void run(benchmark::State& state, int reference_level, StepLimits limits) {
     state.counters["tets"] = scene.simulation().tetCount();
     addPercentiles(state, step_us, "");
     addPercentiles(state, cpu_us, "cpu_");
+    state.counters["process_cpu_mean_us"] = process_cpu_us / steps;
     state.counters["pcg_iters"] = pcg_iterations / steps;
     state.counters["backtracks"] = backtracks / steps;
     state.counters["substeps"] = substeps / steps;
@@ -238,13 +245,16 @@ void runDefaultScene(benchmark::State& state, int resolution,
     double substepped_us = 0.0;
     int substepped = 0;
     int contacts = 0;
+    double process_cpu_us = 0.0;
     for (auto _ : state) {
+        const double p0 = processCpuUs();
         const auto t0 = std::chrono::steady_clock::now();
         (void)sim.setHandPose(script.at(++step * dt));
         const StepReport r = sim.step(dt);
         sim.fill(0, constraints);
         sim.fill(1, surface);
         const auto t1 = std::chrono::steady_clock::now();
+        process_cpu_us += processCpuUs() - p0;
         step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
         pcg_iterations += r.pcg_iterations;
         substeps += r.substeps;
@@ -273,6 +283,7 @@ void runDefaultScene(benchmark::State& state, int resolution,
     state.counters["p99_us"] = common::percentile(step_us, 0.99);
     state.counters["pcg_iters"] = pcg_iterations / static_cast<double>(step_us.size());
     state.counters["newton_extra"] = newton / static_cast<double>(step_us.size());
+    state.counters["process_cpu_mean_us"] = process_cpu_us / static_cast<double>(step_us.size());
 }
 
 // The grid: <resolution>/<PCG cap>/<backtracks>/<substep depth>, 5 Newton iterations.
@@ -284,12 +295,15 @@ void defaultScene(benchmark::State& state) {
     runDefaultScene(state, static_cast<int>(state.range(0)), settings);
 }
 
-// What handsim runs: realtimeSceneSettings() at <resolution>/<Newton iterations>. The
-// shipped scene (solver: block in default.yaml) is 1/2; 1/1 is handsim's default budget.
+// What handsim runs: realtimeSceneSettings() at <resolution>/<Newton iterations>/<helper
+// thread: 1 on, as handsim runs on two or more cores; 0 off>. The shipped scene (solver:
+// block in default.yaml) is 1/2/1; 1/1 is handsim's default budget.
 void defaultSceneHandsimLimits(benchmark::State& state) {
     config::SolverLimits limits;
     limits.newton_iterations = static_cast<int>(state.range(1));
-    runDefaultScene(state, static_cast<int>(state.range(0)), realtimeSceneSettings(limits));
+    SceneSimulationSettings settings = realtimeSceneSettings(limits);
+    settings.solver.use_helper_thread = state.range(2) != 0;
+    runDefaultScene(state, static_cast<int>(state.range(0)), settings);
 }
 
 BENCHMARK(fingertipPress)
@@ -301,11 +315,11 @@ BENCHMARK(fingerFlex)
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(400);
 BENCHMARK(fingertipPressHandsimLimits)
-    ->ArgsProduct({{0, 1, 2}, {30}})
+    ->ArgsProduct({{0, 1, 2}, {30}, {0, 1}})
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(400);
 BENCHMARK(fingerFlexHandsimLimits)
-    ->ArgsProduct({{0, 1}, {30}})
+    ->ArgsProduct({{0, 1}, {30}, {0, 1}})
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(400);
 BENCHMARK(defaultScene)
@@ -313,7 +327,7 @@ BENCHMARK(defaultScene)
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(1200);
 BENCHMARK(defaultSceneHandsimLimits)
-    ->ArgsProduct({{1, 2}, {1, 2, 5}})
+    ->ArgsProduct({{1, 2}, {1, 2, 5}, {0, 1}})
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(1200);
 BENCHMARK(wholeHand)

@@ -76,7 +76,8 @@ void PcgWorkspace::resize(Eigen::Index n) {
 PcgResult solvePcg(const BlockPattern& pattern, const std::vector<double>& values,
                    const Eigen::VectorXd& b, const std::vector<char>& free_mask,
                    const BlockJacobiPreconditioner& pre, int max_iterations,
-                   double relative_tolerance, Eigen::VectorXd& x, PcgWorkspace& work) {
+                   double relative_tolerance, Eigen::VectorXd& x, PcgWorkspace& work,
+                   const std::atomic<bool>* stop) {
     const auto n = b.size();
     work.resize(n);
     Eigen::VectorXd& mask = work.mask;
@@ -119,7 +120,8 @@ PcgResult solvePcg(const BlockPattern& pattern, const std::vector<double>& value
     best = x;
     double best_norm = r_norm;
     double best_model = -0.5 * (b + r).dot(x);
-    while (r_norm > target && result.iterations < max_iterations) {
+    while (r_norm > target && result.iterations < max_iterations &&
+           (stop == nullptr || !stop->load(std::memory_order_relaxed))) {
         pattern.multiply(values, p, ap);
         ap = ap.cwiseProduct(mask);
         const double curvature = p.dot(ap);

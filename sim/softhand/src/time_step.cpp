@@ -2,10 +2,12 @@
 // (docs/algorithms.md §2.6).
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
 #include "energy_terms.hpp"
+#include "haptic/softhand/helper_thread.hpp"
 #include "haptic/softhand/pcg.hpp"
 #include "haptic/softhand/simulation.hpp"
 
@@ -228,19 +230,25 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
         double energy;
         double tissue;
     };
-    const auto evaluate = [&](const Eigen::VectorXd& v_trial) {
-        StepAssembly::massTimes(node_mass_, bodies_, w, v_trial, w.mass_trial);
-        w.pattern.multiply(w.damping_hessian, v_trial, w.tissue_trial);
-        const double damping =
-            alpha * v_trial.dot(w.mass_trial) + gamma * v_trial.dot(w.tissue_trial);
-        integrate(q, v_trial, h, w.trial);
-        const double tissue = EnergyTerms::tissue(*this, w.trial, nullptr, nullptr);
-        const double potential = tissue + EnergyTerms::external(*this, w.trial, nullptr) +
-                                 EnergyTerms::skeleton(*this, w.trial, nullptr) +
-                                 EnergyTerms::contact(*this, w.trial, nullptr);
-        const double kinetic_change = (v_trial - velocity).dot(w.mass_trial - w.mass_velocity);
+    // Reads the step's state only and writes the buffers it is given, so that the helper
+    // thread can evaluate one point (into the w.ahead_* buffers) while this thread does
+    // another.
+    const auto evaluate_into = [&](const Eigen::VectorXd& v_trial, Eigen::VectorXd& mass_trial,
+                                   Eigen::VectorXd& tissue_trial, Configuration& trial) {
+        StepAssembly::massTimes(node_mass_, bodies_, w, v_trial, mass_trial);
+        w.pattern.multiply(w.damping_hessian, v_trial, tissue_trial);
+        const double damping = alpha * v_trial.dot(mass_trial) + gamma * v_trial.dot(tissue_trial);
+        integrate(q, v_trial, h, trial);
+        const double tissue = EnergyTerms::tissue(*this, trial, nullptr, nullptr);
+        const double potential = tissue + EnergyTerms::external(*this, trial, nullptr) +
+                                 EnergyTerms::skeleton(*this, trial, nullptr) +
+                                 EnergyTerms::contact(*this, trial, nullptr);
+        const double kinetic_change = (v_trial - velocity).dot(mass_trial - w.mass_velocity);
         return Evaluation{0.5 * kinetic_change + potential + 0.5 * h * damping,
-                          0.5 * v_trial.dot(w.mass_trial) + potential, tissue};
+                          0.5 * v_trial.dot(mass_trial) + potential, tissue};
+    };
+    const auto evaluate = [&](const Eigen::VectorXd& v_trial) {
+        return evaluate_into(v_trial, w.mass_trial, w.tissue_trial, w.trial);
     };
     // Phi(v) is the potential at the prediction, already summed by the assembly above.
     const double merit_start = potential_predicted + 0.5 * h * damping_start;
@@ -258,12 +266,59 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
     // 3 elements inverted), where substeps from a fresh prediction get out.
     const int newton_iterations =
         stats.inverted_elements > 0 ? 1 : std::max(1, settings_.max_newton_iterations);
+    // The helper thread's jobs. Each is collected (helper_->wait()) before anything it reads
+    // changes: at the next Newton iteration's assembly, and after the loop.
+    HelperThread* helper = nullptr;
+    if (settings_.use_helper_thread && settings_.linear_solver == LinearSolver::kPcg) {
+        if (!helper_) {
+            helper_ = std::make_unique<HelperThread>();
+        }
+        helper = helper_.get();
+        // Sized here so that the helper's jobs allocate nothing.
+        w.cold_delta.setZero(n);
+        w.cold_pcg.resize(n);
+        w.ahead_v.resize(n);
+        w.ahead_mass.resize(n);
+        w.ahead_tissue.resize(n);
+        if (w.ahead_trial.x.size() != q.x.size() || w.ahead_trial.c.size() != q.c.size()) {
+            w.ahead_trial = q;
+        }
+    }
+    struct ColdSolve {
+        Workspace* w;
+        int max_iterations;
+        double relative_tolerance;
+        PcgResult result;
+        std::atomic<bool> stop{false};
+    } cold{&w, settings_.pcg_max_iterations, settings_.pcg_relative_tolerance, {}, {}};
+    const auto solve_cold = [](void* context) {
+        auto& job = *static_cast<ColdSolve*>(context);
+        Workspace& work = *job.w;
+        work.cold_delta.setZero();
+        job.result = solvePcg(work.pattern, work.system, work.rhs, work.free_mask,
+                              work.preconditioner, job.max_iterations, job.relative_tolerance,
+                              work.cold_delta, work.cold_pcg, &job.stop);
+    };
+    struct PointAhead {
+        const decltype(evaluate_into)* evaluate;
+        Workspace* w;
+        Evaluation value;
+    } ahead{&evaluate_into, &w, {}};
+    const auto evaluate_ahead = [](void* context) {
+        auto& job = *static_cast<PointAhead*>(context);
+        Workspace& work = *job.w;
+        job.value =
+            (*job.evaluate)(work.ahead_v, work.ahead_mass, work.ahead_tissue, work.ahead_trial);
+    };
     // Phi (and, once evaluated, E) at `iterate`; its merit is the line search's reference.
     bool evaluated_iterate = false;
     Evaluation iterate_value{merit_start, 0.0, 0.0};
     const bool direct = settings_.linear_solver == LinearSolver::kSparseLdlt;
     for (int newton = 0; newton < newton_iterations && std::isfinite(merit_start); ++newton) {
         if (newton > 0) {
+            if (helper != nullptr) {
+                helper->wait();
+            }
             integrate(q, iterate, h, w.trial);
             for (;;) {
                 Assembler assembler(w.pattern, w.hessian, w.tissue_hessian, w.gradient, w.missing,
@@ -286,6 +341,13 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
         // The direct solver has no warm start; its direction is exact, so it gets the same
         // halvings as a warm PCG solve (the extra cold halvings are PCG's trap remedy).
         bool warm = newton == 0 && !direct;
+        // Under way on the helper, the cold solve that a failed warm one falls back to.
+        enum class Cold { kNone, kRunning, kCollected } cold_state = Cold::kNone;
+        if (warm && helper != nullptr) {
+            cold.stop.store(false);
+            helper->start(solve_cold, &cold);
+            cold_state = Cold::kRunning;
+        }
         double decrement = 0.0;
         double best_fraction = 0.0;
         bool sufficient = false;
@@ -305,9 +367,19 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                 if (direct) {
                     w.preconditioner.compute(w.pattern, w.system, nodeCount(), w.free_mask);
                 }
-                const PcgResult pcg = solvePcg(w.pattern, w.system, w.rhs, w.free_mask,
-                                               w.preconditioner, settings_.pcg_max_iterations,
-                                               settings_.pcg_relative_tolerance, w.delta, w.pcg);
+                PcgResult pcg;
+                if (!warm && cold_state != Cold::kNone) {
+                    if (cold_state == Cold::kRunning) {
+                        helper->wait();
+                    }
+                    cold_state = Cold::kNone;
+                    w.delta = w.cold_delta;
+                    pcg = cold.result;
+                } else {
+                    pcg = solvePcg(w.pattern, w.system, w.rhs, w.free_mask, w.preconditioner,
+                                   settings_.pcg_max_iterations, settings_.pcg_relative_tolerance,
+                                   w.delta, w.pcg);
+                }
                 report.pcg_iterations += pcg.iterations;
                 report.pcg_relative_residual = pcg.relative_residual;
                 report.pcg_capped = report.pcg_capped || !pcg.converged;
@@ -328,9 +400,31 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                                          : std::max(settings_.max_backtracks, kColdHalvings);
                 double step_fraction = 1.0;
                 best_value = iterate_value;
+                // The helper evaluates the next halving while this thread evaluates the
+                // current one; `ahead_pending`: its point is the current one.
+                bool ahead_pending = false;
                 for (int halving = 0;; ++halving) {
-                    v_plus = iterate + step_fraction * w.delta;
-                    const Evaluation value = evaluate(v_plus);
+                    Evaluation value;
+                    if (ahead_pending) {
+                        helper->wait();
+                        value = ahead.value;
+                        ahead_pending = false;
+                    } else {
+                        // Free once the cold solve is done (collected here, kept for later).
+                        const bool helper_free =
+                            helper != nullptr && (cold_state != Cold::kRunning || helper->done());
+                        if (helper_free && halving < halvings) {
+                            helper->wait();
+                            if (cold_state == Cold::kRunning) {
+                                cold_state = Cold::kCollected;
+                            }
+                            w.ahead_v = iterate + (0.5 * step_fraction) * w.delta;
+                            helper->start(evaluate_ahead, &ahead);
+                            ahead_pending = true;
+                        }
+                        v_plus = iterate + step_fraction * w.delta;
+                        value = evaluate(v_plus);
+                    }
                     if (std::isfinite(value.merit) && value.merit < best_value.merit) {
                         best_value = value;
                         best_fraction = step_fraction;
@@ -338,7 +432,7 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                     if (std::isfinite(value.merit) &&
                         value.merit <= iterate_value.merit - kArmijo * step_fraction * decrement) {
                         sufficient = true;
-                        break;
+                        break;  // a point still being evaluated ahead is collected later
                     }
                     if (halving >= halvings) {
                         break;
@@ -352,6 +446,9 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
             }
             warm = false;
             ++report.restarted_solves;
+        }
+        if (cold_state == Cold::kRunning) {
+            cold.stop.store(true);  // the warm direction served: end the cold solve early
         }
         if (newton == 0) {
             // The next step starts PCG from this step's first Newton direction (not from
@@ -373,6 +470,9 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
         if (!sufficient || (energy_ok && moved_m <= settings_.newton_tolerance_m)) {
             break;
         }
+    }
+    if (helper != nullptr) {
+        helper->wait();  // before the state its jobs read changes
     }
     if (!evaluated_iterate) {
         iterate_value = evaluate(iterate);

@@ -7,6 +7,7 @@
 // block_sparse.hpp, with every vector in a workspace that is sized once.
 
 #include <Eigen/Core>
+#include <atomic>
 #include <vector>
 
 #include "haptic/softhand/block_sparse.hpp"
@@ -40,9 +41,12 @@ struct PcgWorkspace {
 };
 
 // Solves A x = b on the free DoFs, starting from x (warm start); A is `values` on `pattern`.
+// `stop`, when given and set, ends the iterations early (a cold solve not needed, time_step.cpp): x
+// is then whatever iterate it had.
 PcgResult solvePcg(const BlockPattern& pattern, const std::vector<double>& values,
                    const Eigen::VectorXd& b, const std::vector<char>& free_mask,
                    const BlockJacobiPreconditioner& pre, int max_iterations,
-                   double relative_tolerance, Eigen::VectorXd& x, PcgWorkspace& work);
+                   double relative_tolerance, Eigen::VectorXd& x, PcgWorkspace& work,
+                   const std::atomic<bool>* stop = nullptr);
 
 }  // namespace haptic::softhand

@@ -11,12 +11,14 @@
 #include <Eigen/Core>
 #include <array>
 #include <limits>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "haptic/softhand/block_sparse.hpp"
 #include "haptic/softhand/collider.hpp"
+#include "haptic/softhand/helper_thread.hpp"
 #include "haptic/softhand/pcg.hpp"
 #include "haptic/softhand/rotation.hpp"
 #include "haptic/softhand/sparse_direct.hpp"
@@ -59,6 +61,11 @@ struct SolverSettings {
     double max_speed_m_per_s{5.0};              // node and body speed clamp
     double contact_stiffness_n_per_m{2000.0};   // per skin node
     double friction_stiffness_n_per_m{2000.0};  // per skin node, tangential
+    // A second thread (HelperThread) solves, alongside the warm-started PCG solve, the cold
+    // one the step falls back to when the warm direction fails, and evaluates each line
+    // search point's next halving alongside it. The steps are the same to the bit; the
+    // slowest ones, with a restart and many halvings, shorten on a free core.
+    bool use_helper_thread{false};
 };
 
 struct RigidBodyDesc {
@@ -279,6 +286,11 @@ class Simulation {
         BlockJacobiPreconditioner preconditioner;
         PcgWorkspace pcg;
         SparseDirectSolver direct;
+        // The helper thread's: the cold solve, and a line-search point with its buffers.
+        Eigen::VectorXd cold_delta;
+        PcgWorkspace cold_pcg;
+        Eigen::VectorXd ahead_v, ahead_mass, ahead_tissue;
+        Configuration ahead_trial;
     };
 
   private:
@@ -327,6 +339,8 @@ class Simulation {
     double tissue_energy_{0.0};
     bool tissue_energy_valid_{false};
     Workspace work_;
+    // Made by the first step that uses it (settings_.use_helper_thread).
+    std::unique_ptr<HelperThread> helper_;
 
     friend struct EnergyTerms;
 };

@@ -1,0 +1,135 @@
+// The soft-hand step's helper thread (sim/softhand/include/haptic/softhand/helper_thread.hpp):
+// it hands jobs over and back without losing or repeating one, and a step that uses it is the
+// step without it, to the bit, on the scenes where the helper does the most (restarted solves,
+// line searches with many halvings, two Newton iterations). Label `threaded`: run under TSan.
+
+#include "haptic/softhand/helper_thread.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstring>
+#include <string>
+
+#include "finger_flex_scene.hpp"
+#include "fingertip_press_scene.hpp"
+#include "haptic/config/scene.hpp"
+#include "haptic/softhand/scene_simulation.hpp"
+
+namespace haptic::softhand {
+namespace {
+
+struct Counter {
+    int value{0};  // written by the helper only, read by the test after wait()
+};
+
+void increment(void* context) {
+    ++static_cast<Counter*>(context)->value;
+}
+
+TEST(HelperThread, RunsEveryJobOnceAndHandsItsResultBack) {
+    HelperThread helper;
+    EXPECT_TRUE(helper.done()) << "no job yet";
+    helper.wait();  // no job: returns at once
+    Counter counter;
+    for (int i = 0; i < 2000; ++i) {
+        helper.start(increment, &counter);
+        helper.wait();
+        ASSERT_EQ(counter.value, i + 1);
+        EXPECT_TRUE(helper.done());
+    }
+    // start() collects a job still under way before it queues the next.
+    for (int i = 0; i < 100; ++i) {
+        helper.start(increment, &counter);
+    }
+    helper.wait();
+    EXPECT_EQ(counter.value, 2100);
+}
+
+TEST(HelperThread, ItsDestructorWaitsForTheJobUnderWay) {
+    std::atomic<bool> finished{false};
+    {
+        HelperThread helper;
+        helper.start(
+            [](void* context) {
+                volatile double sink = 0.0;
+                for (int i = 0; i < 2'000'000; ++i) {
+                    sink = sink + 1.0;
+                }
+                static_cast<std::atomic<bool>*>(context)->store(true);
+            },
+            &finished);
+    }
+    EXPECT_TRUE(finished.load());
+}
+
+bool sameBits(const Vec3& a, const Vec3& b) {
+    return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0;
+}
+
+// Steps two copies of a scene, one with the helper thread, and asserts that every node and
+// body, and what the solver reports, are identical after every step.
+template <typename Scene>
+void expectTheSameSteps(int level, const config::SolverLimits& limits, int steps,
+                        const char* what) {
+    Scene alone(level, limits.pcg_max_iterations, 1e-4);
+    Scene helped(level, limits.pcg_max_iterations, 1e-4);
+    alone.solver() = withRealtimeLimits(alone.solver(), limits);
+    helped.solver() = withRealtimeLimits(helped.solver(), limits);
+    alone.solver().use_helper_thread = false;
+    helped.solver().use_helper_thread = true;
+    int restarted = 0;
+    int backtracks = 0;
+    for (int step = 0; step < steps; ++step) {
+        alone.setInput(step);
+        helped.setInput(step);
+        const StepReport a = alone.step();
+        const StepReport b = helped.step();
+        ASSERT_EQ(a.pcg_iterations, b.pcg_iterations) << what << " step " << step;
+        ASSERT_EQ(a.backtracks, b.backtracks) << what << " step " << step;
+        ASSERT_EQ(a.restarted_solves, b.restarted_solves) << what << " step " << step;
+        ASSERT_EQ(a.newton_iterations, b.newton_iterations) << what << " step " << step;
+        ASSERT_EQ(a.rescaled_steps, b.rescaled_steps) << what << " step " << step;
+        const Simulation& x = alone.simulation();
+        const Simulation& y = helped.simulation();
+        for (int node = 0; node < x.nodeCount(); ++node) {
+            ASSERT_TRUE(sameBits(x.nodePosition(node), y.nodePosition(node)) &&
+                        sameBits(x.nodeVelocity(node), y.nodeVelocity(node)))
+                << what << " step " << step << " node " << node;
+        }
+        for (int body = 0; body < x.bodyCount(); ++body) {
+            ASSERT_TRUE(sameBits(x.bodyPosition(body), y.bodyPosition(body)) &&
+                        sameBits(x.bodyLinearVelocity(body), y.bodyLinearVelocity(body)))
+                << what << " step " << step << " body " << body;
+        }
+        restarted += a.restarted_solves;
+        backtracks += a.backtracks;
+    }
+    // The paths the helper serves ran: cold solves it had ready, and halvings it evaluated.
+    EXPECT_GT(restarted, 0) << what;
+    EXPECT_GT(backtracks, 2 * restarted) << what;
+    std::printf("%s: %d steps, %d restarted solves, %d halvings\n", what, steps, restarted,
+                backtracks);
+}
+
+TEST(HelperThread, TheThimbleScenesStepsAreTheSameToTheBit) {
+    // The thimble scene's point (level 1, 1 Newton iteration, cap 30): its slowest steps are
+    // a restarted solve with 6-8 halvings. The first 120 steps press, slide and lift.
+    const config::SolverLimits limits =
+        config::loadSceneConfig(std::string(HAPTIC_SOURCE_DIR) + "/config/scenes/thimble_only.yaml")
+            .solver;
+    expectTheSameSteps<bench::FingertipPress>(1, limits, 120, "fingertip press");
+}
+
+TEST(HelperThread, TwoNewtonIterationsStepTheSameToTheBit) {
+    // The default scene's budget (2 Newton iterations): the helper's jobs are collected
+    // before the second iteration assembles.
+    const config::SolverLimits limits =
+        config::loadSceneConfig(std::string(HAPTIC_SOURCE_DIR) + "/config/scenes/default.yaml")
+            .solver;
+    ASSERT_EQ(limits.newton_iterations, 2);
+    expectTheSameSteps<bench::FingerFlex>(0, limits, 120, "finger flex");
+}
+
+}  // namespace
+}  // namespace haptic::softhand
