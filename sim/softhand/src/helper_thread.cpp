@@ -10,33 +10,26 @@ namespace {
 // hundreds of microseconds. Handed over through the futex alone, the thimble scene's step p99
 // did not improve at all on the 2-vCPU VM (1 046 against 1 036 us without the helper): the
 // wake-ups ate the gain. So both sides poll this long before they sleep; between steps (5-10
-// ms) the helper sleeps.
+// ms) the helper sleeps, and the step wakes it as it begins (time_step.cpp).
 constexpr std::chrono::microseconds kPollBeforeSleep{200};
-
-template <typename Predicate>
-bool pollFor(std::chrono::microseconds span, Predicate ready) {
-    const auto until = std::chrono::steady_clock::now() + span;
-    do {
-        if (ready()) {
-            return true;
-        }
-    } while (std::chrono::steady_clock::now() < until);
-    return ready();
-}
+// Expecting a job (expectNextJobAt): the timer wakes the helper this long before it (the RT
+// loop's wake-up p99 on the VM is under 0.1 ms), and it polls until this long after it.
+constexpr std::chrono::microseconds kWakeAhead{300};
+constexpr std::chrono::microseconds kLateJob{1000};
 
 }  // namespace
 
 HelperThread::HelperThread() : thread_([this] { run(); }) {}
 
 HelperThread::~HelperThread() {
-    wait();
+    (void)withdraw();
     state_.store(kStop);
     state_.notify_all();
     thread_.join();
 }
 
 void HelperThread::start(Job job, void* context) {
-    wait();
+    (void)withdraw();
     job_ = job;
     context_ = context;
     state_.store(kQueued);  // publishes job_ and context_ (sequentially consistent)
@@ -48,37 +41,79 @@ bool HelperThread::done() const noexcept {
     return state == kIdle || state == kDone;
 }
 
-void HelperThread::wait() {
-    if (state_.load() == kIdle) {
+void HelperThread::expectNextJobAt(std::chrono::steady_clock::time_point at) noexcept {
+    next_job_.store(at.time_since_epoch().count());
+}
+
+void HelperThread::awaitChange(int from, bool until_expected_job) {
+    using Clock = std::chrono::steady_clock;
+    const auto changed = [&] { return state_.load() != from; };
+    const auto pollUntil = [&](Clock::time_point until) {
+        while (!changed()) {
+            if (Clock::now() >= until) {
+                return false;
+            }
+        }
+        return true;
+    };
+    if (pollUntil(Clock::now() + kPollBeforeSleep)) {
         return;
     }
-    if (!pollFor(kPollBeforeSleep, [this] { return state_.load() == kDone; })) {
-        for (int state = state_.load(); state != kDone; state = state_.load()) {
-            state_.wait(state);
+    const Clock::time_point expected{Clock::duration{next_job_.load()}};
+    if (until_expected_job && expected - kWakeAhead > Clock::now()) {
+        std::this_thread::sleep_until(expected - kWakeAhead);
+        if (pollUntil(expected + kLateJob)) {
+            return;
         }
     }
-    state_.store(kIdle);
+    if (!changed()) {
+        state_.wait(from);
+    }
+}
+
+void HelperThread::wait() {
+    for (;;) {
+        const int state = state_.load();
+        if (state == kIdle) {
+            return;
+        }
+        if (state == kDone) {
+            state_.store(kIdle);
+            return;
+        }
+        awaitChange(state, false);
+    }
+}
+
+bool HelperThread::withdraw() {
+    int expected = kQueued;
+    if (state_.compare_exchange_strong(expected, kIdle)) {
+        return true;
+    }
+    wait();
+    return false;
 }
 
 void HelperThread::run() {
-    // Polls for a change of the state it last saw, then sleeps on it: kIdle before a job,
-    // kDone after one until the step collects it (wait() stores kIdle without a wake-up; the
-    // next start() wakes a sleeping helper).
+    // Waits for a change of the state it last saw: kIdle before a job, kDone after one until
+    // the step collects it (wait() stores kIdle without a wake-up; the next start() wakes a
+    // sleeping helper).
     int seen = kIdle;
     for (;;) {
-        if (!pollFor(kPollBeforeSleep, [&] { return state_.load() != seen; })) {
-            state_.wait(seen);
-        }
+        awaitChange(seen, true);
         const int state = state_.load();
         if (state == kStop) {
             return;
         }
-        if (state == kQueued) {
-            job_(context_);
+        int expected = kQueued;
+        if (state == kQueued && state_.compare_exchange_strong(expected, kRunning)) {
+            job_(context_);  // the job of the start() whose kQueued the exchange took
             state_.store(kDone);
             state_.notify_all();
+            seen = kDone;
+            continue;
         }
-        seen = state == kQueued ? static_cast<int>(kDone) : state;
+        seen = state == kQueued ? expected : state;  // taken back meanwhile, or kIdle/kDone
     }
 }
 

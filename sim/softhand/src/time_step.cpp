@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -158,6 +159,24 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
     const Layout layout{nodeCount(), bodyCount()};
     const int n = layout.dofs();
     Workspace& w = work_;
+    if (settings_.use_helper_thread && settings_.linear_solver == LinearSolver::kPcg) {
+        if (!helper_) {
+            helper_ = std::make_unique<HelperThread>();
+        }
+        // Between steps the helper sleeps on its timer until shortly before the next one is
+        // due (a caller stepping at dt: handsim), then polls. A caller off that beat wakes it
+        // here, which a job started after the assembly below may still find asleep (then
+        // the step takes the job back and does it itself).
+        helper_->start([](void*) {}, nullptr);
+        if (depth == 0) {
+            helper_->expectNextJobAt(
+                std::chrono::steady_clock::now() +
+                std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                    std::chrono::duration<double>(h)));
+        }
+    } else {
+        helper_.reset();
+    }
     // Nested substeps reuse the workspace: the caller only returns after them.
     currentConfiguration(w.start);
     const Configuration& q = w.start;
@@ -266,14 +285,10 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
     // 3 elements inverted), where substeps from a fresh prediction get out.
     const int newton_iterations =
         stats.inverted_elements > 0 ? 1 : std::max(1, settings_.max_newton_iterations);
-    // The helper thread's jobs. Each is collected (helper_->wait()) before anything it reads
-    // changes: at the next Newton iteration's assembly, and after the loop.
-    HelperThread* helper = nullptr;
-    if (settings_.use_helper_thread && settings_.linear_solver == LinearSolver::kPcg) {
-        if (!helper_) {
-            helper_ = std::make_unique<HelperThread>();
-        }
-        helper = helper_.get();
+    // The helper thread's jobs. Each is withdrawn (taken back, or waited for) before anything
+    // it reads changes: at the next Newton iteration's assembly, and after the loop.
+    HelperThread* helper = helper_.get();
+    if (helper != nullptr) {
         // Sized here so that the helper's jobs allocate nothing.
         w.cold_delta.setZero(n);
         w.cold_pcg.resize(n);
@@ -317,7 +332,7 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
     for (int newton = 0; newton < newton_iterations && std::isfinite(merit_start); ++newton) {
         if (newton > 0) {
             if (helper != nullptr) {
-                helper->wait();
+                (void)helper->withdraw();
             }
             integrate(q, iterate, h, w.trial);
             for (;;) {
@@ -368,11 +383,12 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                     w.preconditioner.compute(w.pattern, w.system, nodeCount(), w.free_mask);
                 }
                 PcgResult pcg;
-                if (!warm && cold_state != Cold::kNone) {
-                    if (cold_state == Cold::kRunning) {
-                        helper->wait();
-                    }
-                    cold_state = Cold::kNone;
+                // The helper's cold solve, unless it had not begun it (then solved here).
+                const bool cold_ready =
+                    !warm && (cold_state == Cold::kCollected ||
+                              (cold_state == Cold::kRunning && !helper->withdraw()));
+                cold_state = warm ? cold_state : Cold::kNone;
+                if (cold_ready) {
                     w.delta = w.cold_delta;
                     pcg = cold.result;
                 } else {
@@ -405,17 +421,17 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                 bool ahead_pending = false;
                 for (int halving = 0;; ++halving) {
                     Evaluation value;
-                    if (ahead_pending) {
-                        helper->wait();
+                    if (ahead_pending && !helper->withdraw()) {
                         value = ahead.value;
                         ahead_pending = false;
                     } else {
+                        ahead_pending = false;  // taken back before it began: evaluated here
                         // Free once the cold solve is done (collected here, kept for later).
                         const bool helper_free =
                             helper != nullptr && (cold_state != Cold::kRunning || helper->done());
                         if (helper_free && halving < halvings) {
-                            helper->wait();
                             if (cold_state == Cold::kRunning) {
+                                helper->wait();  // done: its result stays for a restart
                                 cold_state = Cold::kCollected;
                             }
                             w.ahead_v = iterate + (0.5 * step_fraction) * w.delta;
@@ -432,7 +448,7 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                     if (std::isfinite(value.merit) &&
                         value.merit <= iterate_value.merit - kArmijo * step_fraction * decrement) {
                         sufficient = true;
-                        break;  // a point still being evaluated ahead is collected later
+                        break;  // a point still being evaluated ahead is withdrawn later
                     }
                     if (halving >= halvings) {
                         break;
@@ -472,7 +488,7 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
         }
     }
     if (helper != nullptr) {
-        helper->wait();  // before the state its jobs read changes
+        (void)helper->withdraw();  // before the state its jobs read changes
     }
     if (!evaluated_iterate) {
         iterate_value = evaluate(iterate);

@@ -2,9 +2,12 @@
 // A second thread beside the soft-hand step (time_step.cpp), which hands it the work that it
 // would otherwise do after its own: the cold PCG solve a failed warm start falls back to, and
 // the line search's next halving. One job at a time, handed over without allocation or lock
-// (an atomic state; the futex behind std::atomic::wait only while idle). The helper computes
-// exactly what the step's thread would have, so the steps are the same to the bit.
+// (an atomic state; the futex behind std::atomic::wait only after a poll). A job the helper
+// has not begun can be taken back, and the step then does it itself, so a helper slow to wake
+// never makes a step slower than one without it. The helper computes exactly what the step's
+// thread would have, so the steps are the same to the bit.
 #include <atomic>
+#include <chrono>
 #include <thread>
 
 namespace haptic::softhand {
@@ -18,21 +21,34 @@ class HelperThread {
     HelperThread(const HelperThread&) = delete;
     HelperThread& operator=(const HelperThread&) = delete;
 
-    // Runs job(context) on the helper. Waits for the previous job first. Everything the job
-    // reads or writes belongs to it until wait() returns.
+    // Queues job(context) for the helper, after withdraw()ing the previous job. Everything the
+    // job reads or writes belongs to it until wait() or withdraw() returns.
     void start(Job job, void* context);
-    // Returns once the job started last has returned (at once when there is none).
+    // Returns once the job queued last has run (at once when there is none).
     void wait();
-    // The job started last has returned, or there is none: wait() would not block.
+    // Takes the job queued last back if the helper has not begun it (returns true: it will
+    // never run), else waits for it (returns false: it ran). False when there is none.
+    bool withdraw();
+    // The job queued last has run, or there is none: wait() would not block.
     [[nodiscard]] bool done() const noexcept;
+    // When the next job is likely to come (the next step of a periodic caller). An idle helper
+    // sleeps on its own timer until shortly before it and polls from then on: woken through
+    // the futex after a few milliseconds asleep, a VM's idle vCPU took 2.9 ms (p50) to run it,
+    // longer than a whole step.
+    void expectNextJobAt(std::chrono::steady_clock::time_point at) noexcept;
 
   private:
-    enum State : int { kIdle, kQueued, kDone, kStop };
+    enum State : int { kIdle, kQueued, kRunning, kDone, kStop };
     void run();
+    // Returns once the state is not `from` any more: polls, then sleeps on the futex. The
+    // helper, idle (until_expected_job), sleeps on its timer until shortly before the job
+    // expected, and polls again, first.
+    void awaitChange(int from, bool until_expected_job);
 
     Job job_{nullptr};
     void* context_{nullptr};
     std::atomic<int> state_{kIdle};
+    std::atomic<std::chrono::steady_clock::rep> next_job_{0};  // steady_clock ticks
     std::thread thread_;  // last: it starts once the members above exist
 };
 
