@@ -3,7 +3,11 @@
 # scene, the line handsim logs at exit: steps, rate held, step time p50/p99/max, and what the
 # energy guard did (rescaled, substepped, frozen steps). Not part of CI (4 x the duration).
 #
-#   scripts/handsim-scenes.sh [--duration 60] [--build build/release]
+#   scripts/handsim-scenes.sh [--duration 60] [--build build/release] [--scenes "thimble_only default"]
+#                             [--helper-thread on|off]
+#
+# --helper-thread on|off runs every scene with solver.helper_thread set so (default: as each
+# scene ships it), for comparing the two in one run (docs/benchmarks.md).
 #
 # Each run uses a copy of config/ whose sim.yaml names the scene (and, for the thimble scene,
 # only the thimble), with --sim-link dds on its own DDS domain: no RouDi, no hapticd. Nothing
@@ -12,11 +16,15 @@ set -euo pipefail
 
 duration=60
 build=build/release
+scenes="thimble_only default whole_hand grasp_box"
+helper_thread=shipped
 while [[ $# -gt 0 ]]; do
     case "$1" in
         --duration) duration="$2"; shift 2 ;;
         --build) build="$2"; shift 2 ;;
-        *) echo "usage: $0 [--duration S] [--build DIR]" >&2; exit 2 ;;
+        --scenes) scenes="$2"; shift 2 ;;
+        --helper-thread) helper_thread="$2"; shift 2 ;;
+        *) echo "usage: $0 [--duration S] [--build DIR] [--scenes \"NAME ...\"] [--helper-thread on|off]" >&2; exit 2 ;;
     esac
 done
 
@@ -25,13 +33,27 @@ handsim="$root/$build/sim/handsim/handsim"
 [[ -x "$handsim" ]] || { echo "$handsim not built" >&2; exit 1; }
 work="$(mktemp -d /tmp/handsim-scenes.XXXX)"
 echo "# $(date -u +%FT%TZ) $(git -C "$root" rev-parse --short HEAD) $(nproc) cores, load $(cut -d' ' -f1 /proc/loadavg)"
-echo "# $0 --duration $duration --build $build; logs in $work"
+echo "# $0 --duration $duration --build $build --scenes \"$scenes\" --helper-thread $helper_thread; logs in $work"
 
 domain=90
-for scene in thimble_only default whole_hand grasp_box; do
+for scene in $scenes; do
+    [[ -f "$root/config/scenes/$scene.yaml" ]] || { echo "no scene config/scenes/$scene.yaml" >&2; exit 2; }
     copy="$work/$scene"
     cp -r "$root/config" "$copy"
     sed -i "s|^scene: .*|scene: scenes/$scene.yaml|" "$copy/sim.yaml"
+    case $helper_thread in
+        shipped) ;;
+        on|off)
+            value=$([[ $helper_thread == on ]] && echo true || echo false)
+            yaml="$copy/scenes/$scene.yaml"
+            sed -i '/^  helper_thread:/d' "$yaml"
+            if grep -q '^solver:' "$yaml"; then
+                sed -i "/^solver:/a\\  helper_thread: $value" "$yaml"
+            else
+                printf 'solver:\n  helper_thread: %s\n' "$value" >> "$yaml"
+            fi ;;
+        *) echo "--helper-thread on or off, not '$helper_thread'" >&2; exit 2 ;;
+    esac
     if [[ "$scene" == thimble_only ]]; then
         sed -i '/^  - devices\/exoskeleton.yaml/d' "$copy/sim.yaml"
     fi

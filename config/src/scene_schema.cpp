@@ -168,6 +168,7 @@ SolverLimits readSolver(MapReader map) {
         map.optional("newton_iterations", out.newton_iterations, spec::Integer<int>::closed(1, 10));
     out.pcg_max_iterations = map.optional("pcg_max_iterations", out.pcg_max_iterations,
                                           spec::Integer<int>::closed(5, 500));
+    out.helper_thread = map.optional("helper_thread", out.helper_thread, spec::Boolean{});
     map.finish();
     return out;
 }

@@ -145,7 +145,7 @@ TEST(ConfigUnknownKeys, SolverKeyHandsimDoesNotOffer) {
     expectError(sceneError("solver_unknown_key.yaml"),
                 {file.string(), lineOf(file, "max_substep_depth"), 3, "solver.max_substep_depth",
                  "unknown key 'solver.max_substep_depth' (allowed: newton_iterations, "
-                 "pcg_max_iterations)"});
+                 "pcg_max_iterations, helper_thread)"});
 }
 
 TEST(ConfigOutOfRange, SolverNeedsAtLeastOneNewtonIteration) {
@@ -211,6 +211,13 @@ TEST(ConfigWrongTypes, YesIsNotABoolean) {
     expectError(deviceError("wrong_type_bool.yaml"),
                 {file.string(), lineOf(file, "fd: yes"), 7, "can.fd",
                  "can.fd: expected true or false, got the string 'yes'"});
+}
+
+TEST(ConfigWrongTypes, TheSolversHelperThreadIsTrueOrFalse) {
+    const auto file = kDataDir / "scenes/solver_helper_thread_not_boolean.yaml";
+    expectError(sceneError("solver_helper_thread_not_boolean.yaml"),
+                {file.string(), lineOf(file, "helper_thread"), 18, "solver.helper_thread",
+                 "solver.helper_thread: expected true or false, got the string 'sometimes'"});
 }
 
 TEST(ConfigWrongTypes, StringWhereNumberExpected) {

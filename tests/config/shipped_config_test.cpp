@@ -221,6 +221,7 @@ TEST(ShippedConfig, DefaultScene) {
     EXPECT_DOUBLE_EQ(cfg.hand.anthropometry.hand_length_m, 0.19);
     // 100 Hz leaves room to re-linearise once; the 200 Hz scenes keep one iteration.
     EXPECT_EQ(cfg.solver, (SolverLimits{2, 30}));
+    EXPECT_FALSE(cfg.solver.helper_thread) << "off unless a scene turns it on";
 
     ASSERT_EQ(cfg.objects.size(), 2U);
     EXPECT_EQ(cfg.objects[0].name, "table");
@@ -261,6 +262,10 @@ TEST(ShippedConfig, ThimbleOnlyScene) {
     EXPECT_EQ(cfg.devices.size(), 1U);
     EXPECT_TRUE(cfg.devices.contains("thimble"));
     EXPECT_EQ(cfg.objects[0].pose.rpy_rad, (Vec3{0.0, 0.0, 0.0}));  // rpy_deg defaults to zero
+    // handsim's default budget, with the helper thread on.
+    SolverLimits expected;
+    expected.helper_thread = true;
+    EXPECT_EQ(cfg.solver, expected);
 }
 
 TEST(ShippedConfig, GraspScene) {
@@ -339,6 +344,12 @@ TEST(ConfigTestData, LoadsAndCoversEveryShape) {
     EXPECT_DOUBLE_EQ(scene.hand.anthropometry.fingertip_diameter_m, 0.016);  // default
 
     EXPECT_NO_THROW((void)loadSceneConfig(kDataDir / "scenes/fingertip_ok.yaml"));
+}
+
+TEST(ConfigTestData, ASceneCanTurnTheSolversHelperThreadOn) {
+    const SceneConfig cfg = loadSceneConfig(kDataDir / "scenes/solver_helper_thread_on.yaml");
+    EXPECT_EQ(cfg.solver.newton_iterations, 2);
+    EXPECT_TRUE(cfg.solver.helper_thread);
 }
 
 TEST(ConfigTestData, SameCanIdsOnDifferentInterfacesAreFine) {

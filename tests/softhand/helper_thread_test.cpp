@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <thread>
 
 #include "finger_flex_scene.hpp"
 #include "fingertip_press_scene.hpp"
@@ -135,9 +136,19 @@ void expectTheSameSteps(int level, const config::SolverLimits& limits, int steps
                 backtracks);
 }
 
+TEST(HelperThread, HandsimUsesItWhereTheSceneAllowsAndASecondCoreExists) {
+    config::SolverLimits limits;
+    EXPECT_FALSE(withRealtimeLimits(SolverSettings{}, limits).use_helper_thread);
+    EXPECT_FALSE(realtimeSceneSettings(limits).solver.use_helper_thread);
+    limits.helper_thread = true;  // scene YAML solver.helper_thread: true
+    EXPECT_EQ(withRealtimeLimits(SolverSettings{}, limits).use_helper_thread,
+              std::thread::hardware_concurrency() >= 2);
+    EXPECT_FALSE(SolverSettings{}.use_helper_thread) << "the library's default: one thread";
+}
+
 TEST(HelperThread, TheThimbleScenesStepsAreTheSameToTheBit) {
-    // The thimble scene's point (level 1, 1 Newton iteration, cap 30): its slowest steps are
-    // a restarted solve with 6-8 halvings. The first 120 steps press, slide and lift.
+    // The thimble scene's point (level 1, 1 Newton iteration, cap 30, the helper on): its
+    // slowest steps are a restarted solve with 6-8 halvings. 120 steps press, slide and lift.
     const config::SolverLimits limits =
         config::loadSceneConfig(std::string(HAPTIC_SOURCE_DIR) + "/config/scenes/thimble_only.yaml")
             .solver;

@@ -13,8 +13,8 @@ SolverSettings withRealtimeLimits(SolverSettings physics, const config::SolverLi
     physics.max_backtracks = 2;
     physics.max_substep_depth = 0;
     physics.newton_tolerance_m = std::numeric_limits<double>::infinity();
-    // handsim's step has a second core beside it on the machines it is specified for.
-    physics.use_helper_thread = std::thread::hardware_concurrency() >= 2;
+    // Only where a second core can take it.
+    physics.use_helper_thread = limits.helper_thread && std::thread::hardware_concurrency() >= 2;
     return physics;
 }
 

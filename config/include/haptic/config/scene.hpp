@@ -164,7 +164,8 @@ struct DeviceBinding {
     Finger finger{Finger::kIndex};
 };
 
-// YAML: solver: {newton_iterations, pcg_max_iterations}. handsim's per-step solver budget,
+// YAML: solver: {newton_iterations, pcg_max_iterations, helper_thread}. handsim's per-step
+// solver budget,
 // chosen per scene because the budget is 1/rate_hz: a 100 Hz finger can afford to
 // re-linearise a stiff contact once more, a 200 Hz fingertip cannot. The trade is measured in
 // docs/benchmarks.md ("handsim's limits"). Omitted keys keep these defaults.
@@ -173,6 +174,10 @@ struct SolverLimits {
     // on steps that still raise the energy (docs/algorithms.md §2.6).
     int newton_iterations{1};
     int pcg_max_iterations{30};  // per Newton iteration
+    // A second thread takes the step's fallback solve and next line-search points, on a
+    // machine with two or more cores (softhand::HelperThread; the same steps, the slowest
+    // shorter where it pays: docs/benchmarks.md). Off: the step runs on handsim's thread alone.
+    bool helper_thread{false};
 
     friend bool operator==(const SolverLimits&, const SolverLimits&) = default;
 };
