@@ -32,8 +32,8 @@ class HelperThread {
     // The job queued last has run, or there is none: wait() would not block.
     [[nodiscard]] bool done() const noexcept;
     // When the next job is likely to come (the next step of a periodic caller). An idle helper
-    // sleeps on its own timer until shortly before it and polls from then on: woken through
-    // the futex after a few milliseconds asleep, a VM's idle vCPU took 2.9 ms (p50) to run it,
+    // naps on its own timer until shortly before it and polls from then on: woken through the
+    // futex after a few milliseconds asleep, a VM's idle vCPU took 2.9 ms (p50) to run it,
     // longer than a whole step.
     void expectNextJobAt(std::chrono::steady_clock::time_point at) noexcept;
 
@@ -41,8 +41,8 @@ class HelperThread {
     enum State : int { kIdle, kQueued, kRunning, kDone, kStop };
     void run();
     // Returns once the state is not `from` any more: polls, then sleeps on the futex. The
-    // helper, idle (until_expected_job), sleeps on its timer until shortly before the job
-    // expected, and polls again, first.
+    // helper, idle (until_expected_job), first naps on its timer until shortly before the job
+    // expected, and polls around it.
     void awaitChange(int from, bool until_expected_job);
 
     Job job_{nullptr};
