@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "energy_terms.hpp"
 #include "haptic/softhand/pcg.hpp"
@@ -319,6 +320,70 @@ Vec3 Simulation::forceOnCollider(int collider) const {
         }
     }
     return sum;
+}
+
+int Simulation::relax(double dt_s, int max_steps, double displacement_tolerance_m) {
+    for (int s = 1; s <= max_steps; ++s) {
+        for (auto& v : v_) {
+            v.setZero();
+        }
+        for (auto& b : bodies_) {
+            b.v.setZero();
+            b.w.setZero();
+        }
+        const std::vector<Vec3> before = x_;
+        std::vector<Vec3> body_before;
+        for (const auto& b : bodies_) {
+            body_before.push_back(b.c);
+        }
+        const StepReport report = step(dt_s);
+        double largest = 0.0;
+        for (int i = 0; i < nodeCount(); ++i) {
+            largest = std::max(largest, (x_[i] - before[i]).norm());
+        }
+        for (int b = 0; b < bodyCount(); ++b) {
+            largest = std::max(largest, (bodies_[b].c - body_before[b]).norm());
+        }
+        // A clamped step (PCG cap, energy rescale) may move little without having converged.
+        if (largest < displacement_tolerance_m && !report.clamped) {
+            return s;
+        }
+    }
+    return max_steps;
+}
+
+double Simulation::kineticEnergy() const noexcept {
+    double kinetic = 0.0;
+    for (int i = 0; i < nodeCount(); ++i) {
+        kinetic += 0.5 * node_mass_[i] * v_[i].squaredNorm();
+    }
+    for (const auto& b : bodies_) {
+        if (b.kinematic) {
+            continue;
+        }
+        const Mat3 inertia = b.rotation * b.inertia_body * b.rotation.transpose();
+        kinetic += 0.5 * b.mass * b.v.squaredNorm() + 0.5 * b.w.dot(inertia * b.w);
+    }
+    return kinetic;
+}
+
+double Simulation::totalEnergy() const {
+    return kineticEnergy() +
+           EnergyTerms::potential(*this, currentConfiguration(), nullptr, nullptr);
+}
+
+double Simulation::energyNow() {
+    currentConfiguration(work_.start);
+    return kineticEnergy() + potentialNow(work_.start);
+}
+
+double Simulation::potentialNow(const Configuration& q) {
+    if (!tissue_energy_valid_) {
+        tissue_energy_ = EnergyTerms::tissue(*this, q, nullptr, nullptr);
+        tissue_energy_valid_ = true;
+    }
+    return tissue_energy_ + EnergyTerms::external(*this, q, nullptr) +
+           EnergyTerms::skeleton(*this, q, nullptr) + EnergyTerms::contact(*this, q, nullptr);
 }
 
 }  // namespace haptic::softhand
