@@ -130,6 +130,9 @@ void HelperThread::run() {
             continue;
         }
         seen = state == kQueued ? expected : state;  // taken back meanwhile, or kIdle/kDone
+        if (seen == kStop) {
+            return;  // taken back and stopped between the load and the exchange
+        }
     }
 }
 

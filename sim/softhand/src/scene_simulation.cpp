@@ -1,10 +1,22 @@
 #include "haptic/softhand/scene_simulation.hpp"
 
+#include <sched.h>
+
 #include <limits>
 #include <stdexcept>
 #include <thread>
 
 namespace haptic::softhand {
+
+int usableCores() {
+    // The CPUs this process may run on (taskset, a cpuset), not the machine's.
+    cpu_set_t allowed;
+    CPU_ZERO(&allowed);
+    if (::sched_getaffinity(0, sizeof(allowed), &allowed) == 0) {
+        return CPU_COUNT(&allowed);
+    }
+    return static_cast<int>(std::thread::hardware_concurrency());
+}
 
 SolverSettings withRealtimeLimits(SolverSettings physics, const config::SolverLimits& limits) {
     physics.pcg_max_iterations = limits.pcg_max_iterations;
@@ -14,7 +26,7 @@ SolverSettings withRealtimeLimits(SolverSettings physics, const config::SolverLi
     physics.max_substep_depth = 0;
     physics.newton_tolerance_m = std::numeric_limits<double>::infinity();
     // Only where a second core can take it.
-    physics.use_helper_thread = limits.helper_thread && std::thread::hardware_concurrency() >= 2;
+    physics.use_helper_thread = limits.helper_thread && usableCores() >= 2;
     return physics;
 }
 

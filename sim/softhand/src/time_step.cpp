@@ -416,8 +416,9 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                                          : std::max(settings_.max_backtracks, kColdHalvings);
                 double step_fraction = 1.0;
                 best_value = iterate_value;
-                // The helper evaluates the next halving while this thread evaluates the
-                // current one; `ahead_pending`: its point is the current one.
+                // Once a point has failed, the helper evaluates the next halving while this
+                // thread evaluates the current one; `ahead_pending`: its point is the current
+                // one.
                 bool ahead_pending = false;
                 for (int halving = 0;; ++halving) {
                     Evaluation value;
@@ -429,7 +430,9 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                         // Free once the cold solve is done (collected here, kept for later).
                         const bool helper_free =
                             helper != nullptr && (cold_state != Cold::kRunning || helper->done());
-                        if (helper_free && halving < halvings) {
+                        // From the second point on: the first usually passes, and a point
+                        // ahead that the helper has begun is waited for when withdrawn.
+                        if (helper_free && halving > 0 && halving < halvings) {
                             if (cold_state == Cold::kRunning) {
                                 helper->wait();  // done: its result stays for a restart
                                 cold_state = Cold::kCollected;

@@ -34,6 +34,8 @@ struct SceneSimulationSettings {
 // step").
 // `physics` (stiffnesses, damping, gravity) with that budget: what realtimeSceneSettings()
 // ships, for benchmarks and validation that run their own scenes as handsim would.
+// The CPUs this process may run on (its affinity mask).
+[[nodiscard]] int usableCores();
 [[nodiscard]] SolverSettings withRealtimeLimits(SolverSettings physics,
                                                 const config::SolverLimits& limits = {});
 [[nodiscard]] SceneSimulationSettings realtimeSceneSettings(
