@@ -29,6 +29,11 @@ while [[ $# -gt 0 ]]; do
 done
 
 root="$(cd "$(dirname "$0")/.." && pwd)"
+# Checked before the first run, not a scene's duration into them.
+for scene in $scenes; do
+    [[ -f "$root/config/scenes/$scene.yaml" ]] || { echo "no scene config/scenes/$scene.yaml" >&2; exit 2; }
+done
+[[ $helper_thread =~ ^(shipped|on|off)$ ]] || { echo "--helper-thread on or off, not '$helper_thread'" >&2; exit 2; }
 handsim="$root/$build/sim/handsim/handsim"
 [[ -x "$handsim" ]] || { echo "$handsim not built" >&2; exit 1; }
 work="$(mktemp -d /tmp/handsim-scenes.XXXX)"
@@ -37,7 +42,6 @@ echo "# $0 --duration $duration --build $build --scenes \"$scenes\" --helper-thr
 
 domain=90
 for scene in $scenes; do
-    [[ -f "$root/config/scenes/$scene.yaml" ]] || { echo "no scene config/scenes/$scene.yaml" >&2; exit 2; }
     copy="$work/$scene"
     cp -r "$root/config" "$copy"
     sed -i "s|^scene: .*|scene: scenes/$scene.yaml|" "$copy/sim.yaml"
@@ -52,7 +56,6 @@ for scene in $scenes; do
             else
                 printf 'solver:\n  helper_thread: %s\n' "$value" >> "$yaml"
             fi ;;
-        *) echo "--helper-thread on or off, not '$helper_thread'" >&2; exit 2 ;;
     esac
     if [[ "$scene" == thimble_only ]]; then
         sed -i '/^  - devices\/exoskeleton.yaml/d' "$copy/sim.yaml"

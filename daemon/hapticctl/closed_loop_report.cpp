@@ -150,23 +150,31 @@ ExoskeletonReport exoskeletonReport(const DeviceColumns& device,
         report.rms_error_n = std::sqrt(sum_squared_error / n);
         report.rms_ghost_torque_nm = std::sqrt(sum_squared_ghost / n);
     }
+    const auto& tick = device.column("tick");
     if (!energy.empty()) {
-        report.delivered_energy_j = -(energy.back() - energy.front());
-        report.environment_work_j = environment.back() - environment.front();
-        // The observer's energy is the port's intake (-delivered) since the enable.
+        // The observer's energy is the port's intake (-delivered) since the enable, and a
+        // disabled port starts a new interval: both columns read 0 again
+        // (ExoskeletonChannel). Such a drop is no energy delivered, nor the objects' work.
+        const auto interval_ends = [&](std::size_t i) {
+            return energy[i] == 0.0 && environment[i] == 0.0 &&
+                   (energy[i - 1] != 0.0 || environment[i - 1] != 0.0);
+        };
         report.carried_in_budget_j = energy.front() + environment.front();
         report.worst_balance_j = -report.carried_in_budget_j;
-        for (std::size_t i = 0; i < energy.size(); ++i) {
+        for (std::size_t i = 1; i < energy.size(); ++i) {
             report.worst_balance_j =
                 std::max(report.worst_balance_j, -(energy[i] + environment[i]));
-        }
-    }
-    const auto& tick = device.column("tick");
-    for (std::size_t i = 1; i < energy.size(); ++i) {
-        const double delivered = -(energy[i] - energy[i - 1]);
-        if (tick[i] == tick[i - 1] + 1.0 && -(energy[i - 1] + environment[i - 1]) > 0.0 &&
-            delivered > 0.0) {
-            report.delivered_in_deficit_j += delivered;
+            if (interval_ends(i)) {
+                continue;
+            }
+            const double delivered = -(energy[i] - energy[i - 1]);
+            report.delivered_energy_j += delivered;
+            report.environment_work_j += environment[i] - environment[i - 1];
+            // Consecutive samples only: across a lost sample the balance may have crossed 0.
+            if (tick[i] == tick[i - 1] + 1.0 && -(energy[i - 1] + environment[i - 1]) > 0.0 &&
+                delivered > 0.0) {
+                report.delivered_in_deficit_j += delivered;
+            }
         }
     }
     for (std::size_t i = 1; i < command.size(); ++i) {

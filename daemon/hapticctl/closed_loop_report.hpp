@@ -77,7 +77,7 @@ struct ExoskeletonReport {
     double peak_error_n{0.0};
     double rms_ghost_torque_nm{0.0};
     std::size_t clamp_below_reference_ticks{0};
-    // Over the recording's first to last sample.
+    // Over the recording, summed over the port's enable intervals in it.
     double delivered_energy_j{0.0};
     double environment_work_j{0.0};
     // Delivered beyond what the moving objects put in over the recording. It can be > 0 for a
@@ -93,7 +93,8 @@ struct ExoskeletonReport {
     double worst_balance_j{0.0};
     // What the port delivered on ticks that began with the balance > 0 (in deficit, the
     // passivity controller lets no force spend): the controller's failures. A deficit itself
-    // can arise without them, from the objects' motion debited after the tick.
+    // can arise without them, from the objects' motion debited after the tick. Counted over
+    // consecutive samples only (a lower bound when telemetry samples were lost).
     double delivered_in_deficit_j{0.0};
     double largest_step_n{0.0};
     std::size_t steps_over_rate_limit{0};

@@ -559,6 +559,27 @@ TEST(ClosedLoopReport, APortSpendingABudgetCarriedInIsPassive) {
     const ExoskeletonReport spending = exoskeletonReport(readTelemetryCsv(csv).at(0), {});
     EXPECT_NEAR(spending.worst_balance_j, 1.75e-6, 1e-12);
     EXPECT_NEAR(spending.delivered_in_deficit_j, 0.25e-6, 1e-12);
+
+    // The port is disabled (both columns read 0: a new passivity interval), then enabled and
+    // given 2 uJ by the objects, of which it delivers 1.5: the drop to 0 is neither delivered
+    // energy nor the objects' work, and no delivery in deficit.
+    const double delivered_before = spending.delivered_energy_j;
+    const double work_before = spending.environment_work_j;
+    sample.tick = 103;
+    sample.exoskeleton.energy_observer_j = 0.0;
+    sample.exoskeleton.environment_work_j = 0.0;
+    csv += telemetryCsvRow(sample, 0);
+    sample.tick = 104;
+    sample.exoskeleton.environment_work_j = 2e-6;
+    csv += telemetryCsvRow(sample, 0);
+    sample.tick = 105;
+    sample.exoskeleton.energy_observer_j = -1.5e-6;
+    csv += telemetryCsvRow(sample, 0);
+    const ExoskeletonReport reenabled = exoskeletonReport(readTelemetryCsv(csv).at(0), {});
+    EXPECT_NEAR(reenabled.delivered_energy_j, delivered_before + 1.5e-6, 1e-12);
+    EXPECT_NEAR(reenabled.environment_work_j, work_before + 2e-6, 1e-12);
+    EXPECT_NEAR(reenabled.delivered_in_deficit_j, 0.25e-6, 1e-12);
+    EXPECT_NEAR(reenabled.worst_balance_j, 1.75e-6, 1e-12);
 }
 
 // A thimble recording and the virtual user's felt log of the same run, on one monotonic
