@@ -4,8 +4,9 @@
 // the line search's next halving. One job at a time, handed over without allocation or lock
 // (an atomic state; the futex behind std::atomic::wait only after a poll). A job the helper
 // has not begun can be taken back, and the step then does it itself, so a helper slow to wake
-// never makes a step slower than one without it. The helper computes exactly what the step's
-// thread would have, so the steps are the same to the bit.
+// costs a step at most the rest of a job it has begun (a cold solve told to stop ends within
+// one PCG iteration). The helper computes exactly what the step's thread would have, so the
+// steps are the same to the bit.
 #include <atomic>
 #include <chrono>
 #include <thread>
