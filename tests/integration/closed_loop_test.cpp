@@ -26,6 +26,7 @@
 #include "haptic/config/daemon.hpp"
 #include "haptic/config/sim.hpp"
 #include "haptic/ipc/iceoryx_runtime.hpp"
+#include "loop_stall_retry.hpp"
 
 namespace haptic::testing {
 namespace {
@@ -116,6 +117,9 @@ class ClosedLoop : public ::testing::Test {
     }
 
     void TearDown() override {
+        if (HasFailure() && daemon_) {
+            noteFailureAfterLoopStall(daemon_->stderrText());
+        }
         for (auto* process : {sim_.get(), daemon_.get()}) {
             if (process != nullptr) {
                 EXPECT_EQ(process->terminate(), std::optional<int>(0)) << process->stderrText();

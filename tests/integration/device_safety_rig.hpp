@@ -31,6 +31,7 @@
 #include "haptic/ipc/iceoryx_runtime.hpp"
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
+#include "loop_stall_retry.hpp"
 #include "roudi_process.hpp"
 
 namespace haptic::testing {
@@ -169,6 +170,9 @@ class DeviceSafetyTest : public ::testing::Test {
     }
 
     void TearDown() override {
+        if (HasFailure() && daemon_ && !loop_stalls_on_purpose_) {
+            noteFailureAfterLoopStall(daemon_->stderrText());
+        }
         sim_.reset();
         if (daemon_) {
             EXPECT_EQ(daemon_->terminate(), std::optional<int>(0)) << daemon_->stderrText();
@@ -297,6 +301,9 @@ class DeviceSafetyTest : public ::testing::Test {
     }
 
     TestConfig config_;
+    // A test that stalls hapticd's loop itself sets this: its stall fault is no reason to run
+    // it again (loop_stall_retry.hpp).
+    bool loop_stalls_on_purpose_{false};
     // More arguments for the exoskeleton's hapticemu (a fixture's constructor sets them).
     std::vector<std::string> exo_emulator_args_;
     // What goes before RouDi's, hapticd's and handsim's commands (a fixture's constructor sets

@@ -214,6 +214,7 @@ TEST_F(FailStopTest, SigkillLeavesBothDevicesSafeByThemselvesAndARestartRendersA
 TEST_F(FailStopTest, SigstopMakesTheDevicesSafeByTimeoutAndHapticdBlamesItsOwnStall) {
     renderUntilTheExoskeletonPushes();
     const std::int64_t stop_ns = monotonicNs();
+    loop_stalls_on_purpose_ = true;
     ASSERT_EQ(::kill(daemon_->pid(), SIGSTOP), 0);
     const auto stopped = exo_bus_.listen(200ms);
     ASSERT_EQ(::kill(daemon_->pid(), SIGCONT), 0);
@@ -234,6 +235,7 @@ TEST_F(FailStopTest, SigstopMakesTheDevicesSafeByTimeoutAndHapticdBlamesItsOwnSt
 
 TEST_F(FailStopTest, AStallOfTheLoopAloneIsHapticdsOwnFaultAndBlamesNoHealthyDevice) {
     renderUntilTheExoskeletonPushes();
+    loop_stalls_on_purpose_ = true;
     const pid_t loop_thread = threadNamed(daemon_->pid(), "hapticd-rt");
     ASSERT_GT(loop_thread, 0) << "hapticd has no thread called hapticd-rt";
     // 100 ms, ten times the devices' command timeout; under the sanitizers, whose command
