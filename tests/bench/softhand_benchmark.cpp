@@ -296,8 +296,9 @@ void defaultScene(benchmark::State& state) {
 }
 
 // What handsim runs: realtimeSceneSettings() at <resolution>/<Newton iterations>/<helper
-// thread: 1 on, as handsim runs on two or more cores; 0 off>. The shipped scene (solver:
-// block in default.yaml) is 1/2/1; 1/1 is handsim's default budget.
+// thread: 1 on, 0 off>. The shipped default scene (solver: block in default.yaml) is 1/2/0:
+// solver.helper_thread is off there and on only in thimble_only.yaml. 1/1 is handsim's
+// default budget.
 void defaultSceneHandsimLimits(benchmark::State& state) {
     config::SolverLimits limits;
     limits.newton_iterations = static_cast<int>(state.range(1));

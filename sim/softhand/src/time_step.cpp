@@ -165,10 +165,11 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
         }
         // Between steps the helper sleeps on its timer until shortly before the next one is
         // due (a caller stepping at dt: handsim), then polls. A caller off that beat wakes it
-        // here, which a job started after the assembly below may still find asleep (then
-        // the step takes the job back and does it itself).
-        helper_->start([](void*) {}, nullptr);
+        // here with an empty job, which a job started after the assembly below may still find
+        // asleep (then the step takes the job back and does it itself). A substep runs inside
+        // a step that already woke it.
         if (depth == 0) {
+            helper_->start([](void*) {}, nullptr);
             helper_->expectNextJobAt(
                 std::chrono::steady_clock::now() +
                 std::chrono::duration_cast<std::chrono::steady_clock::duration>(
