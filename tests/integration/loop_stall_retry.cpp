@@ -55,15 +55,17 @@ int main(int argc, char** argv) {
         return result;
     }
     if (attempt >= haptic::testing::kMaxAttempts) {
-        std::printf("[ NO RETRY ] hapticd's loop stalled in this failed run too (%s); attempt "
-                    "%d of %d, the failure stands\n",
-                    stall.c_str(), attempt, haptic::testing::kMaxAttempts);
+        std::printf(
+            "[ NO RETRY ] hapticd's loop stalled in this failed run too (%s); attempt "
+            "%d of %d, the failure stands\n",
+            stall.c_str(), attempt, haptic::testing::kMaxAttempts);
         return result;
     }
-    std::printf("[ RETRY    ] the failed test's hapticd stalled (%s): its SCHED_FIFO thread "
-                "was off the CPU past the devices' command timeout, which on this VM is the "
-                "host's doing; running again, attempt %d of %d\n",
-                stall.c_str(), attempt + 1, haptic::testing::kMaxAttempts);
+    std::printf(
+        "[ RETRY    ] the failed test's hapticd stalled (%s): its SCHED_FIFO thread "
+        "was off the CPU past the devices' command timeout, which on this VM is the "
+        "host's doing; running again, attempt %d of %d\n",
+        stall.c_str(), attempt + 1, haptic::testing::kMaxAttempts);
     std::fflush(stdout);
     std::fflush(stderr);
     const std::string next = std::to_string(attempt + 1);
