@@ -39,15 +39,20 @@ class SparseDirectSolver {
                const Eigen::VectorXd& b, const std::vector<char>& free_mask, Eigen::VectorXd& x);
 
   private:
+    // The lower triangle's structure, each block entry's place in it, and the ordering.
+    void analyse(const BlockPattern& pattern);
     void assemble(const BlockPattern& pattern, const std::vector<double>& values,
                   const std::vector<char>& free_mask);
 
     Eigen::SparseMatrix<double> lower_;  // the lower triangle, pattern fixed per generation
-    std::vector<Eigen::Triplet<double>> triplets_;
+    // Per block of the pattern, 9 entries (row-major): the index into lower_'s values, -1 for
+    // an entry above the diagonal.
+    std::vector<int> slots_;
     using Factorisation = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower>;
     std::unique_ptr<Factorisation> ldlt_;
     int analysed_generation_{-1};
     Eigen::VectorXd masked_b_;
+    Eigen::VectorXd solution_;
 };
 
 }  // namespace haptic::softhand
