@@ -47,6 +47,12 @@ run_variant() {
   TSAN_OPTIONS="suppressions=$ROOT/tests/sanitizer/tsan.supp" \
     ctest --test-dir "$build" --output-on-failure --no-tests=error -j2 --timeout 300 "${selection[@]}"
   echo "=== $variant: tests passed in $((SECONDS - start)) s"
+  # Tests that passed only on a later attempt print nothing above; a rising count is a sign of
+  # an RT regression, not only of the VM (tests/integration/loop_stall_retry.hpp).
+  local log="$build/Testing/Temporary/LastTest.log" retries
+  retries=$(grep -c '^\[ RETRY    \]' "$log" 2>/dev/null || true)
+  echo "=== $variant: ${retries:-0} attempt(s) rerun after a loop stall of hapticd"
+  grep '^\[ RETRY    \]' "$log" 2>/dev/null | sed 's/^/    /' || true
 }
 
 # Short libFuzzer run of the CAN frame decoders with the sanitizer build (the 1M-input run is

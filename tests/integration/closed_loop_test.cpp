@@ -118,7 +118,7 @@ class ClosedLoop : public ::testing::Test {
 
     void TearDown() override {
         if (HasFailure() && daemon_) {
-            noteFailureAfterLoopStall(daemon_->stderrText());
+            noteFailureAfterLoopStall(daemon_->stderrText(), daemon_->running());
         }
         for (auto* process : {sim_.get(), daemon_.get()}) {
             if (process != nullptr) {

@@ -171,7 +171,7 @@ class DeviceSafetyTest : public ::testing::Test {
 
     void TearDown() override {
         if (HasFailure() && daemon_ && !loop_stalls_on_purpose_) {
-            noteFailureAfterLoopStall(daemon_->stderrText());
+            noteFailureAfterLoopStall(daemon_->stderrText(), daemon_->running());
         }
         sim_.reset();
         if (daemon_) {

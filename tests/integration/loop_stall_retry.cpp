@@ -28,9 +28,14 @@ int attemptFromEnvironment() {
 
 }  // namespace
 
-void noteFailureAfterLoopStall(const std::string& hapticd_log) {
-    if (!stallLine().empty()) {
+void noteFailureAfterLoopStall(const std::string& hapticd_log, bool hapticd_running) {
+    if (!stallLine().empty() || !hapticd_running) {
         return;
+    }
+    for (const char* report : {"Sanitizer", "runtime error:"}) {
+        if (hapticd_log.find(report) != std::string::npos) {
+            return;
+        }
     }
     const auto at = hapticd_log.find(kStallFault);
     if (at == std::string::npos) {
@@ -70,6 +75,9 @@ int main(int argc, char** argv) {
     std::fflush(stderr);
     const std::string next = std::to_string(attempt + 1);
     ::setenv("HAPTIC_LOOP_STALL_ATTEMPT", next.c_str(), 1);
+    // Only the standard streams go on: a descriptor the run left open (a socket, a pipe)
+    // must not reach the next attempt.
+    (void)::close_range(3, ~0U, 0);
     ::execv("/proc/self/exe", original.data());
     std::perror("execv /proc/self/exe");
     return result;

@@ -9,9 +9,10 @@
 //
 // A fixture's TearDown hands hapticd's log to noteFailureAfterLoopStall() when its test
 // failed. The test binary's main (loop_stall_retry.cpp) then runs the same tests again in a
-// fresh process image, at most kMaxAttempts in all, printing why. A failure without such a
-// stall, or on the last attempt, stands; a test that stalls the loop on purpose never calls
-// this.
+// fresh process image, at most kMaxAttempts in all, printing why (scripts/test.sh counts
+// the retries of a run from ctest's log). A failure without such a stall, with hapticd gone
+// or a sanitizer's report in its log, or on the last attempt, stands; a test that stalls the
+// loop on purpose never calls this.
 
 #include <string>
 
@@ -19,7 +20,9 @@ namespace haptic::testing {
 
 inline constexpr int kMaxAttempts = 3;
 
-// Records the first "loop stalled" fault line of `hapticd_log`, if any.
-void noteFailureAfterLoopStall(const std::string& hapticd_log);
+// Records the first "loop stalled" fault line of `hapticd_log`, if any, unless hapticd is no
+// longer running (it crashed or exited: that failure stands) or its log holds a sanitizer's
+// report.
+void noteFailureAfterLoopStall(const std::string& hapticd_log, bool hapticd_running);
 
 }  // namespace haptic::testing

@@ -1,6 +1,7 @@
 #include "haptic/softhand/block_sparse.hpp"
 
 #include <algorithm>
+#include <atomic>
 
 namespace haptic::softhand {
 
@@ -11,7 +12,10 @@ void BlockPattern::build(int block_rows, std::vector<std::pair<int, int>> blocks
     std::sort(blocks.begin(), blocks.end());
     blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
     block_rows_ = block_rows;
-    ++generation_;
+    // Drawn from one counter for every pattern: a cache keyed on the generation (the sparse
+    // direct solver's analysis) cannot take another pattern's first build for its own.
+    static std::atomic<int> last_generation{0};
+    generation_ = ++last_generation;
     row_start_.assign(static_cast<std::size_t>(block_rows) + 1, 0);
     columns_.clear();
     columns_.reserve(blocks.size());

@@ -81,7 +81,8 @@ bool SparseDirectSolver::solve(const BlockPattern& pattern, const std::vector<do
                                const Eigen::VectorXd& b, const std::vector<char>& free_mask,
                                Eigen::VectorXd& x) {
     if (!ldlt_ || analysed_generation_ != pattern.generation() ||
-        lower_.rows() != 3 * pattern.blockRows()) {
+        lower_.rows() != 3 * pattern.blockRows() ||
+        slots_.size() != 9 * static_cast<std::size_t>(pattern.blockCount())) {
         analyse(pattern);
     }
     assemble(pattern, values, free_mask);

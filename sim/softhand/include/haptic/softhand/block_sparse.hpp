@@ -20,7 +20,8 @@ class BlockPattern {
 
     [[nodiscard]] int blockRows() const { return block_rows_; }
     [[nodiscard]] int blockCount() const { return static_cast<int>(columns_.size()); }
-    // Changes on every build(): block indices looked up before it are stale after it.
+    // Changes on every build(), unique over all patterns: block indices looked up before it are
+    // stale after it.
     [[nodiscard]] int generation() const { return generation_; }
     // Index of block (row, col), or -1 when it is not in the pattern.
     [[nodiscard]] int find(int row, int col) const;
