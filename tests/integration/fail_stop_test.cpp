@@ -458,6 +458,18 @@ TEST_F(FailStopTest, ADurationThatEndsWhileRenderingWritesTheSafeCommandsBeforeE
 TEST_F(FailStopTest, ADriveThatStaysEnabledAfterADisableLatchesItsOwnFault) {
     renderUntilTheExoskeletonPushes();
     ASSERT_TRUE(exo_emu_->sendCommand("stuck-enable on"));
+    (void)waitForOutput(*exo_emu_, "ok stuck-enable on");
+    // hapticd may have disabled the drive meanwhile (a faded sim input: a sanitized handsim
+    // steps at 4 Hz), and a drive disabled before it got stuck has nothing to ignore (an ASan
+    // CI rehearsal saw no fault at all). Stuck from here on, it is heard enabled once first.
+    bool heard_enabled = false;
+    for (const auto deadline = std::chrono::steady_clock::now() + 20s;
+         !heard_enabled && std::chrono::steady_clock::now() < deadline;) {
+        const auto window = exo_bus_.listen(30ms);
+        heard_enabled = std::any_of(window.begin(), window.end(),
+                                    [](const auto& h) { return enabledWithForce(h.message, 0.0); });
+    }
+    ASSERT_TRUE(heard_enabled) << "the stuck drive was never heard enabled";
     // hapticd itself disables the drive whenever the sim input fades (under the sanitizers a
     // 4 Hz handsim does so often), so the fault may latch before this disable arrives, which
     // FAULT then refuses: either way the drive was told to disable and stayed enabled.
