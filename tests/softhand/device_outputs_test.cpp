@@ -190,6 +190,64 @@ TEST_F(KinestheticOutputTest, FarPlaneGivesNoConstraint) {
     EXPECT_EQ(set.constraints.size(), 0U);
 }
 
+// The generalised force of the contact forces on the finger's nodes, computed here from the
+// sim's contact list: what the reference must equal once the finger rests on the object.
+std::array<double, 3> contactTorques(const HandModel& model, const HandKinematics& kinematics) {
+    const Simulation& sim = model.simulation;
+    const FingerChain chain = *kinematics.chain(config::Finger::kIndex);
+    std::array<double, 3> tau{0.0, 0.0, 0.0};
+    for (const Simulation::ContactForce& contact : sim.contactForces()) {
+        for (std::size_t s = 0; s < 3; ++s) {
+            const BoneInfo& b = model.bones[static_cast<std::size_t>(chain.bones[s])];
+            if (contact.node < b.first_node || contact.node >= b.first_node + b.node_count) {
+                continue;
+            }
+            for (std::size_t j = 0; j <= s; ++j) {
+                const Vec3 lever =
+                    sim.nodePosition(contact.node) - kinematics.anchor(sim, chain.joints[j]);
+                tau[j] += kinematics.axis(sim, chain.joints[j]).dot(lever.cross(contact.force_n));
+            }
+        }
+    }
+    return tau;
+}
+
+// The reference is the tracking coupling's torque. It is 0 in free space, where the springs
+// hold the finger's weight and lag, and equals the contact's generalised torque once the
+// finger rests on the plane pressed in by its targets.
+TEST_F(KinestheticOutputTest, TheReferenceIsTheCouplingWhichMatchesTheContactAtRest) {
+    Simulation& sim = model.simulation;
+    ASSERT_GT(sim.settings().gravity_m_per_s2.norm(), 0.0);
+    sim.relax(0.005, 50, 1e-7);  // the finger sags under its weight; no contact yet
+    ASSERT_TRUE(sim.contactForces().empty());
+    msgs::ConstraintSet set;
+    output.fill(sim, set);
+    EXPECT_THAT(set.reference_torque_nm, ::testing::Each(0.0)) << "free space renders nothing";
+
+    // Targets flexed so that the pad would go about 2 mm into the plane.
+    const std::array<double, 3> dq{0.02, 0.03, 0.04};
+    std::vector<BonePose> poses;
+    kinematics.forward(kinematics.buildPose(0), dq, poses);
+    for (std::size_t k = 0; k < model.bones.size(); ++k) {
+        if (!sim.body(model.bones[k].body).kinematic) {
+            sim.setTrackingTarget(model.bones[k].body, poses[k].position_m, poses[k].rotation);
+        }
+    }
+    const int steps = sim.relax(0.005, 400, 1e-8);
+    ASSERT_LT(steps, 400) << "the press did not come to rest";
+    ASSERT_FALSE(sim.contactForces().empty());
+    output.fill(sim, set);
+    const auto contact = contactTorques(model, kinematics);
+    std::printf("at rest: reference %.5f %.5f %.5f N m, contact %.5f %.5f %.5f N m\n",
+                set.reference_torque_nm[0], set.reference_torque_nm[1], set.reference_torque_nm[2],
+                contact[0], contact[1], contact[2]);
+    EXPECT_LT(contact[0], -1e-3) << "the plane pushes the finger back (extension)";
+    for (std::size_t j = 0; j < 3; ++j) {
+        EXPECT_NEAR(set.reference_torque_nm[j], contact[j], 0.02 * std::abs(contact[0]))
+            << "joint " << j;
+    }
+}
+
 TEST(KinestheticOutput, FingertipModelHasNoJointsForAnExoskeleton) {
     const HandModel tip = buildHand(handConfig(config::HandModel::kFingertip), SolverSettings{});
     const HandKinematics kinematics(tip);

@@ -185,20 +185,56 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) {
             out.constraints.push_back(constraint);
         }
     }
-    // The fully actuated reference: the generalised force of every contact force on the
-    // finger, tau_j = u_j . ((p - anchor_j) x f), a node on phalanx s moving with joints 0..s.
-    out.reference_torque_nm.fill(0.0);
-    for (const Simulation::ContactForce& contact : sim.contactForces()) {
-        for (std::size_t s = 0; s < 3; ++s) {
-            if (contact.node < nodes_[s].first || contact.node >= nodes_[s].second) {
-                continue;
-            }
-            const Vec3 p = sim.nodePosition(contact.node);
+    out.reference_torque_nm = referenceTorques(sim, axes, anchors);
+}
+
+std::array<double, msgs::kMaxJointDofs> KinestheticOutput::referenceTorques(
+    const Simulation& sim, const std::array<Vec3, 3>& axes,
+    const std::array<Vec3, 3>& anchors) const {
+    std::array<double, msgs::kMaxJointDofs> reference{};
+    const auto onFinger = [this](int node) {
+        return std::any_of(nodes_.begin(), nodes_.end(), [node](const auto& range) {
+            return node >= range.first && node < range.second;
+        });
+    };
+    const auto& contacts = sim.contactForces();
+    if (std::none_of(contacts.begin(), contacts.end(),
+                     [&](const Simulation::ContactForce& c) { return onFinger(c.node); })) {
+        return reference;  // free space: the device is to be transparent
+    }
+    // The fully actuated reference is the coupling between the tracked finger and the
+    // simulated one (docs/algorithms.md, "Reference forces"): the generalised force of the
+    // tracking springs on the three phalanges, less the finger's own weight, which those springs
+    // carry in free space and the user's muscles carry on a real hand. A node on phalanx s
+    // moves with joints 0..s: tau_j = u_j . ((c - anchor_j) x f + m). At rest this equals the
+    // contact's generalised force; within a step it is that force through the phalanges' mass,
+    // so a single frame's contact impulse (a node caught at an edge) is not in it.
+    const Vec3& gravity = sim.settings().gravity_m_per_s2;
+    std::array<double, 3> coupling{0.0, 0.0, 0.0};
+    for (std::size_t s = 0; s < 3; ++s) {
+        const Simulation::Body& body = sim.body(skin_[s].body);
+        Vec3 force = body.track_linear * (body.target_c - body.c);
+        if (body.gravity) {
+            force += body.mass * gravity;
+        }
+        const Vec3 moment =
+            -body.track_angular * logMap(body.rotation * body.target_rotation.transpose());
+        for (std::size_t j = 0; j <= s; ++j) {
+            coupling[j] += axes[j].dot((body.c - anchors[j]).cross(force) + moment);
+        }
+        for (int node = nodes_[s].first; node < nodes_[s].second; ++node) {
+            const Vec3 weight = sim.nodeMass(node) * gravity;
             for (std::size_t j = 0; j <= s; ++j) {
-                out.reference_torque_nm[j] += axes[j].dot((p - anchors[j]).cross(contact.force_n));
+                coupling[j] += axes[j].dot((sim.nodePosition(node) - anchors[j]).cross(weight));
             }
         }
     }
+    // The springs pull the finger into the object; the reference is what the object does to
+    // it, the force the device is to apply to the user's finger.
+    for (std::size_t j = 0; j < 3; ++j) {
+        reference[j] = -coupling[j];
+    }
+    return reference;
 }
 
 TactileOutput::TactileOutput(const HandModel& model, config::Finger finger,

@@ -39,10 +39,10 @@ class KinestheticOutput {
                       config::Finger finger, KinestheticOutputSettings settings = {});
 
     [[nodiscard]] std::array<double, 3> jointAngles(const Simulation& sim) const;
-    // Fills everything but the header. The reference is the net contact force and moment on
-    // the sampled pad nodes: a contact on the tip or the flanks is out of the plate's reach. Once
-    // per simulation step: each row's normal turns by at most kMaxNormalTurnRad from the one the
-    // same contact had in the previous call.
+    // Fills everything but the header: a constraint row per phalanx and object within the
+    // margin, and the reference torques (the tracking coupling's, while the finger touches
+    // anything; 0 otherwise). Once per simulation step: each row's normal turns by at most
+    // kMaxNormalTurnRad from the one the same contact had in the previous call.
     void fill(const Simulation& sim, msgs::ConstraintSet& out);
     // The hand was placed (no continuity with the previous step): forget the last normals.
     void reset();
@@ -66,7 +66,12 @@ class KinestheticOutput {
         std::vector<Vec3> p_bone;  // rest positions in the bone frame
     };
     std::array<RigidSkin, 3> skin_;
-    // [first, end) node ids of each phalanx, for the reference torques of its contacts
+    // The fully actuated reference torques of fill(): 0 without contact on the finger.
+    [[nodiscard]] std::array<double, msgs::kMaxJointDofs> referenceTorques(
+        const Simulation& sim, const std::array<Vec3, 3>& axes,
+        const std::array<Vec3, 3>& anchors) const;
+
+    // [first, end) node ids of each phalanx: its contacts, and its tissue's weight
     std::array<std::pair<int, int>, 3> nodes_{};
     // The normal of each (object, phalanx) row sent in the last call; empty: no row.
     std::vector<std::array<std::optional<Vec3>, 3>> last_normal_;
