@@ -468,6 +468,57 @@ TEST_F(TactileOutputTest, TheReferenceCountsTheContactOnThePadOnly) {
     EXPECT_NEAR(table_pad_n, table_n, 0.2 * table_n) << "the pad's contact left out";
 }
 
+// Where the FEM presses a sample's node, the sample weighs the contact's secant stiffness:
+// its normal force over the depth sent. So the pad model hapticd judges the plate with (the
+// sum of weight times depth) gives the sim's pad force at the depths sent, on the simulated
+// finger and on a tracked one 1.5 mm deeper alike; samples clear of the contact keep the
+// linear pad's area weight.
+TEST_F(TactileOutputTest, APressedSampleWeighsItsContactsSecantStiffness) {
+    const double table_top = table_z + 0.002;  // the pad 1 mm into it
+    const int table =
+        model.simulation.addCollider({HalfSpace{}, Vec3(0, 0, table_top), Mat3::Identity(), 0.5});
+    // Built on the rest pad, as handsim builds it (the pad's radius is measured then).
+    const TactileOutput output(model, config::Finger::kIndex, finger_from_device, material);
+    const int bone = model.bones.front().body;
+    model.simulation.setTrackingTarget(bone, model.simulation.bodyPosition(bone),
+                                       model.simulation.bodyRotation(bone));
+    for (int i = 0; i < 20; ++i) {
+        (void)model.simulation.step(0.005);
+    }
+    msgs::ContactSurface clear_of_it;
+    {
+        HandModel untouched =
+            buildHand(handConfig(config::HandModel::kFingertip), SolverSettings{});
+        const TactileOutput far(untouched, config::Finger::kIndex, finger_from_device, material);
+        far.fill(untouched.simulation, simulatedBone(untouched), clear_of_it);
+    }
+    const double area_weight = clear_of_it.samples[0].weight;
+    const BonePose simulated = simulatedBone(model);
+    const BonePose tracked{simulated.position_m - Vec3(0, 0, 0.0015), simulated.rotation};
+    for (const BonePose& finger : {simulated, tracked}) {
+        msgs::ContactSurface surface;
+        output.fill(model.simulation, finger, surface);
+        double model_force = 0.0;
+        int secant = 0;
+        for (const auto& s : surface.samples) {
+            if (s.signed_distance_m < 0.0 && s.weight != area_weight) {
+                model_force += s.weight * -s.signed_distance_m;
+                ++secant;
+            } else {
+                EXPECT_DOUBLE_EQ(s.weight, area_weight);
+            }
+        }
+        // The normal force of the contacts on the pad: the table's normal is +z.
+        const double pad_force = -surface.reference_force_device_n[2];
+        std::printf(
+            "%d samples weigh their secant; pad model %.4f N, the sim's pad %.4f N "
+            "(table %.4f N)\n",
+            secant, model_force, pad_force, model.simulation.forceOnCollider(table).norm());
+        EXPECT_GT(secant, 3);
+        EXPECT_NEAR(model_force, pad_force, 1e-3 * pad_force);
+    }
+}
+
 // The device is strapped to the user's finger: where the tracked finger is 1.5 mm deeper than
 // the simulated one the contact holds back, every pad sample lies 1.5 mm deeper against the
 // object (the plate presses 1.5 mm further), while the reference, the sim's contact on its

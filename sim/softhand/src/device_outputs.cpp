@@ -26,6 +26,10 @@ std::vector<int> skinOf(const Simulation& sim, const BoneInfo& bone) {
 
 // Below this the simulated skin does not press on the object: no normal to take from it.
 constexpr double kMinPressForceN = 1e-6;
+// A pressed sample's secant weight is taken over at least this depth: a sample grazing the
+// object with a pressed node would otherwise weigh without bound (0.1 mm, about the plate's
+// step at the servos' resolution).
+constexpr double kMinSecantDepthM = 1e-4;
 
 const BoneInfo& distalBone(const HandModel& model, config::Finger finger) {
     for (const auto& bone : model.bones) {
@@ -291,6 +295,7 @@ TactileOutput::TactileOutput(const HandModel& model, config::Finger finger,
                               msgs::kMaxContactSamples));
     on_pad_.assign(static_cast<std::size_t>(nodes_.second - nodes_.first), 0);
     pressed_.assign(on_pad_.size(), 0);
+    normal_force_n_.assign(on_pad_.size(), 0.0);
     for (std::size_t i = 0; i < count; ++i) {
         samples_.push_back({candidates[i].p_bone_m, area, candidates[i].node});
         on_pad_[static_cast<std::size_t>(candidates[i].node - nodes_.first)] = 1;
@@ -326,6 +331,7 @@ void TactileOutput::fill(const Simulation& sim, const BonePose& finger_bone,
     // The reference: net force and moment of the contacts on the sampled pad, the part of the
     // fingertip the plate can render (a tip-first touch is not the thimble's to render).
     std::fill(pressed_.begin(), pressed_.end(), 0);
+    std::fill(normal_force_n_.begin(), normal_force_n_.end(), 0.0);
     Vec3 force = Vec3::Zero();
     Vec3 moment = Vec3::Zero();
     // The sim's pad contact carried rigidly onto the user's (tracked) pad: each force from the
@@ -341,6 +347,10 @@ void TactileOutput::fill(const Simulation& sim, const BonePose& finger_bone,
             if (contact.force_n.norm() > kMinPressForceN) {
                 pressed_[static_cast<std::size_t>(contact.node - nodes_.first)] = 1;
             }
+            const Vec3 normal =
+                sim.queryCollider(contact.collider, sim.nodePosition(contact.node)).normal;
+            normal_force_n_[static_cast<std::size_t>(contact.node - nodes_.first)] +=
+                std::max(contact.force_n.dot(normal), 0.0);
             const Vec3 on_user_pad =
                 bone_position +
                 tracked_from_sim * (sim.nodePosition(contact.node) - sim_bone_position);
@@ -377,7 +387,18 @@ void TactileOutput::fill(const Simulation& sim, const BonePose& finger_bone,
         }
         // No object at all: far away, pointing back at the pad.
         out_sample.signed_distance_m = std::isfinite(nearest.phi_m) ? nearest.phi_m : 1.0;
+        // Weight: the patch's stiffness. Where the FEM presses the sample's node it is the
+        // contact's secant, the normal force there over the depth sent, so that the pad model
+        // (sum of w * depth) gives the sim's pad force at the depths sent, and the optimiser's
+        // fit, weighted by contact stiffness (docs/algorithms.md §3.3), matches force on curved
+        // objects too. Elsewhere: area times the linear pad stiffness.
         out_sample.weight = sample.area_m2 * pad_stiffness_pa_per_m_;
+        const double pressed_n =
+            normal_force_n_[static_cast<std::size_t>(sample.node - nodes_.first)];
+        if (out_sample.signed_distance_m < 0.0 && pressed_n > kMinPressForceN) {
+            out_sample.weight =
+                pressed_n / std::max(-out_sample.signed_distance_m, kMinSecantDepthM);
+        }
         out.samples.push_back(out_sample);
     }
     const Vec3 force_device = device.rotation.transpose() * force;

@@ -237,7 +237,13 @@ std::vector<FemCaseResult> runFemErrorAnalysis(const ThimbleKinematics& kinemati
         const TactileCommand warm = optimiser.solve(reference.surface);
         r.warm_report = warm.report;
         r.warm = evaluate(warm.dofs);
-        r.plane_fit = evaluate(geometricPlaneFit(kinematics, reference.surface));
+        // The plane fit is defined on area weights (centroid and average normal); the pad's
+        // samples share its area evenly.
+        msgs::ContactSurface area_weighted = reference.surface;
+        for (msgs::ContactSample& sample : area_weighted.samples) {
+            sample.weight = 1.0;
+        }
+        r.plane_fit = evaluate(geometricPlaneFit(kinematics, area_weighted));
         r.force_normal = evaluate(forceNormalDisplacement(kinematics, reference.surface,
                                                           reference.contact.force_on_finger_n,
                                                           finger_stiffness_n_per_m));

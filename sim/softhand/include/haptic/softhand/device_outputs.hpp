@@ -121,6 +121,8 @@ class TactileOutput {
     std::vector<char> on_pad_;
     // Per node as on_pad_, refilled by every fill(): 1 where the sim's contact pushes on it.
     mutable std::vector<char> pressed_;
+    // Per node as on_pad_, refilled by every fill(): the normal force the contact presses it with.
+    mutable std::vector<double> normal_force_n_;
     Mat3 bone_from_device_rotation_;
     Vec3 bone_from_device_translation_m_;
     double pad_stiffness_pa_per_m_{0.0};
