@@ -107,6 +107,21 @@ class FailStopTest : public BusWatchingTest {
         ASSERT_TRUE(enabled) << "the exoskeleton never reported itself enabled";
     }
 
+    // Listens to the exoskeleton's frames until one reports it enabled with at least
+    // `force_n`, for up to `timeout` (a sanitized handsim steps at about 4 Hz: allow 20 s).
+    bool heardEnabledWithin(std::chrono::steady_clock::duration timeout, double force_n = 0.0) {
+        for (const auto deadline = std::chrono::steady_clock::now() + timeout;
+             std::chrono::steady_clock::now() < deadline;) {
+            const auto window = exo_bus_.listen(30ms);
+            if (std::any_of(window.begin(), window.end(), [force_n](const auto& h) {
+                    return enabledWithForce(h.message, force_n);
+                })) {
+                return true;
+            }
+        }
+        return false;
+    }
+
     // After a stall of hapticd's loop: no force comes back without an operator, hapticd's own
     // stall is the one fault (no device is blamed), `while_faulted` runs, and `clear` brings
     // both devices back READY.
@@ -462,14 +477,7 @@ TEST_F(FailStopTest, ADriveThatStaysEnabledAfterADisableLatchesItsOwnFault) {
     // hapticd may have disabled the drive meanwhile (a faded sim input: a sanitized handsim
     // steps at 4 Hz), and a drive disabled before it got stuck has nothing to ignore (an ASan
     // CI rehearsal saw no fault at all). Stuck from here on, it is heard enabled once first.
-    bool heard_enabled = false;
-    for (const auto deadline = std::chrono::steady_clock::now() + 20s;
-         !heard_enabled && std::chrono::steady_clock::now() < deadline;) {
-        const auto window = exo_bus_.listen(30ms);
-        heard_enabled = std::any_of(window.begin(), window.end(),
-                                    [](const auto& h) { return enabledWithForce(h.message, 0.0); });
-    }
-    ASSERT_TRUE(heard_enabled) << "the stuck drive was never heard enabled";
+    ASSERT_TRUE(heardEnabledWithin(20s)) << "the stuck drive was never heard enabled";
     // hapticd itself disables the drive whenever the sim input fades (under the sanitizers a
     // 4 Hz handsim does so often), so the fault may latch before this disable arrives, which
     // FAULT then refuses: either way the drive was told to disable and stayed enabled.
@@ -587,14 +595,8 @@ TEST_F(EstopRelayTest, APressedOrSilentRelayStopsTheDevicesAndOnlyAnOperatorReAr
     // A relay that falls silent (a cut wire) is a pressed one: limp within its timeout (from
     // its last status, sent before the silence) and two ticks.
     // Rendering again: the device reports itself enabled (this also drains the listener).
-    bool enabled = false;
-    // Up to 20 s, as renderUntilTheExoskeletonPushes: a sanitized handsim steps at ~4 Hz.
-    for (int i = 0; i < 660 && !enabled; ++i) {
-        const auto window = exo_bus_.listen(30ms);
-        enabled = std::any_of(window.begin(), window.end(),
-                              [](const auto& h) { return enabledWithForce(h.message, 0.0); });
-    }
-    ASSERT_TRUE(enabled) << "the exoskeleton did not come back after clear and enable";
+    ASSERT_TRUE(heardEnabledWithin(20s))
+        << "the exoskeleton did not come back after clear and enable";
     const std::int64_t silence_ns = monotonicNs();
     ASSERT_TRUE(exo_emu_->sendCommand("estop silence"));
     const auto silent_limp_ns = limpAfter(silence_ns, 800ms);
