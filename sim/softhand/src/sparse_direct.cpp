@@ -57,6 +57,9 @@ void SparseDirectSolver::assemble(const BlockPattern& pattern, const std::vector
     for (int row = 0; row < pattern.blockRows(); ++row) {
         for (int block = pattern.rowBegin(row); block < pattern.rowEnd(row); ++block) {
             const int col = pattern.column(block);
+            if (col > row) {
+                continue;  // upper triangle: every slot of the block is -1
+            }
             const double* v = values.data() + 9 * static_cast<std::size_t>(block);
             const int* slot = slots_.data() + 9 * static_cast<std::size_t>(block);
             for (int i = 0; i < 3; ++i) {
