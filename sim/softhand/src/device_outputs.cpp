@@ -207,7 +207,7 @@ std::array<double, msgs::kMaxJointDofs> KinestheticOutput::referenceTorques(
         return reference;  // free space: the device is to be transparent
     }
     // The fully actuated reference is the coupling between the tracked finger and the
-    // simulated one (docs/algorithms.md, "Reference forces"): the generalised force of the
+    // simulated one (docs/softhand.md, "Exoskeleton: ConstraintSet"): the generalised force of the
     // tracking springs on the three phalanges, less the finger's own weight, which those springs
     // carry in free space and the user's muscles carry on a real hand. A node on phalanx s
     // moves with joints 0..s: tau_j = u_j . ((c - anchor_j) x f + m). At rest this equals the
