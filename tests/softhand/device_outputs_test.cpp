@@ -468,12 +468,13 @@ TEST_F(TactileOutputTest, TheReferenceCountsTheContactOnThePadOnly) {
     EXPECT_NEAR(table_pad_n, table_n, 0.2 * table_n) << "the pad's contact left out";
 }
 
-// Where the FEM presses a sample's node, the sample weighs the contact's secant stiffness:
-// its normal force over the depth sent. So the pad model hapticd judges the plate with (the
-// sum of weight times depth) gives the sim's pad force at the depths sent, on the simulated
-// finger and on a tracked one 1.5 mm deeper alike; samples clear of the contact keep the
-// linear pad's area weight.
-TEST_F(TactileOutputTest, APressedSampleWeighsItsContactsSecantStiffness) {
+// Where the FEM presses a sample's node harder than the linear pad would, the sample weighs the
+// contact's secant stiffness (its normal force over the depth sent); no weight is below the
+// linear pad's area weight, which hapticd's pad force limits rely on. So the pad model (the
+// sum of weight times depth over the samples in contact) never gives less than the sim's pad
+// force at the depths sent, on the simulated finger and on a tracked one 1.5 mm deeper alike
+// (where the sim's force over the deeper depth is the softer secant, the area weight stays).
+TEST_F(TactileOutputTest, NoSampleWeighsLessThanTheLinearPadAndThePadModelCoversTheSimsForce) {
     const double table_top = table_z + 0.002;  // the pad 1 mm into it
     const int table =
         model.simulation.addCollider({HalfSpace{}, Vec3(0, 0, table_top), Mat3::Identity(), 0.5});
@@ -501,9 +502,10 @@ TEST_F(TactileOutputTest, APressedSampleWeighsItsContactsSecantStiffness) {
         double model_force = 0.0;
         int secant = 0;
         for (const auto& s : surface.samples) {
-            if (s.signed_distance_m < 0.0 && s.weight != area_weight) {
+            EXPECT_GE(s.weight, area_weight);
+            if (s.signed_distance_m < 0.0) {
                 model_force += s.weight * -s.signed_distance_m;
-                ++secant;
+                secant += s.weight > area_weight ? 1 : 0;
             } else {
                 EXPECT_DOUBLE_EQ(s.weight, area_weight);
             }
@@ -514,8 +516,9 @@ TEST_F(TactileOutputTest, APressedSampleWeighsItsContactsSecantStiffness) {
             "%d samples weigh their secant; pad model %.4f N, the sim's pad %.4f N "
             "(table %.4f N)\n",
             secant, model_force, pad_force, model.simulation.forceOnCollider(table).norm());
-        EXPECT_GT(secant, 3);
-        EXPECT_NEAR(model_force, pad_force, 1e-3 * pad_force);
+        // This light press (0.23 N) is softer than the linear pad everywhere; the secant wins
+        // on firmer contacts (FemErrorAnalysis.TheOptimiserMatchesAFlatContact...: the edge).
+        EXPECT_GE(model_force, pad_force * (1.0 - 1e-9));
     }
 }
 

@@ -202,8 +202,9 @@ std::array<double, msgs::kMaxJointDofs> KinestheticOutput::referenceTorques(
         });
     };
     const auto& contacts = sim.contactForces();
-    if (std::none_of(contacts.begin(), contacts.end(),
-                     [&](const Simulation::ContactForce& c) { return onFinger(c.node); })) {
+    if (std::none_of(contacts.begin(), contacts.end(), [&](const Simulation::ContactForce& c) {
+            return onFinger(c.node) && c.force_n.norm() > kMinPressForceN;
+        })) {
         return reference;  // free space: the device is to be transparent
     }
     // The fully actuated reference is the coupling between the tracked finger and the
@@ -387,17 +388,19 @@ void TactileOutput::fill(const Simulation& sim, const BonePose& finger_bone,
         }
         // No object at all: far away, pointing back at the pad.
         out_sample.signed_distance_m = std::isfinite(nearest.phi_m) ? nearest.phi_m : 1.0;
-        // Weight: the patch's stiffness. Where the FEM presses the sample's node it is the
-        // contact's secant, the normal force there over the depth sent, so that the pad model
-        // (sum of w * depth) gives the sim's pad force at the depths sent, and the optimiser's
-        // fit, weighted by contact stiffness (docs/algorithms.md §3.3), matches force on curved
-        // objects too. Elsewhere: area times the linear pad stiffness.
-        out_sample.weight = sample.area_m2 * pad_stiffness_pa_per_m_;
+        // Weight: the patch's stiffness, at least the linear pad's (area times its stiffness
+        // per area), which is what hapticd's pad force limits judge the user's pad with: a
+        // softer weight would let the plate press deeper than they allow today. Where the FEM
+        // presses the sample's node harder than that, the contact's secant (the normal force
+        // there over the depth sent): the optimiser's fit is then weighted by contact stiffness
+        // (docs/algorithms.md §3.3) and matches force on curved objects better.
+        const double area_weight = sample.area_m2 * pad_stiffness_pa_per_m_;
+        out_sample.weight = area_weight;
         const double pressed_n =
             normal_force_n_[static_cast<std::size_t>(sample.node - nodes_.first)];
         if (out_sample.signed_distance_m < 0.0 && pressed_n > kMinPressForceN) {
-            out_sample.weight =
-                pressed_n / std::max(-out_sample.signed_distance_m, kMinSecantDepthM);
+            out_sample.weight = std::max(
+                area_weight, pressed_n / std::max(-out_sample.signed_distance_m, kMinSecantDepthM));
         }
         out.samples.push_back(out_sample);
     }

@@ -9,8 +9,9 @@
 //     the finger along the plate normal faster than this (it may always withdraw).
 // The pad model is the one the contact surface carries: its samples are the undeformed pad in
 // the device frame and each weight is its patch's stiffness (N/m: area times the pad's
-// stiffness per area); a sample the plate passes by delta presses back with w delta, faded out
-// over the plate's rim as in the optimiser. A linear pad: the sim's weights assume one. The
+// stiffness per area, or the sim's contact secant where that is stiffer, never less); a sample
+// the plate passes by delta presses back with w delta, faded out over the plate's rim as in the
+// optimiser. A linear pad. The
 // weights come from the sim, so the device file sets a floor on their total
 // (safety.min_pad_stiffness_n_per_m): a pad model softer than that is stiffened to it.
 //
