@@ -128,7 +128,8 @@ class RealtimeLoop {
                         ? daemon::RealtimePolicy::kEnforce
                         : daemon::RealtimePolicy::kIgnore,
                     cfg.loop.priority, cfg.loop.cpu_affinity},
-          period_ns_(1'000'000'000LL / cfg.loop.rate_hz) {}
+          period_ns_(1'000'000'000LL / cfg.loop.rate_hz),
+          stall_limit_ns_(coreSettings(cfg).stall_limit_ns) {}
 
     // The thread is named so an operator can find it (`top -H`, `ps -L`, `chrt -p`) and a
     // test can stop it alone.
@@ -162,6 +163,16 @@ class RealtimeLoop {
     [[nodiscard]] const daemon::SeqLock<msgs::HapticStatus>& status() const noexcept {
         return status_;
     }
+    // After stop(): the longest the devices went without a command, when that was longer than
+    // the stall limit (their command timeout) and ended within kExitStallWindowNs of the last
+    // safe command; else 0. The main thread journals the core's stall fault (kFaultLoopStalled)
+    // only from a later status snapshot, which a stall during the stop never gets, and one in
+    // the fail-stop itself has no next tick to raise it: only this sees them.
+    [[nodiscard]] std::int64_t exitStallNs() const noexcept {
+        return exit_stall_ns_.load(std::memory_order_relaxed);
+    }
+    [[nodiscard]] std::int64_t stallLimitNs() const noexcept { return stall_limit_ns_; }
+    static constexpr std::int64_t kExitStallWindowNs = 200'000'000;
 
   private:
     // Ticks of safe commands written after the loop ends: more than one, so a single frame
@@ -182,6 +193,19 @@ class RealtimeLoop {
 
         daemon::TickTiming timing;
         std::int64_t previous_wake = 0;
+        // The gaps between command writes, as the devices see them (their timeout counts from
+        // the last command heard): the most recent one above the stall limit.
+        std::int64_t last_write_ns = 0;
+        std::int64_t stall_gap_ns = 0;
+        std::int64_t stall_end_ns = 0;
+        const auto noteWrite = [&](std::int64_t at_ns) noexcept {
+            if (last_write_ns != 0 && stall_limit_ns_ > 0 &&
+                at_ns - last_write_ns > stall_limit_ns_) {
+                stall_gap_ns = at_ns - last_write_ns;
+                stall_end_ns = at_ns;
+            }
+            last_write_ns = at_ns;
+        };
         // SIGTERM/SIGINT end the loop here, on the next tick, not when the main thread next
         // wakes (up to 10 ms later): the devices are safe within two ticks of the signal.
         while (!stop_requested_.load(std::memory_order_relaxed) && !process::shutdownRequested()) {
@@ -206,6 +230,7 @@ class RealtimeLoop {
             devices_.write();
             storeDeviceStates(compute_done);
             const std::int64_t write_done = monotonicNowNs();
+            noteWrite(write_done);
 
             // This tick's split is recorded by the next update(); the statistics trail by
             // one tick, which does not matter for percentiles.
@@ -223,6 +248,10 @@ class RealtimeLoop {
             (void)timer.waitNext();
             devices_.read(monotonicNowNs());
             devices_.writeSafe();
+            noteWrite(monotonicNowNs());
+        }
+        if (stall_end_ns != 0 && last_write_ns - stall_end_ns <= kExitStallWindowNs) {
+            exit_stall_ns_.store(stall_gap_ns, std::memory_order_relaxed);
         }
     }
 
@@ -307,6 +336,8 @@ class RealtimeLoop {
     msgs::TelemetrySample telemetry_scratch_{};
     daemon::RealtimeSettings realtime_;
     std::int64_t period_ns_;
+    std::int64_t stall_limit_ns_;
+    std::atomic<std::int64_t> exit_stall_ns_{0};
     msgs::HapticStatus status_scratch_{};
     daemon::SeqLock<msgs::HapticStatus> status_;
     std::atomic<bool> stop_requested_{false};
@@ -550,6 +581,13 @@ int runDaemon(const DaemonOptions& options) {
     loop.stop();
     spdlog::info("stopped after {} ticks ({} telemetry samples dropped)", loop.ticks(),
                  loop.telemetryDropped());
+    if (const std::int64_t stall_ns = loop.exitStallNs(); stall_ns > 0) {
+        spdlog::error(
+            "fail-stop: loop stalled {:.1f} ms between two commands within its last {} ms "
+            "(limit {:.1f} ms); devices safe by their own command timeout meanwhile",
+            static_cast<double>(stall_ns) * 1e-6, RealtimeLoop::kExitStallWindowNs / 1'000'000,
+            static_cast<double>(loop.stallLimitNs()) * 1e-6);
+    }
     if (dds_sim_link) {
         dds_sim_link->stop();
         for (std::size_t i = 0; i < cfg.devices.size(); ++i) {

@@ -14,6 +14,9 @@ namespace {
 
 // The fault line hapticd logs (daemon_core.cpp, kFaultLoopStalled).
 constexpr const char* kStallFault = "fault [110] hapticd: loop stalled";
+// The line an exiting hapticd logs when the stall came between its last tick and its
+// fail-stop (daemon_app.cpp, RealtimeLoop::failStopStallNs).
+constexpr const char* kFailStopStall = "fail-stop: loop stalled";
 
 std::string& stallLine() {
     static std::string line;
@@ -26,10 +29,10 @@ int attemptFromEnvironment() {
     return attempt >= 1 ? attempt : 1;
 }
 
-}  // namespace
-
-void noteFailureAfterLoopStall(const std::string& hapticd_log, bool hapticd_running) {
-    if (!stallLine().empty() || !hapticd_running) {
+// Records the first line of `hapticd_log` that starts with `marker`, unless a stall is
+// already recorded or the log holds a sanitizer's report.
+void noteStallLine(const std::string& hapticd_log, const char* marker) {
+    if (!stallLine().empty()) {
         return;
     }
     for (const char* report : {"Sanitizer", "runtime error:"}) {
@@ -37,12 +40,28 @@ void noteFailureAfterLoopStall(const std::string& hapticd_log, bool hapticd_runn
             return;
         }
     }
-    const auto at = hapticd_log.find(kStallFault);
+    const auto at = hapticd_log.find(marker);
     if (at == std::string::npos) {
         return;
     }
     const auto end = hapticd_log.find('\n', at);
     stallLine() = hapticd_log.substr(at, end == std::string::npos ? end : end - at);
+}
+
+}  // namespace
+
+void noteFailureAfterLoopStall(const std::string& hapticd_log, bool hapticd_running) {
+    if (hapticd_running) {
+        noteStallLine(hapticd_log, kStallFault);
+    }
+}
+
+void noteFailureAfterFailStopStall(const std::string& hapticd_log,
+                                   std::optional<int> hapticd_exit_code) {
+    if (hapticd_exit_code == std::optional<int>(0)) {
+        noteStallLine(hapticd_log, kFailStopStall);
+        noteStallLine(hapticd_log, kStallFault);
+    }
 }
 
 }  // namespace haptic::testing

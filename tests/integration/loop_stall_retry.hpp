@@ -12,8 +12,10 @@
 // fresh process image, at most kMaxAttempts in all, printing why (scripts/test.sh counts
 // the retries of a run from ctest's log). A failure without such a stall, with hapticd gone
 // or a sanitizer's report in its log, or on the last attempt, stands; a test that stalls the
-// loop on purpose never calls this.
+// loop on purpose never calls this. A test that ends hapticd itself (--duration) and judges
+// its fail-stop hands the exited hapticd's log to noteFailureAfterFailStopStall() instead.
 
+#include <optional>
 #include <string>
 
 namespace haptic::testing {
@@ -24,5 +26,12 @@ inline constexpr int kMaxAttempts = 3;
 // longer running (it crashed or exited: that failure stands) or its log holds a sanitizer's
 // report.
 void noteFailureAfterLoopStall(const std::string& hapticd_log, bool hapticd_running);
+
+// The same for a test that ends hapticd on purpose and judges its fail-stop: records the line
+// hapticd logs at exit when its loop stalled in its last ticks or its fail-stop ("fail-stop:
+// loop stalled"), or the stall fault journaled before, if `hapticd_exit_code` is 0 and the log
+// holds no sanitizer's report. A crash, a refused start or no stall line: the failure stands.
+void noteFailureAfterFailStopStall(const std::string& hapticd_log,
+                                   std::optional<int> hapticd_exit_code);
 
 }  // namespace haptic::testing
