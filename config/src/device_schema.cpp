@@ -344,6 +344,8 @@ OptimiserConfig readOptimiser(MapReader map) {
     out.max_iterations = map.required("max_iterations", spec::Integer<int>::closed(1, 1000));
     out.pad_samples =
         map.optional("pad_samples", 64, spec::Integer<int>::closed(1, kMaxPadSamples));
+    out.pad_stiffening_depth_m =
+        map.optional("pad_stiffening_depth_m", out.pad_stiffening_depth_m, Real::positive(0.1));
     map.finish();
     return out;
 }

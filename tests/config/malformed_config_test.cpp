@@ -471,6 +471,14 @@ TEST(ConfigMissingKeys, ThePadStiffnessFloorIsTheThimblesAndAtLeast1NPerM) {
                  "safety.min_pad_stiffness_n_per_m", "expected a number in [1, 1e+06], got 0.5"});
 }
 
+// The optimiser's pad stiffening depth: zero would be a pad infinitely stiff at once.
+TEST(ConfigMissingKeys, ThePadStiffeningDepthIsPositive) {
+    const auto file = kDataDir / "devices/pad_stiffening_depth_zero.yaml";
+    expectError(deviceError("pad_stiffening_depth_zero.yaml"),
+                {file.string(), lineOf(file, "pad_stiffening_depth_m"), 27,
+                 "optimiser.pad_stiffening_depth_m", "expected a number in (0, 0.1], got 0"});
+}
+
 TEST(ConfigMissingKeys, ReplayNeedsAFile) {
     const auto file = kDataDir / "scenes/script_keys_on_replay.yaml";
     expectError(

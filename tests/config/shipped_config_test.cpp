@@ -209,6 +209,8 @@ TEST(ShippedConfig, Thimble) {
     EXPECT_EQ(thimble.finger_calibration.T_finger_device.rpy_rad, (Vec3{0.0, 0.0, 0.0}));
     EXPECT_EQ(thimble.optimiser.max_iterations, 20);
     EXPECT_EQ(thimble.optimiser.pad_samples, 64);
+    // Fitted to the FEM fingertip (FemErrorAnalysis.TheShippedPadLawIsTheOneFittedToTheFem...).
+    EXPECT_DOUBLE_EQ(thimble.optimiser.pad_stiffening_depth_m, 0.1);
 }
 
 TEST(ShippedConfig, DefaultScene) {

@@ -16,7 +16,14 @@ class ErrorAnalysisTest : public ::testing::Test {
     config::ThimbleConfig config{config::loadDeviceConfig(HAPTIC_THIMBLE_CONFIG).thimble()};
     ThimbleKinematics kinematics{config};
     NonlinearPadModel pad{PadModelParameters{}};
-    ContactSurfaceOptimiser optimiser{kinematics, OptimiserSettings::fromConfig(config)};
+    // Given the stand-in pad's own law, as tactile_error_analysis does (the shipped law is the
+    // FEM's, judged by FemErrorAnalysis against the FEM).
+    ContactSurfaceOptimiser optimiser{kinematics, [this] {
+                                          auto settings = OptimiserSettings::fromConfig(config);
+                                          settings.pad_stiffening_depth_m =
+                                              pad.parameters().stiffening_depth_m;
+                                          return settings;
+                                      }()};
 
     std::map<std::string, CaseResult> run() {
         const AnalysisSettings settings{config.optimiser.pad_samples,

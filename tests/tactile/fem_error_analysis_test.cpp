@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "haptic/config/device.hpp"
+#include "haptic/tactile/fem_pad_fit.hpp"
 
 namespace haptic::tactile {
 namespace {
@@ -90,6 +91,29 @@ TEST_F(FemErrorAnalysis, TheOptimiserMatchesAFlatContactAndBeatsThePlaneFitOnCur
     EXPECT_LT(edge.cold.force_error, edge.plane_fit.force_error);
     // Warm from the same press at two thirds of the depth, the optimiser lands where it did cold.
     EXPECT_NEAR(flat.warm.force_error, flat.cold.force_error, 0.01);
+}
+
+// The optimiser's pad law is the FEM's: fitted to the flat plate's presses of the FEM
+// fingertip the thimble scene ships (level 1), it reproduces their force within 5 % from 0.25 to
+// 2 mm, and the stiffening depth the thimble ships is that fit (today the top of its range, a
+// linear law: the FEM pad does not stiffen). A stale value after a change of the FEM, its
+// material or the scene's level fails here: rerun tactile_fem_error_analysis.
+TEST_F(FemErrorAnalysis, TheShippedPadLawIsTheOneFittedToTheFemAndReproducesItsForce) {
+    const PadLawFit fit =
+        fitPadLawToFem(finger, device.thimble().plate_radius_m, defaultPadFitDepths());
+    std::printf(
+        "pad law fitted to the FEM: s = %.3f mm, c = %.3f, force error RMS %.1f %%, "
+        "max %.1f %%; shipped s = %.3f mm\n",
+        fit.stiffening_depth_m * 1e3, fit.weight_scale, 100 * fit.rms_relative_error,
+        100 * fit.max_relative_error, device.thimble().optimiser.pad_stiffening_depth_m * 1e3);
+    ASSERT_EQ(fit.points.size(), defaultPadFitDepths().size());
+    for (const PadIndentation& point : fit.points) {
+        EXPECT_NEAR(point.model_force_n, point.fem_force_n, 0.05 * point.fem_force_n)
+            << "at " << point.depth_m * 1e3 << " mm";
+    }
+    EXPECT_LT(fit.rms_relative_error, 0.03);
+    EXPECT_NEAR(device.thimble().optimiser.pad_stiffening_depth_m, fit.stiffening_depth_m,
+                0.05 * fit.stiffening_depth_m);
 }
 
 }  // namespace

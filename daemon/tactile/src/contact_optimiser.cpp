@@ -135,6 +135,7 @@ OptimiserSettings OptimiserSettings::fromConfig(const config::ThimbleConfig& con
     OptimiserSettings settings;
     settings.max_iterations = config.optimiser.max_iterations;
     settings.max_samples = config.optimiser.pad_samples;
+    settings.pad_stiffening_depth_m = config.optimiser.pad_stiffening_depth_m;
     return settings;
 }
 

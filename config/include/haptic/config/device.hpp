@@ -211,10 +211,14 @@ struct FingerCalibration {
     Transform T_finger_device;      // device base frame in the finger frame
 };
 
-// YAML: optimiser: {max_iterations, pad_samples}. Bounds fix the worst-case tick cost.
+// YAML: optimiser: {max_iterations, pad_samples, pad_stiffening_depth_m}. Bounds fix the
+// worst-case tick cost.
 struct OptimiserConfig {
     int max_iterations{0};
     int pad_samples{0};  // <= msgs kMaxContactSamples
+    // s of the pad law p(delta) = p0 (exp(delta / s) - 1) the optimiser matches forces with;
+    // the shipped value is fitted to the soft-hand FEM fingertip (tactile_fem_error_analysis).
+    double pad_stiffening_depth_m{0.001};
 };
 
 struct ThimbleConfig {

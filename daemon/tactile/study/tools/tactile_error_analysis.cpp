@@ -67,6 +67,10 @@ int main(int argc, char** argv) {
         const double stiffness = pad.flatPlateForce(kIndentationM) / kIndentationM;
         auto settings = haptic::tactile::OptimiserSettings::fromConfig(device.thimble());
         settings.max_samples = std::max(settings.max_samples, sample_override);
+        // This analysis's reference is the stand-in pad model, and the optimiser is given that
+        // model's law (the shipped one is fitted to the FEM: tactile_fem_error_analysis is the
+        // independent analysis): it checks the optimiser's fit on a pad it models exactly.
+        settings.pad_stiffening_depth_m = pad_parameters.stiffening_depth_m;
         haptic::tactile::ContactSurfaceOptimiser optimiser(kinematics, settings);
         int samples = device.thimble().optimiser.pad_samples;
         if (sample_override > 0) {

@@ -6,8 +6,10 @@
 //   tactile_fem_error_analysis [--config config/devices/thimble.yaml] [--resolution 1]
 //                              [--indentation-mm 1.5] [--out DIR]
 //
-// Prints the markdown table docs/benchmarks.md records and writes DIR/fem_error_analysis.dat,
-// the gnuplot input of daemon/tactile/study/results/fem_error_analysis.gp.
+// Prints the optimiser's pad law fitted to the FEM (fem_pad_fit.hpp: the stiffening depth that
+// config/devices/thimble.yaml's optimiser.pad_stiffening_depth_m ships) and the markdown table
+// docs/benchmarks.md records, and writes DIR/fem_error_analysis.dat, the gnuplot input of
+// daemon/tactile/study/results/fem_error_analysis.gp.
 
 #include <CLI/CLI.hpp>
 #include <cmath>
@@ -20,6 +22,7 @@
 
 #include "haptic/config/device.hpp"
 #include "haptic/tactile/fem_error_analysis.hpp"
+#include "haptic/tactile/fem_pad_fit.hpp"
 
 namespace {
 
@@ -69,6 +72,21 @@ int main(int argc, char** argv) {
         const auto settings = haptic::tactile::OptimiserSettings::fromConfig(device.thimble());
         const haptic::tactile::FemFingertip finger(device.thimble(), resolution,
                                                    device.thimble().optimiser.pad_samples);
+        const auto fit = haptic::tactile::fitPadLawToFem(finger, device.thimble().plate_radius_m,
+                                                         haptic::tactile::defaultPadFitDepths());
+        std::printf(
+            "Pad law fitted to the FEM (flat plate): stiffening depth s = %.3f mm%s (shipped "
+            "optimiser.pad_stiffening_depth_m: %.3f mm), weight scale c = %.3f, force error RMS "
+            "%.1f %%, max %.1f %%\n\n| depth (mm) | FEM force (N) | fitted law (N) "
+            "|\n|---|---|---|\n",
+            fit.stiffening_depth_m * 1e3, fit.linear ? " (top of its range: linear)" : "",
+            settings.pad_stiffening_depth_m * 1e3, fit.weight_scale, 100.0 * fit.rms_relative_error,
+            100.0 * fit.max_relative_error);
+        for (const auto& point : fit.points) {
+            std::printf("| %.2f | %.3f | %.3f |\n", point.depth_m * 1e3, point.fem_force_n,
+                        point.model_force_n);
+        }
+        std::printf("\n");
         const double indentation = indentation_mm * 1e-3;
         const double stiffness = haptic::tactile::femSecantStiffness(
             finger, indentation, device.thimble().plate_radius_m);

@@ -36,9 +36,9 @@ struct OptimiserSettings {
     double non_contact_weight{1.0};  // eta
     double smoothness_weight{1e-6};  // lambda, relative to a total sample weight of 1
     double rim_blend_m{0.001};       // the rim weight falls from 1 to 0 over this width
-    // s of the pad's exponential stiffening p(delta) = p0 (exp(delta / s) - 1) (1 mm for the
-    // stand-in pad model, a finger_calibration value once measured). Infinity or <= 0: a
-    // linear pad, i.e. the quadratic objective.
+    // s of the pad's exponential stiffening p(delta) = p0 (exp(delta / s) - 1):
+    // optimiser.pad_stiffening_depth_m, which ships fitted to the soft-hand FEM fingertip
+    // (fem_pad_fit.hpp). Infinity or <= 0: a linear pad, i.e. the quadratic objective.
     double pad_stiffening_depth_m{0.001};
     // Converged when the scaled step is below this: 1 um, far below what a hobby servo can
     // resolve (0.1 degree on a 10 mm crank is ~17 um).
