@@ -238,11 +238,19 @@ TEST(UserPad, ThePhalanxIsPressedAsDeepAsItsSurfaceReachesOverThePlate) {
     const double first_contact = user_pad.firstContactHeightM();
     EXPECT_NEAR(first_contact, 0.020, 1e-12);
     {
-        const auto plate = plateAt(thimble, first_contact - 0.001, 0.0, 0.0);
+        // A line load of 50 N/m indents a cylinder by delta = P' / (pi E*) (ln(4 pi E* R / P')
+        // - 1); level at that depth, the plate presses the side along its whole 16 mm chord
+        // (the tip, 11.5 mm out, lies beyond the 8 mm disc): 0.8 N at the line's middle.
+        constexpr double kLineLoad = 50.0;
+        const double e_star = pad.effective_modulus_pa;
+        const double depth =
+            kLineLoad / (std::numbers::pi * e_star) *
+            (std::log(4.0 * std::numbers::pi * e_star * pad.radius_m / kLineLoad) - 1.0);
+        const auto plate = plateAt(thimble, first_contact - depth, 0.0, 0.0);
         ASSERT_TRUE(plate.ok());
         const FeltPadContact felt = user_pad.feel(plate.servo_rad);
-        EXPECT_NEAR(felt.indentation_m, 0.001, 1e-9);
-        EXPECT_NEAR(felt.force_device_n.z(), -user_pad.forceAt(0.001), 1e-9);
+        EXPECT_NEAR(felt.indentation_m, depth, 1e-9);
+        EXPECT_NEAR(felt.force_device_n.z(), -kLineLoad * 2.0 * thimble.plate_radius_m, 1e-6);
         EXPECT_NEAR(felt.point_device_m.head<2>().norm(), 0.0, 1e-9) << "the line's middle";
     }
     int pressed = 0;
@@ -269,8 +277,12 @@ TEST(UserPad, ThePhalanxIsPressedAsDeepAsItsSurfaceReachesOverThePlate) {
                     << pitch_deg << " " << roll_deg << " " << depth;
                 worst_excess_m = std::max(worst_excess_m, felt.indentation_m - expected);
                 worst_shortfall_m = std::max(worst_shortfall_m, expected - felt.indentation_m);
-                EXPECT_NEAR(felt.force_device_n.norm(), user_pad.forceAt(felt.indentation_m),
-                            1e-12);
+                // The side's line is indented by at most the deepest point's depth along the
+                // whole 16 mm chord: no more force than that, and some wherever it is pressed.
+                EXPECT_LE(
+                    felt.force_device_n.norm(),
+                    user_pad.lineLoadAt(felt.indentation_m) * 2.0 * thimble.plate_radius_m + 1e-12);
+                EXPECT_EQ(felt.force_device_n.norm() > 0.0, felt.indentation_m > 0.0);
                 if (felt.indentation_m > 0.0) {
                     ++pressed;
                     EXPECT_NEAR(felt.force_device_n.normalized().dot(plate.pose.plateNormal()), 1.0,
@@ -299,6 +311,59 @@ TEST(UserPad, ThePhalanxIsPressedAsDeepAsItsSurfaceReachesOverThePlate) {
     std::printf("the phalanx pressed up to %.3f mm deeper than a sphere at its centre\n",
                 largest_gain_m * 1e3);
     EXPECT_GT(largest_gain_m, 0.0005);
+}
+
+// The side's line contact law, checked against its defining relation evaluated forwards:
+// the load found for each depth gives that depth back, the load rises with the depth, and it
+// goes on (on the secant) past the law's reach at P' = 4 pi E* R / e^2.
+TEST(UserPad, TheSidesLineLoadInvertsTheCylindersApproach) {
+    const auto pad = shippedPad();
+    const UserPad user_pad(shippedThimble(), pad, 0.0115);
+    const double e_star = pad.effective_modulus_pa;
+    const auto depthOf = [&](double load) {
+        return load / (std::numbers::pi * e_star) *
+               (std::log(4.0 * std::numbers::pi * e_star * pad.radius_m / load) - 1.0);
+    };
+    EXPECT_EQ(user_pad.lineLoadAt(0.0), 0.0);
+    EXPECT_EQ(user_pad.lineLoadAt(-0.001), 0.0);
+    double previous = 0.0;
+    for (const double load : {0.1, 1.0, 10.0, 50.0, 200.0, 800.0}) {
+        const double depth = depthOf(load);
+        EXPECT_NEAR(user_pad.lineLoadAt(depth), load, 1e-6 * load) << load;
+        EXPECT_GT(depth, previous);
+        previous = depth;
+    }
+    const double peak_load = 4.0 * std::numbers::pi * e_star * pad.radius_m * std::exp(-2.0);
+    const double reach = depthOf(peak_load);
+    std::printf("line contact: reach %.2f mm at %.0f N/m\n", reach * 1e3, peak_load);
+    EXPECT_NEAR(user_pad.lineLoadAt(reach * (1.0 - 1e-9)), peak_load, 1e-3 * peak_load);
+    EXPECT_NEAR(user_pad.lineLoadAt(2.0 * reach), 2.0 * peak_load, 1e-9 * peak_load);
+}
+
+// A phalanx short enough (half-length 4 mm) for its tip to lie over the disc: a level plate
+// presses the side's 8 mm line and half the tip's contact circle (the other half is the
+// side's), and pitching the plate a little either way changes the force a little: the tip's
+// share moves continuously between the side and the cap.
+TEST(UserPad, TheTipCarriesItsShareOfTheContactCircleAndTheForceIsContinuousInPitch) {
+    const auto thimble = shippedThimble();
+    const auto pad = shippedPad();
+    constexpr double kHalf = 0.004;
+    constexpr double kDepth = 0.001;
+    UserPad user_pad(thimble, pad, kHalf);
+    const double first_contact = user_pad.firstContactHeightM();
+    const auto level = plateAt(thimble, first_contact - kDepth, 0.0, 0.0);
+    ASSERT_TRUE(level.ok());
+    const double level_force = user_pad.feel(level.servo_rad).force_device_n.norm();
+    const double hertz =
+        4.0 / 3.0 * pad.effective_modulus_pa * std::sqrt(pad.radius_m) * std::pow(kDepth, 1.5);
+    EXPECT_NEAR(level_force, 2.0 * kHalf * user_pad.lineLoadAt(kDepth) + 0.5 * hertz, 1e-9);
+    for (const double pitch_deg : {-0.2, 0.2}) {
+        const auto pitched =
+            plateAt(thimble, first_contact - kDepth, 0.0, pitch_deg * std::numbers::pi / 180.0);
+        ASSERT_TRUE(pitched.ok());
+        const double force = user_pad.feel(pitched.servo_rad).force_device_n.norm();
+        EXPECT_NEAR(force, level_force, 0.05 * level_force) << pitch_deg;
+    }
 }
 
 TEST(UserPad, ANegativeHalfLengthIsRefused) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -10,6 +11,13 @@
 #include "haptic/tactile/thimble_kinematics.hpp"
 
 namespace haptic::emu {
+
+namespace {
+
+// Slices of the side's line contact (midpoint rule along the part over the disc).
+constexpr int kSideSlices = 32;
+
+}  // namespace
 
 UserPad::UserPad(const config::ThimbleConfig& thimble, const config::UserPadConfig& pad,
                  double half_length_m)
@@ -44,6 +52,32 @@ double UserPad::forceAt(double indentation_m) const noexcept {
            std::pow(indentation_m, 1.5);
 }
 
+double UserPad::lineLoadAt(double indentation_m) const noexcept {
+    if (!(indentation_m > 0.0)) {
+        return 0.0;
+    }
+    // delta(P') = P' / (pi E*) (ln(4 pi E* R / P') - 1) rises with P' up to P' = 4 pi E* R / e^2,
+    // where delta = P' / (pi E*): the law's reach (4.3 mm for the shipped pad). Below it, P' is
+    // found by bisection on log P'; beyond it, the load grows on that point's secant.
+    const double e_star = pad_.effective_modulus_pa;
+    const double scale = 4.0 * std::numbers::pi * e_star * pad_.radius_m;
+    const double peak_load = scale * std::exp(-2.0);
+    const double peak_depth = peak_load / (std::numbers::pi * e_star);
+    if (indentation_m >= peak_depth) {
+        return peak_load * indentation_m / peak_depth;
+    }
+    const auto depthOf = [&](double load) {
+        return load / (std::numbers::pi * e_star) * (std::log(scale / load) - 1.0);
+    };
+    double low = std::log(peak_load) - 60.0;
+    double high = std::log(peak_load);
+    for (int i = 0; i < 60; ++i) {
+        const double mid = 0.5 * (low + high);
+        (depthOf(std::exp(mid)) < indentation_m ? low : high) = mid;
+    }
+    return std::exp(0.5 * (low + high));
+}
+
 FeltPadContact UserPad::feel(const std::array<double, 3>& servo_rad) {
     FeltPadContact out;
     const tactile::ForwardResult forward =
@@ -76,15 +110,41 @@ FeltPadContact UserPad::feel(const std::array<double, 3>& servo_rad) {
             deepest_point = p;
         }
     };
-    // The tip: its sphere's point nearest the plate.
+    // The force and its moment, summed over the contact's parts: the plate's point under each
+    // part of the pad, loaded along the plate's normal.
+    double force = 0.0;
+    Eigen::Vector3d loaded_points = Eigen::Vector3d::Zero();  // sum of load x plate point
+    const auto press = [&](const Eigen::Vector3d& pad_point, double load_n) {
+        if (load_n > 0.0) {
+            force += load_n;
+            loaded_points += load_n * (pad_point - height(pad_point) * normal);
+        }
+    };
+    const double along = normal.dot(axis_);
+    // The tip: its sphere's point nearest the plate, pressed by Hertz's sphere law. Where the
+    // phalanx has a side, only the part of the tip's contact circle (radius sqrt(R delta))
+    // beyond the junction with the side belongs to the tip: the side's line contact carries
+    // the rest. That share runs from 0 (the plate pitched up towards the tip) through 1/2
+    // (level) to 1 (pitched down onto the tip).
     const Eigen::Vector3d tip_point = centre_ + half_length_m_ * axis_ - pad_.radius_m * normal;
     if (overDisc(tip_point)) {
         consider(tip_point);
+        const double tip_depth = -height(tip_point);
+        double share = 1.0;
+        if (half_length_m_ > 0.0 && tip_depth > 0.0) {
+            const double a = std::sqrt(pad_.radius_m * tip_depth);
+            // The contact circle's centre lies -R along beyond the junction; the side's part
+            // is the circle's segment behind the chord at that distance.
+            const double x = std::clamp(-pad_.radius_m * along, -a, a);
+            const double behind = a * a * std::acos(x / a) - x * std::sqrt(a * a - x * x);
+            share = 1.0 - behind / (std::numbers::pi * a * a);
+        }
+        press(tip_point, share * forceAt(tip_depth));
     }
     // The side: the line of the phalanx's surface nearest the plate, p(t) = base + t axis for t
     // in [-half, half] (the proximal end is flat: its rim ends the line). Its part over the disc
-    // is an interval of t, and its height is linear in t: the deepest is at an end.
-    const double along = normal.dot(axis_);
+    // is an interval of t, and its height is linear in t: the deepest is at an end. It is
+    // pressed as a line contact (a cylinder on a flat), integrated along the interval.
     const Eigen::Vector3d across = normal - along * axis_;
     if (across.squaredNorm() > 1e-24) {
         const Eigen::Vector3d base = centre_ - pad_.radius_m * across.normalized();
@@ -117,17 +177,23 @@ FeltPadContact UserPad::feel(const std::array<double, 3>& servo_rad) {
                 consider(first);
                 consider(last);
             }
+            // Midpoint rule: the indentation is linear along the line, the load concave in it.
+            const double slice = (high - low) / kSideSlices;
+            for (int i = 0; i < kSideSlices; ++i) {
+                const Eigen::Vector3d p = base + (low + (i + 0.5) * slice) * axis_;
+                press(p, slice * lineLoadAt(-height(p)));
+            }
         }
     }
     if (!std::isfinite(deepest)) {
         return out;  // no part of the pad lies over the disc
     }
-    // The plate's point under the pad's deepest.
-    const Eigen::Vector3d point = deepest_point - deepest * normal;
-    out.point_device_m = point;
     out.indentation_m = std::max(0.0, -deepest);
-    out.force_device_n = forceAt(out.indentation_m) * normal;
-    out.moment_device_nm = point.cross(out.force_device_n);
+    // Every load is along the normal: the centre of pressure carries the moment.
+    out.point_device_m =
+        force > 0.0 ? Eigen::Vector3d(loaded_points / force) : deepest_point - deepest * normal;
+    out.force_device_n = force * normal;
+    out.moment_device_nm = out.point_device_m.cross(out.force_device_n);
     return out;
 }
 

@@ -26,10 +26,11 @@ struct HandImpedanceConfig {
     std::array<double, 3> damping_nms_per_rad{0.004, 0.0015, 0.0008};
 };
 
-// The user's finger pad under a thimble's plate (docs/drivers.md, "Virtual user"): a Hertz
-// sphere of the fingertip's radius, F = 4/3 E* sqrt(R) delta^(3/2) at indentation delta. It is
-// the user's, not the tactile optimiser's pad law (an exponential stiffening), so the felt
-// force judges the rendering rather than restating its model. The defaults are the scene's
+// The user's finger pad under a thimble's plate (docs/drivers.md, "Virtual user"): the distal
+// phalanx of the fingertip's radius, its side in line contact with the plate and its tip a
+// Hertz sphere, F = 4/3 E* sqrt(R) delta^(3/2) (emu::UserPad). It is the user's, not the
+// tactile optimiser's pad law, so the felt force judges the rendering rather than restating
+// its model. The defaults are the scene's
 // fingertip (diameter 16 mm) and the FEM tissue's material (E 50 kPa, nu 0.45) as a half-space,
 // E* = E / (1 - nu^2).
 struct UserPadConfig {

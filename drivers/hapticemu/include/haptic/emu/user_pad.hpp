@@ -13,11 +13,21 @@
 //
 // The indentation delta is how far the deepest point of the pad's surface that lies over the
 // plate's disc reaches past the plate's plane: on the side of the phalanx facing the plate
-// along its length, or on its round tip. The pad feels Hertz's sphere law at that point,
-// F = 4/3 E* sqrt(R) delta^(3/2), normal to the plate, at the plate point under it: exact on
-// the tip, an approximation along the side (a cylinder's line contact is stiffer; a
-// pitched plate, the usual case, meets the phalanx near one end). Friction is not modelled
-// (the plate does not slide on the pad in the thimble's motion: it presses and tilts).
+// along its length, or on its round tip. The force, normal to the plate, sums two contacts:
+// - the side, a cylinder on a flat: a line contact, each length dt of the side's line over the
+//   disc loaded by P'(delta(t)) dt. In 2D Hertz theory a cylinder's approach has no absolute
+//   value (the half-space's displacement is logarithmic); with the datum at depth R it is
+//   delta = 2 P' / (pi E*) (ln(4 R / b) - 1/2), b = sqrt(4 P' R / (pi E*)) the contact's
+//   half-width, i.e. delta = P' / (pi E*) (ln(4 pi E* R / P') - 1), solved for P'. delta(t) is
+//   linear along the line when the plate is pitched;
+// - the tip, Hertz's sphere law F = 4/3 E* sqrt(R) delta^(3/2) at its point nearest the plate,
+//   times the share of its contact circle that lies beyond the side (1/2 for a level plate,
+//   all of it for a sphere: half-length 0).
+// Both with the same E* and R. Until 2026-11-29 the whole pad felt the sphere law at its
+// deepest point, 3.6 times softer than the FEM fingertip at 1.5 mm along the side; the line
+// contact is within 10 % of the FEM from 1.5 to 2 mm and softer below (-46 % at 0.25 mm).
+// Friction is not modelled (the plate does not slide on the pad in the thimble's motion: it
+// presses and tilts).
 //
 // This is the user's pad, independent of the tactile optimiser's model (an exponential pad
 // law over the contact surface's samples): the felt force judges the rendering.
@@ -56,8 +66,10 @@ class UserPad {
     // starts from the last pose found, so calls along a trajectory converge in few steps.
     [[nodiscard]] FeltPadContact feel(const std::array<double, 3>& servo_rad);
 
-    // Hertz's law alone: the force at an indentation (0 for delta <= 0).
+    // Hertz's sphere law alone: the force at an indentation (0 for delta <= 0).
     [[nodiscard]] double forceAt(double indentation_m) const noexcept;
+    // The line contact's load per length of the side (N/m) at an indentation (0 for <= 0).
+    [[nodiscard]] double lineLoadAt(double indentation_m) const noexcept;
     // The phalanx's centre (the finger frame's origin) in the device frame.
     [[nodiscard]] const Eigen::Vector3d& centreDeviceM() const noexcept { return centre_; }
     // Its axis in the device frame, from the flat proximal end to the tip's centre (unit).
