@@ -163,11 +163,12 @@ class RealtimeLoop {
     [[nodiscard]] const daemon::SeqLock<msgs::HapticStatus>& status() const noexcept {
         return status_;
     }
-    // After stop(): the longest the devices went without a command, when that was longer than
-    // the stall limit (their command timeout) and ended within kExitStallWindowNs of the last
-    // safe command; else 0. The main thread journals the core's stall fault (kFaultLoopStalled)
-    // only from a later status snapshot, which a stall during the stop never gets, and one in
-    // the fail-stop itself has no next tick to raise it: only this sees them.
+    // After stop(): the most recent gap between two command writes that was longer than the
+    // stall limit (the devices' command timeout), if it ended within kExitStallWindowNs of the
+    // last safe command; else 0. The main thread journals the core's stall fault
+    // (kFaultLoopStalled) only from a later status snapshot, which a stall during the stop
+    // never gets, and one in the fail-stop itself has no next tick to raise it. A stall the
+    // journal did report just before the stop is reported here a second time.
     [[nodiscard]] std::int64_t exitStallNs() const noexcept {
         return exit_stall_ns_.load(std::memory_order_relaxed);
     }
@@ -584,7 +585,7 @@ int runDaemon(const DaemonOptions& options) {
     if (const std::int64_t stall_ns = loop.exitStallNs(); stall_ns > 0) {
         spdlog::error(
             "fail-stop: loop stalled {:.1f} ms between two commands within its last {} ms "
-            "(limit {:.1f} ms); devices safe by their own command timeout meanwhile",
+            "(limit {:.1f} ms); any device listening went safe by its own command timeout",
             static_cast<double>(stall_ns) * 1e-6, RealtimeLoop::kExitStallWindowNs / 1'000'000,
             static_cast<double>(loop.stallLimitNs()) * 1e-6);
     }

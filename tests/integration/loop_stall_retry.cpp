@@ -15,7 +15,7 @@ namespace {
 // The fault line hapticd logs (daemon_core.cpp, kFaultLoopStalled).
 constexpr const char* kStallFault = "fault [110] hapticd: loop stalled";
 // The line an exiting hapticd logs when the stall came between its last tick and its
-// fail-stop (daemon_app.cpp, RealtimeLoop::failStopStallNs).
+// fail-stop (daemon_app.cpp, RealtimeLoop::exitStallNs).
 constexpr const char* kFailStopStall = "fail-stop: loop stalled";
 
 std::string& stallLine() {
