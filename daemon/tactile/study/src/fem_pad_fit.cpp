@@ -24,6 +24,21 @@ struct PadSample {
     double weight;    // linear pad: area x stiffness per area (N/m)
 };
 
+// The samples under the FEM's plate, a square of 2 plate radii centred under the pad's lowest
+// point (FemFingertip::pressPlate): the pad's contact line is longer than the plate, and a
+// sample beyond it is pressed by nothing.
+std::vector<PadSample> underThePlate(const msgs::ContactSurface& surface,
+                                     const Eigen::Vector3d& pad_point, double plate_radius_m) {
+    std::vector<PadSample> samples;
+    for (const msgs::ContactSample& sample : surface.samples) {
+        if (std::abs(sample.p_device_m[0] - pad_point.x()) <= plate_radius_m &&
+            std::abs(sample.p_device_m[1] - pad_point.y()) <= plate_radius_m) {
+            samples.push_back({sample.p_device_m[2], sample.weight});
+        }
+    }
+    return samples;
+}
+
 // sum_i w_i s (exp(delta_i / s) - 1) for the flat plate `depth_m` past the lowest point.
 double lawForce(const std::vector<PadSample>& samples, double lowest_m, double depth_m,
                 double stiffening_depth_m) {
@@ -72,10 +87,8 @@ PadLawFit fitPadLawToFem(const FemFingertip& finger, double plate_radius_m,
     PlatformPose clear;
     clear.position_m = finger.padPoint() + Eigen::Vector3d(0.0, 0.0, kClearOfThePadM);
     const FemPress untouched = finger.pressPlate(clear, plate_radius_m);
-    std::vector<PadSample> samples;
-    for (const msgs::ContactSample& sample : untouched.surface.samples) {
-        samples.push_back({sample.p_device_m[2], sample.weight});
-    }
+    const std::vector<PadSample> samples =
+        underThePlate(untouched.surface, finger.padPoint(), plate_radius_m);
     const double lowest = finger.padPoint().z();
 
     std::vector<double> fem;
