@@ -135,7 +135,10 @@ FeltPadContact UserPad::feel(const std::array<double, 3>& servo_rad) {
             const double a = std::sqrt(pad_.radius_m * tip_depth);
             // The contact circle's centre lies -R along beyond the junction; the side's part
             // is the circle's segment behind the chord at that distance.
-            const double x = std::clamp(-pad_.radius_m * along, -a, a);
+            // In the plate's plane: the centre sits (R - delta) along the axis beyond the
+            // junction over the axis's in-plane length sqrt(1 - along^2).
+            const double in_plane = std::sqrt(std::max(1.0 - along * along, 1e-12));
+            const double x = std::clamp(-(pad_.radius_m - tip_depth) * along / in_plane, -a, a);
             const double behind = a * a * std::acos(x / a) - x * std::sqrt(a * a - x * x);
             share = 1.0 - behind / (std::numbers::pi * a * a);
         }
@@ -177,10 +180,23 @@ FeltPadContact UserPad::feel(const std::array<double, 3>& servo_rad) {
                 consider(first);
                 consider(last);
             }
-            // Midpoint rule: the indentation is linear along the line, the load concave in it.
-            const double slice = (high - low) / kSideSlices;
-            for (int i = 0; i < kSideSlices; ++i) {
-                const Eigen::Vector3d p = base + (low + (i + 0.5) * slice) * axis_;
+            // Midpoint rule over the part of the interval past the plate (the indentation is
+            // linear in t, so that part is an interval too): slices start where it does, so a
+            // pad indented anywhere is loaded.
+            const double h_low = height(first);
+            const double h_high = height(last);
+            double from = low;
+            double to = high;
+            if (h_low >= 0.0 && h_high >= 0.0) {
+                to = from;  // nowhere past the plate
+            } else if (h_low >= 0.0) {
+                from = low + (high - low) * h_low / (h_low - h_high);
+            } else if (h_high >= 0.0) {
+                to = low + (high - low) * h_low / (h_low - h_high);
+            }
+            const double slice = (to - from) / kSideSlices;
+            for (int i = 0; slice > 0.0 && i < kSideSlices; ++i) {
+                const Eigen::Vector3d p = base + (from + (i + 0.5) * slice) * axis_;
                 press(p, slice * lineLoadAt(-height(p)));
             }
         }
