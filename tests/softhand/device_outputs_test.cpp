@@ -248,6 +248,46 @@ TEST_F(KinestheticOutputTest, TheReferenceIsTheCouplingWhichMatchesTheContactAtR
     }
 }
 
+// A joint pressed past its limit: the same press with the DIP's target 0.25 rad hyperextended,
+// past its limit at 0, so the limit's spring carries part of what the tracking springs pull.
+// That torque is the finger's own (the user's joint carries it without the device): the
+// reference is still the contact's generalised torque, not the springs' (which differ from it
+// at the DIP by the limit's torque).
+TEST_F(KinestheticOutputTest, AJointPressedPastItsLimitLeavesTheReferenceTheContacts) {
+    Simulation& sim = model.simulation;
+    const FingerChain chain = *kinematics.chain(config::Finger::kIndex);
+    const JointDesc& dip = sim.jointDesc(chain.joints[2]);
+    ASSERT_EQ(dip.limit_min_rad, 0.0) << "the DIP does not hyperextend";
+    const std::array<double, 3> dq{0.05, 0.05, -0.25};
+    std::vector<BonePose> poses;
+    kinematics.forward(kinematics.buildPose(0), dq, poses);
+    for (std::size_t k = 0; k < model.bones.size(); ++k) {
+        if (!sim.body(model.bones[k].body).kinematic) {
+            sim.setTrackingTarget(model.bones[k].body, poses[k].position_m, poses[k].rotation);
+        }
+    }
+    const int steps = sim.relax(0.005, 400, 1e-8);
+    ASSERT_LT(steps, 400) << "the press did not come to rest";
+    ASSERT_FALSE(sim.contactForces().empty());
+    const double dip_flexion = kinematics.flexion(sim, chain.joints[2]);
+    const double limit_torque = -dip.limit_stiffness_nm_per_rad * dip_flexion;
+    msgs::ConstraintSet set;
+    output.fill(sim, set);
+    const auto contact = contactTorques(model, kinematics);
+    std::printf(
+        "DIP at %.4f rad (limit 0, its torque %.5f N m): reference %.5f %.5f %.5f N m, "
+        "contact %.5f %.5f %.5f N m\n",
+        dip_flexion, limit_torque, set.reference_torque_nm[0], set.reference_torque_nm[1],
+        set.reference_torque_nm[2], contact[0], contact[1], contact[2]);
+    ASSERT_LT(dip_flexion, -0.01) << "the DIP rests past its limit";
+    // The limit's torque is no small part of the DIP's balance here.
+    EXPECT_GT(std::abs(limit_torque), 0.5 * std::abs(contact[2]));
+    for (std::size_t j = 0; j < 3; ++j) {
+        EXPECT_NEAR(set.reference_torque_nm[j], contact[j], 0.02 * std::abs(contact[0]))
+            << "joint " << j;
+    }
+}
+
 TEST(KinestheticOutput, FingertipModelHasNoJointsForAnExoskeleton) {
     const HandModel tip = buildHand(handConfig(config::HandModel::kFingertip), SolverSettings{});
     const HandKinematics kinematics(tip);

@@ -235,9 +235,17 @@ std::array<double, msgs::kMaxJointDofs> KinestheticOutput::referenceTorques(
         }
     }
     // The springs pull the finger into the object; the reference is what the object does to
-    // it, the force the device is to apply to the user's finger.
+    // it, the force the device is to apply to the user's finger. At rest the springs also
+    // balance a joint pressed past its limit (the limit's torque -k v about u_j, v the
+    // violation, as the sim's coupling energy has it): that torque is the finger's own
+    // anatomy, which the user's joint carries without the device, so it is taken out.
+    const std::array<double, 3> q = jointAngles(sim);
     for (std::size_t j = 0; j < 3; ++j) {
-        reference[j] = -coupling[j];
+        const JointDesc& joint = sim.jointDesc(chain_.joints[j]);
+        const double violation = q[j] > joint.limit_max_rad   ? q[j] - joint.limit_max_rad
+                                 : q[j] < joint.limit_min_rad ? q[j] - joint.limit_min_rad
+                                                              : 0.0;
+        reference[j] = -coupling[j] + joint.limit_stiffness_nm_per_rad * violation;
     }
     return reference;
 }
