@@ -79,6 +79,13 @@ class FrozenThread {
 
 class FailStopTest : public BusWatchingTest {
   protected:
+    // How long a test freezes the loop: 100 ms, ten times the devices' command timeout; under
+    // the sanitizers, whose command timeout here is 100 ms, twice that. The devices have gone
+    // limp by their own timeout well before it ends.
+    std::chrono::milliseconds loopStall() const {
+        return std::chrono::milliseconds(std::max(100, 2 * exo_device_.can.command_timeout_ms));
+    }
+
     // Rendering with the sim running, until the exoskeleton reports itself enabled with force
     // (or, when the emulated user's finger never meets the object within 6 s, enabled).
     void renderUntilTheExoskeletonPushes() {
@@ -253,10 +260,7 @@ TEST_F(FailStopTest, AStallOfTheLoopAloneIsHapticdsOwnFaultAndBlamesNoHealthyDev
     loop_stalls_on_purpose_ = true;
     const pid_t loop_thread = threadNamed(daemon_->pid(), "hapticd-rt");
     ASSERT_GT(loop_thread, 0) << "hapticd has no thread called hapticd-rt";
-    // 100 ms, ten times the devices' command timeout; under the sanitizers, whose command
-    // timeout here is 100 ms, twice that.
-    const auto stall =
-        std::chrono::milliseconds(std::max(100, 2 * exo_device_.can.command_timeout_ms));
+    const auto stall = loopStall();
     const std::int64_t stop_ns = monotonicNs();
     std::vector<Heard<protocol::ExoskeletonMessage>> stalled;
     {
@@ -415,18 +419,16 @@ TEST_F(FailStopTest, SigtermWritesTheSafeCommandsWithinTwoTicksAndExitsCleanly) 
     EXPECT_LT(fromRetract(last_command->message.command.servo_target_rad), 1e-3);
 }
 
-// A SIGTERM that arrives while the loop is off the CPU (frozen here for twice the command
-// timeout): the devices go safe by their own timeout meanwhile, the fail-stop still commands
-// the safe state once the loop runs, and hapticd says at exit that its last commands came late,
-// a stall no status snapshot reports because none follows it.
+// A SIGTERM that arrives while the loop is off the CPU (frozen here for loopStall()): the devices
+// go safe by their own timeout meanwhile, the fail-stop still commands the safe state once the loop
+// runs, and hapticd says at exit that its last commands came late, a stall no status snapshot
+// reports because none follows it.
 TEST_F(FailStopTest, ASigtermDuringALoopStallIsLoggedAtExitAndTheSafeCommandsStillFollow) {
     renderUntilTheExoskeletonPushes();
     loop_stalls_on_purpose_ = true;
     const pid_t loop_thread = threadNamed(daemon_->pid(), "hapticd-rt");
     ASSERT_GT(loop_thread, 0) << "hapticd has no thread called hapticd-rt";
-    // As long as the stall test's above: the device must have gone limp well before the thaw.
-    const auto stall =
-        std::chrono::milliseconds(std::max(100, 2 * exo_device_.can.command_timeout_ms));
+    const auto stall = loopStall();
     std::int64_t thawed_ns = 0;
     {
         const FrozenThread frozen(loop_thread);

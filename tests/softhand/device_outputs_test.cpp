@@ -73,6 +73,22 @@ class KinestheticOutputTest : public ::testing::Test {
         model.simulation.addCollider({HalfSpace{}, point, plane_rotation, 0.5});
     }
 
+    static constexpr int kMaxPressSteps = 400;
+
+    // Sets the tracking targets to the finger flexed by `dq` from its build pose and lets the
+    // sim come to rest; the steps it took (kMaxPressSteps: not at rest).
+    int pressTowards(const std::array<double, 3>& dq) {
+        Simulation& sim = model.simulation;
+        std::vector<BonePose> poses;
+        kinematics.forward(kinematics.buildPose(0), dq, poses);
+        for (std::size_t k = 0; k < model.bones.size(); ++k) {
+            if (!sim.body(model.bones[k].body).kinematic) {
+                sim.setTrackingTarget(model.bones[k].body, poses[k].position_m, poses[k].rotation);
+            }
+        }
+        return sim.relax(0.005, kMaxPressSteps, 1e-8);
+    }
+
     // The distal skin node nearest the plane, and its distance to it.
     std::pair<int, double> closestDistalNode() const {
         const Simulation& sim = model.simulation;
@@ -225,16 +241,7 @@ TEST_F(KinestheticOutputTest, TheReferenceIsTheCouplingWhichMatchesTheContactAtR
     EXPECT_THAT(set.reference_torque_nm, ::testing::Each(0.0)) << "free space renders nothing";
 
     // Targets flexed so that the pad would go about 2 mm into the plane.
-    const std::array<double, 3> dq{0.02, 0.03, 0.04};
-    std::vector<BonePose> poses;
-    kinematics.forward(kinematics.buildPose(0), dq, poses);
-    for (std::size_t k = 0; k < model.bones.size(); ++k) {
-        if (!sim.body(model.bones[k].body).kinematic) {
-            sim.setTrackingTarget(model.bones[k].body, poses[k].position_m, poses[k].rotation);
-        }
-    }
-    const int steps = sim.relax(0.005, 400, 1e-8);
-    ASSERT_LT(steps, 400) << "the press did not come to rest";
+    ASSERT_LT(pressTowards({0.02, 0.03, 0.04}), kMaxPressSteps) << "the press did not come to rest";
     ASSERT_FALSE(sim.contactForces().empty());
     output.fill(sim, set);
     const auto contact = contactTorques(model, kinematics);
@@ -258,16 +265,8 @@ TEST_F(KinestheticOutputTest, AJointPressedPastItsLimitLeavesTheReferenceTheCont
     const FingerChain chain = *kinematics.chain(config::Finger::kIndex);
     const JointDesc& dip = sim.jointDesc(chain.joints[2]);
     ASSERT_EQ(dip.limit_min_rad, 0.0) << "the DIP does not hyperextend";
-    const std::array<double, 3> dq{0.05, 0.05, -0.25};
-    std::vector<BonePose> poses;
-    kinematics.forward(kinematics.buildPose(0), dq, poses);
-    for (std::size_t k = 0; k < model.bones.size(); ++k) {
-        if (!sim.body(model.bones[k].body).kinematic) {
-            sim.setTrackingTarget(model.bones[k].body, poses[k].position_m, poses[k].rotation);
-        }
-    }
-    const int steps = sim.relax(0.005, 400, 1e-8);
-    ASSERT_LT(steps, 400) << "the press did not come to rest";
+    ASSERT_LT(pressTowards({0.05, 0.05, -0.25}), kMaxPressSteps)
+        << "the press did not come to rest";
     ASSERT_FALSE(sim.contactForces().empty());
     const double dip_flexion = kinematics.flexion(sim, chain.joints[2]);
     const double limit_torque = -dip.limit_stiffness_nm_per_rad * dip_flexion;
