@@ -133,10 +133,9 @@ FeltPadContact UserPad::feel(const std::array<double, 3>& servo_rad) {
         double share = 1.0;
         if (half_length_m_ > 0.0 && tip_depth > 0.0) {
             const double a = std::sqrt(pad_.radius_m * tip_depth);
-            // The contact circle's centre lies -R along beyond the junction; the side's part
-            // is the circle's segment behind the chord at that distance.
-            // In the plate's plane: the centre sits (R - delta) along the axis beyond the
-            // junction over the axis's in-plane length sqrt(1 - along^2).
+            // The contact circle's centre lies -(R - delta) along beyond the junction along
+            // the axis, so -(R - delta) along / sqrt(1 - along^2) in the plate's plane; the
+            // side's part is the circle's segment behind the chord at that distance.
             const double in_plane = std::sqrt(std::max(1.0 - along * along, 1e-12));
             const double x = std::clamp(-(pad_.radius_m - tip_depth) * along / in_plane, -a, a);
             const double behind = a * a * std::acos(x / a) - x * std::sqrt(a * a - x * x);

@@ -189,11 +189,11 @@ void KinestheticOutput::fill(const Simulation& sim, msgs::ConstraintSet& out) {
             out.constraints.push_back(constraint);
         }
     }
-    out.reference_torque_nm = referenceTorques(sim, axes, anchors);
+    out.reference_torque_nm = referenceTorques(sim, q, axes, anchors);
 }
 
 std::array<double, msgs::kMaxJointDofs> KinestheticOutput::referenceTorques(
-    const Simulation& sim, const std::array<Vec3, 3>& axes,
+    const Simulation& sim, const std::array<double, 3>& q, const std::array<Vec3, 3>& axes,
     const std::array<Vec3, 3>& anchors) const {
     std::array<double, msgs::kMaxJointDofs> reference{};
     const auto onFinger = [this](int node) {
@@ -239,7 +239,6 @@ std::array<double, msgs::kMaxJointDofs> KinestheticOutput::referenceTorques(
     // balance a joint pressed past its limit (the limit's torque -k v about u_j, v the
     // violation, as the sim's coupling energy has it): that torque is the finger's own
     // anatomy, which the user's joint carries without the device, so it is taken out.
-    const std::array<double, 3> q = jointAngles(sim);
     for (std::size_t j = 0; j < 3; ++j) {
         const JointDesc& joint = sim.jointDesc(chain_.joints[j]);
         const double violation = q[j] > joint.limit_max_rad   ? q[j] - joint.limit_max_rad

@@ -66,9 +66,10 @@ class KinestheticOutput {
         std::vector<Vec3> p_bone;  // rest positions in the bone frame
     };
     std::array<RigidSkin, 3> skin_;
-    // The fully actuated reference torques of fill(): 0 without contact on the finger.
+    // The fully actuated reference torques of fill() at joint angles `q` (jointAngles()): 0
+    // without contact on the finger.
     [[nodiscard]] std::array<double, msgs::kMaxJointDofs> referenceTorques(
-        const Simulation& sim, const std::array<Vec3, 3>& axes,
+        const Simulation& sim, const std::array<double, 3>& q, const std::array<Vec3, 3>& axes,
         const std::array<Vec3, 3>& anchors) const;
 
     // [first, end) node ids of each phalanx: its contacts, and its tissue's weight
