@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <stdexcept>
@@ -11,6 +12,10 @@
 
 namespace haptic::ctl {
 namespace {
+
+// Below this |felt| the felt log's five decimals no longer give the push's direction to 1 %:
+// the last direction felt above it stands.
+constexpr double kPushDirectionFloorN = 1e-3;
 
 std::vector<std::string_view> splitFields(std::string_view line) {
     std::vector<std::string_view> fields;
@@ -220,6 +225,9 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
     double reference_on_felt_sum = 0.0;
     double felt_sum = 0.0;
     double squared_error_sum = 0.0;
+    double squared_along_sum = 0.0;
+    double squared_across_sum = 0.0;
+    std::array<double, 3> push{0.0, 0.0, -1.0};  // the untilted plate pushes the pad along −z
     double last_felt = 0.0;
     std::size_t held_end = 0;  // past the last known value
     for (std::size_t i = 0; i < time.size(); ++i) {
@@ -227,12 +235,26 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
         report.peak_reference_force_n = std::max(report.peak_reference_force_n, reference);
         double felt = std::nan("");
         double error = 0.0;
+        double along_error = 0.0;
+        double across_error = 0.0;
         if (report.felt_attached) {
             felt = magnitude(felt_axes, i);
             if (std::isfinite(felt)) {
                 error = std::hypot((*felt_axes[0])[i] - (*reference_axes[0])[i],
                                    (*felt_axes[1])[i] - (*reference_axes[1])[i],
                                    (*felt_axes[2])[i] - (*reference_axes[2])[i]);
+                if (felt > kPushDirectionFloorN) {
+                    for (std::size_t k = 0; k < 3; ++k) {
+                        push[k] = (*felt_axes[k])[i] / felt;
+                    }
+                }
+                double reference_along = 0.0;
+                for (std::size_t k = 0; k < 3; ++k) {
+                    reference_along += (*reference_axes[k])[i] * push[k];
+                }
+                along_error = felt - reference_along;
+                across_error = std::sqrt(
+                    std::max(reference * reference - reference_along * reference_along, 0.0));
                 last_felt = felt;
                 report.peak_indentation_m = std::max(report.peak_indentation_m, (*indentation)[i]);
             }
@@ -253,6 +275,8 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
                 felt_sum += felt;
                 reference_on_felt_sum += reference;
                 squared_error_sum += error * error;
+                squared_along_sum += along_error * along_error;
+                squared_across_sum += across_error * across_error;
                 report.peak_error_n = std::max(report.peak_error_n, error);
             }
         }
@@ -265,6 +289,8 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
         report.mean_felt_force_n = felt_sum / n;
         report.mean_reference_on_felt_ticks_n = reference_on_felt_sum / n;
         report.rms_error_n = std::sqrt(squared_error_sum / n);
+        report.rms_error_along_push_n = std::sqrt(squared_along_sum / n);
+        report.rms_error_across_push_n = std::sqrt(squared_across_sum / n);
         felt_held.resize(held_end);
         report.felt_quality = contactQuality(felt_held, settings);
     }
@@ -540,6 +566,12 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
                     r.felt_ticks, r.mean_felt_force_n, r.mean_reference_on_felt_ticks_n,
                     r.rms_error_n, 100.0 * r.errorFraction(), r.peak_error_n,
                     1e3 * r.peak_indentation_m);
+                out += fmt::format(
+                    "  of that error, along the plate's push {:.3f} N RMS ({:.1f}%); across it "
+                    "{:.3f} N RMS ({:.1f}%): the reference's shear, which a plate pressing "
+                    "without shear cannot apply\n",
+                    r.rms_error_along_push_n, 100.0 * r.alongPushFraction(),
+                    r.rms_error_across_push_n, 100.0 * r.acrossPushFraction());
                 if (q.contact_ticks == 0) {
                     out +=
                         fmt::format("  felt: never above {:.2f} N, so no chatter or limit figure\n",

@@ -121,6 +121,13 @@ struct ThimbleReport {
     double mean_reference_on_felt_ticks_n{0.0};
     double rms_error_n{0.0};
     double peak_error_n{0.0};
+    // The error split by the plate's push (the felt force's direction, which the plate's normal
+    // sets; where nothing is felt, the last one felt, at first the untilted plate's −z): along
+    // it, |felt| − reference·push, what a better plate pose could have changed; across it, the
+    // reference's component perpendicular to the push, the shear (friction) that a plate
+    // pressing without shear cannot apply. rms_error_n² = along² + across².
+    double rms_error_along_push_n{0.0};
+    double rms_error_across_push_n{0.0};
     // Of |felt| over every tick (an unknown one holding the last known value), by
     // contactQuality's own rule: the ticks with |felt| above the threshold, clamp = the pad
     // force limit.
@@ -130,6 +137,16 @@ struct ThimbleReport {
     [[nodiscard]] double errorFraction() const noexcept {
         return mean_reference_on_felt_ticks_n > 0.0 ? rms_error_n / mean_reference_on_felt_ticks_n
                                                     : 0.0;
+    }
+    [[nodiscard]] double alongPushFraction() const noexcept {
+        return mean_reference_on_felt_ticks_n > 0.0
+                   ? rms_error_along_push_n / mean_reference_on_felt_ticks_n
+                   : 0.0;
+    }
+    [[nodiscard]] double acrossPushFraction() const noexcept {
+        return mean_reference_on_felt_ticks_n > 0.0
+                   ? rms_error_across_push_n / mean_reference_on_felt_ticks_n
+                   : 0.0;
     }
 };
 

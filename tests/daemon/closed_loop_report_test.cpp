@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -329,6 +330,67 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
     // Its one row stands for the ticks up to 20 ms after it: 0-20.
     EXPECT_THAT(formatReport(no_felt_in_contact, {}, thimble_settings),
                 HasSubstr("the user's finger never inside the scene's static objects (21 ticks)"));
+}
+
+// A finger sliding on an object feels friction across the pad; the thimble's plate pushes the
+// pad along its normal only. The report splits the error along the plate's push (felt) and
+// across it (the reference's shear), the two adding up to the whole error.
+TEST(ClosedLoopReport, TheThimblesErrorIsSplitAlongAndAcrossThePlatesPush) {
+    msgs::HapticStatus status;
+    msgs::DeviceStatus thimble_status;
+    thimble_status.device_id.assign("pad_device");
+    thimble_status.kind = msgs::DeviceKind::kThimble;
+    ASSERT_TRUE(status.devices.push_back(thimble_status));
+    const std::int64_t origin_ns = 5'000'000'000'000;
+    std::string csv = telemetryCsvProvenance("0.1.0", 0, origin_ns, &status) + telemetryCsvHeader();
+    // From tick 10 the sim's pad is pressed 0.4 N into the pad (−z) and dragged 0.2 N along −x.
+    const std::array<double, 3> reference{-0.2, 0.0, -0.4};
+    const double reference_n = std::hypot(reference[0], reference[2]);
+    msgs::TelemetrySample sample;
+    sample.device_index = 0;
+    sample.device_kind = msgs::DeviceKind::kThimble;
+    for (int i = 0; i < 70; ++i) {
+        sample.tick = static_cast<std::uint64_t>(i);
+        sample.stamp_ns = origin_ns + 1'000'000LL * i;
+        const bool contact = i >= 10;
+        sample.thimble.reference_force_device_n = {contact ? reference[0] : 0.0, 0.0,
+                                                   contact ? reference[2] : 0.0};
+        csv += telemetryCsvRow(sample, origin_ns);
+    }
+    // The plate, tilted so its push lies along the reference, presses 0.3 N on ticks 20-59;
+    // nothing is felt before (no push felt yet: the untilted plate's −z stands for it) or after
+    // (the last push felt stands).
+    const double felt_n = 0.3;
+    std::string felt_log =
+        "stamp_ns,device,finger_penetration_m,pose_known,indentation_m,force_x_n,force_y_n,"
+        "force_z_n,moment_x_nm,moment_y_nm,moment_z_nm\n";
+    for (int i = -5; i < 70; ++i) {
+        const double f = i >= 20 && i < 60 ? felt_n / reference_n : 0.0;
+        felt_log +=
+            fmt::format("{},pad_device,0,1,0,{},0.0,{},0,0,0\n",
+                        origin_ns + 1'000'000LL * i - 500'000, f * reference[0], f * reference[2]);
+    }
+    auto devices = readTelemetryCsv(csv);
+    ASSERT_EQ(attachFeltLog(devices, readRecordingInfo(csv), readFeltLog(felt_log)),
+              std::vector<std::string>{"pad_device"});
+    const ThimbleReport report = thimbleReport(devices.at(0), {});
+    ASSERT_EQ(report.felt_ticks, 60U);
+    // Ticks 10-19, pushed along −z: 0.4 N short along it, the 0.2 N drag across it. Ticks
+    // 20-59: along the reference, 0.3 N against its |F|, nothing across. Ticks 60-69: the whole
+    // reference along the last push, nothing felt.
+    const double along_squared =
+        (10 * 0.4 * 0.4 + 40 * std::pow(felt_n - reference_n, 2) + 10 * reference_n * reference_n) /
+        60.0;
+    const double across_squared = 10 * 0.2 * 0.2 / 60.0;
+    EXPECT_NEAR(report.rms_error_along_push_n, std::sqrt(along_squared), 1e-5);
+    EXPECT_NEAR(report.rms_error_across_push_n, std::sqrt(across_squared), 1e-5);
+    EXPECT_NEAR(std::hypot(report.rms_error_along_push_n, report.rms_error_across_push_n),
+                report.rms_error_n, 1e-9);
+    EXPECT_NEAR(report.acrossPushFraction(), std::sqrt(across_squared) / reference_n, 1e-5);
+    EXPECT_THAT(formatReport(devices, {}, {}),
+                HasSubstr(fmt::format("across it {:.3f} N RMS ({:.1f}%): the reference's shear",
+                                      std::sqrt(across_squared),
+                                      100.0 * std::sqrt(across_squared) / reference_n)));
 }
 
 TEST(ContactQuality, AHeldContactForceHasNoChatterAndIsNotAtTheClamp) {
