@@ -48,6 +48,19 @@ std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s) 
     out += fmt::format("  Sim link: {}, {}, last input {}, {:.1f} Hz, {} received, {} rejected\n",
                        toString(link.transport), link.connected ? "connected" : "NOT CONNECTED",
                        age, link.rate_hz, link.received, link.rejected);
+    if (link.rejected > 0) {
+        // Which check refused them (docs/hapticd.md, "Sim input validation"): a NaN from the
+        // sim is not a late message on a loaded machine.
+        std::string reasons;
+        for (std::size_t i = 0; i < link.rejected_by_reason.size(); ++i) {
+            if (link.rejected_by_reason[i] > 0) {
+                reasons += fmt::format("{}{} {}", reasons.empty() ? "" : ", ",
+                                       msgs::toString(static_cast<msgs::SimInputRejection>(i + 1)),
+                                       link.rejected_by_reason[i]);
+            }
+        }
+        out += fmt::format("            rejected: {}\n", reasons);
+    }
     if (link.late_input_ticks > 0) {
         out += fmt::format(
             "            late input faded the force on {} ticks (sim slower than 3/4 of "

@@ -49,12 +49,18 @@ std::string statusJson(const msgs::HapticStatus& status, double sample_age_s) {
                        {"wakeup_latency_us", percentiles(loop.wakeup_latency_us)},
                        {"tick_work_us", percentiles(loop.tick_work_us)}};
     const msgs::SimLinkStatus& link = status.sim_link;
+    Json rejected_by_reason = Json::object();
+    for (std::size_t i = 0; i < link.rejected_by_reason.size(); ++i) {
+        rejected_by_reason[msgs::toString(static_cast<msgs::SimInputRejection>(i + 1))] =
+            link.rejected_by_reason[i];
+    }
     out["sim_link"] = Json{{"transport", msgs::toString(link.transport)},
                            {"connected", link.connected},
                            {"age_ms", orNull(link.age_ms)},
                            {"rate_hz", link.rate_hz},
                            {"received", link.received},
                            {"rejected", link.rejected},
+                           {"rejected_by_reason", rejected_by_reason},
                            {"late_input_ticks", link.late_input_ticks}};
     Json devices = Json::array();
     for (const msgs::DeviceStatus& device : status.devices) {

@@ -694,6 +694,15 @@ TEST_F(DaemonCoreTest, RejectsNonFiniteAndWrongDeviceInputAndCountsThem) {
     msgs::HapticStatus status;
     sut.fillStatus(kMs, status);
     EXPECT_THAT(status.sim_link.rejected, Eq(8U));
+    // By reason, over both devices (the thimble's NaN sample among the non-finite ones).
+    std::array<std::uint64_t, msgs::kSimInputRejectionReasons> by_reason{};
+    by_reason[msgs::reasonIndex(InputRejection::kNonFinite)] = 3;
+    by_reason[msgs::reasonIndex(InputRejection::kWrongDevice)] = 1;
+    by_reason[msgs::reasonIndex(InputRejection::kDofMismatch)] = 1;
+    by_reason[msgs::reasonIndex(InputRejection::kDegenerateConstraint)] = 1;
+    by_reason[msgs::reasonIndex(InputRejection::kCountOverCapacity)] = 1;
+    by_reason[msgs::reasonIndex(InputRejection::kBadNormal)] = 1;
+    EXPECT_THAT(status.sim_link.rejected_by_reason, Eq(by_reason));
     EXPECT_THAT(status.sim_link.received, Eq(0U));
     EXPECT_FALSE(status.sim_link.connected);
 }

@@ -116,6 +116,7 @@ TEST(StatusJson, CarriesEveryFieldOfTheScreenUnderTheDocumentedNames) {
     status.sim_link.age_ms = -1.0;
     status.sim_link.received = 7;
     status.sim_link.rejected = 2;
+    status.sim_link.rejected_by_reason[msgs::reasonIndex(msgs::SimInputRejection::kNotNewer)] = 2;
     msgs::DeviceStatus device;
     device.device_id.assign("exo");
     device.kind = msgs::DeviceKind::kExoskeleton;
@@ -147,6 +148,11 @@ TEST(StatusJson, CarriesEveryFieldOfTheScreenUnderTheDocumentedNames) {
     EXPECT_EQ(json["sim_link"]["transport"], msgs::toString(msgs::SimTransport::kDds));
     EXPECT_TRUE(json["sim_link"]["age_ms"].is_null());
     EXPECT_EQ(json["sim_link"]["rejected"], 2);
+    // Every reason, by its key, also those that never happened.
+    ASSERT_EQ(json["sim_link"]["rejected_by_reason"].size(), msgs::kSimInputRejectionReasons);
+    EXPECT_EQ(json["sim_link"]["rejected_by_reason"]["not_newer"], 2);
+    EXPECT_EQ(json["sim_link"]["rejected_by_reason"]["non_finite"], 0);
+    EXPECT_EQ(json["sim_link"]["rejected_by_reason"]["stamp_ahead"], 0);
     ASSERT_EQ(json["devices"].size(), 1U);
     EXPECT_EQ(json["devices"][0]["id"], "exo");
     EXPECT_EQ(json["devices"][0]["kind"], "exoskeleton");
@@ -221,6 +227,19 @@ TEST(StatusFormat, LateSimInputIsShownOnlyWhenItHappened) {
     EXPECT_THAT(formatStatus(status, 0.05),
                 HasSubstr("late input faded the force on 1234 ticks (sim slower than 3/4 of "
                           "sim_timeout_ms, or stalled)"));
+}
+
+// The operator sees which check refused the sim's messages: a NaN from the sim is not a late
+// message on a loaded machine.
+TEST(StatusFormat, RejectedSimInputIsShownByReasonOnlyWhenItHappened) {
+    msgs::HapticStatus status;
+    status.sim_link.connected = true;
+    EXPECT_THAT(formatStatus(status, 0.05), Not(HasSubstr("rejected:")));
+    status.sim_link.rejected = 5;
+    status.sim_link.rejected_by_reason[msgs::reasonIndex(msgs::SimInputRejection::kNonFinite)] = 1;
+    status.sim_link.rejected_by_reason[msgs::reasonIndex(msgs::SimInputRejection::kDelayed)] = 4;
+    EXPECT_THAT(formatStatus(status, 0.05),
+                HasSubstr("5 rejected\n            rejected: non_finite 1, delayed 4\n"));
 }
 
 TEST(StatusFormat, SaysWhenTheSimIsNotConnected) {

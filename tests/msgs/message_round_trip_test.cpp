@@ -224,6 +224,7 @@ class Filler {
         fill(m.sim_link.rate_hz);
         fill(m.sim_link.received);
         fill(m.sim_link.rejected);
+        fill(m.sim_link.rejected_by_reason);
         fill(m.sim_link.late_input_ticks);
         fill(m.faults);
         fill(m.version);

@@ -473,6 +473,9 @@ void DaemonCore::fillStatus(std::int64_t now_ns, msgs::HapticStatus& out) noexce
         out.devices.push_back(status);
         received += slot.received;
         rejected += slot.rejected;
+        for (std::size_t reason = 1; reason < slot.rejected_by.size(); ++reason) {
+            out.sim_link.rejected_by_reason[reason - 1] += slot.rejected_by[reason];
+        }
         newest_age_ms = std::min(newest_age_ms, ageMs(slot, now_ns));
     }
 

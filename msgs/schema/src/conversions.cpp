@@ -13,6 +13,8 @@ using Member = std::remove_cvref_t<Accessor>;
 template <typename T>
 constexpr std::size_t kArraySize = std::tuple_size_v<T>;
 
+static_assert(kArraySize<Member<decltype(idl::SimLinkStatus{}.rejected_by_reason())>> ==
+              kSimInputRejectionReasons);
 static_assert(kArraySize<Member<decltype(idl::ConstraintSet{}.q_sim_rad())>> == kMaxJointDofs);
 static_assert(kArraySize<Member<decltype(idl::LinearConstraint{}.a())>> == kMaxJointDofs);
 static_assert(kArraySize<Member<decltype(idl::ContactKinematics{}.q_ref_rad())>> ==
@@ -362,6 +364,7 @@ idl::HapticStatus toIdl(const HapticStatus& in) {
     link.rate_hz(in.sim_link.rate_hz);
     link.received(in.sim_link.received);
     link.rejected(in.sim_link.rejected);
+    link.rejected_by_reason(in.sim_link.rejected_by_reason);
     link.late_input_ticks(in.sim_link.late_input_ticks);
     out.sim_link(link);
 
@@ -428,6 +431,7 @@ ConversionResult fromIdl(const idl::HapticStatus& in, HapticStatus& out) {
     out.sim_link.rate_hz = link.rate_hz();
     out.sim_link.received = link.received();
     out.sim_link.rejected = link.rejected();
+    out.sim_link.rejected_by_reason = link.rejected_by_reason();
     out.sim_link.late_input_ticks = link.late_input_ticks();
 
     out.faults.clear();

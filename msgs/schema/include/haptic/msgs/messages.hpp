@@ -9,6 +9,7 @@
 // units and frames are in the field names; quaternions are (w, x, y, z).
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <type_traits>
 
@@ -155,6 +156,31 @@ enum class BusState : std::uint32_t {
 };
 enum class SimTransport : std::uint32_t { kIceoryx, kDds };
 
+// Why hapticd rejected a message from the sim. Counted per reason in SimLinkStatus; a
+// rejected message never reaches a device: NaN/Inf and out-of-range values stop where they
+// enter (hapticd's validate()).
+enum class SimInputRejection : std::uint8_t {
+    kNone,
+    kWrongDevice,           // source_id names another device
+    kDofMismatch,           // dof differs from the device's joint count
+    kNonFinite,             // NaN or Inf anywhere
+    kCountOverCapacity,     // a count larger than its array (corrupt shared memory)
+    kDegenerateConstraint,  // a constraint normal of zero length, or a contact beyond 1 m / 10 rad
+    kBadNormal,             // a contact normal that is not unit length
+    kNegativeWeight,
+    kNotNewer,    // its header.seq does not advance (and it is no restart): a replay or duplicate
+    kDelayed,     // older than sim_timeout_ns by its stamp (see DaemonCore::freshness())
+    kBadStamp,    // header.stamp_ns is 0 or negative
+    kStampAhead,  // stamped ahead of the sim's learnt clock by more than sim_timeout_ns
+    kCount_,
+};
+// SimLinkStatus::rejected_by_reason has one count per reason, kNone left out.
+inline constexpr std::size_t kSimInputRejectionReasons =
+    static_cast<std::size_t>(SimInputRejection::kCount_) - 1;
+[[nodiscard]] constexpr std::size_t reasonIndex(SimInputRejection reason) noexcept {
+    return static_cast<std::size_t>(reason) - 1;
+}
+
 struct LoopStatistics {
     double rate_hz{0.0};
     std::uint64_t ticks{0};
@@ -197,6 +223,8 @@ struct SimLinkStatus {
     double rate_hz{0.0};
     std::uint64_t received{0};
     std::uint64_t rejected{0};
+    // The rejected messages by reason, indexed by reasonIndex(); they add up to `rejected`.
+    std::array<std::uint64_t, kSimInputRejectionReasons> rejected_by_reason{};
     // Ticks since start on which some device's input was older than the fade start (3/4 of
     // sim_timeout_ms) but not yet timed out: the sim is alive but slower than the fade allows.
     std::uint64_t late_input_ticks{0};

@@ -76,6 +76,39 @@ namespace haptic::msgs {
     return "UNKNOWN";
 }
 
+// The key hapticctl shows a rejection reason under (status screen and JSON).
+[[nodiscard]] constexpr const char* toString(SimInputRejection reason) noexcept {
+    switch (reason) {
+        case SimInputRejection::kNone:
+            return "none";
+        case SimInputRejection::kWrongDevice:
+            return "wrong_device";
+        case SimInputRejection::kDofMismatch:
+            return "dof_mismatch";
+        case SimInputRejection::kNonFinite:
+            return "non_finite";
+        case SimInputRejection::kCountOverCapacity:
+            return "count_over_capacity";
+        case SimInputRejection::kDegenerateConstraint:
+            return "degenerate_constraint";
+        case SimInputRejection::kBadNormal:
+            return "bad_normal";
+        case SimInputRejection::kNegativeWeight:
+            return "negative_weight";
+        case SimInputRejection::kNotNewer:
+            return "not_newer";
+        case SimInputRejection::kDelayed:
+            return "delayed";
+        case SimInputRejection::kBadStamp:
+            return "bad_stamp";
+        case SimInputRejection::kStampAhead:
+            return "stamp_ahead";
+        case SimInputRejection::kCount_:
+            break;
+    }
+    return "UNKNOWN";
+}
+
 // The hapticctl subcommand that sends the command.
 [[nodiscard]] constexpr const char* toString(CommandKind kind) noexcept {
     switch (kind) {
