@@ -33,6 +33,8 @@ struct SimLinkLine {
     bool connected{false};
     unsigned long received{0};
     unsigned long rejected{0};
+    // Of those, the ones refused for their content (every reason but `delayed`).
+    unsigned long rejected_for_content{0};
 };
 
 SimLinkLine parseSimLink(const std::string& status) {
@@ -46,6 +48,18 @@ SimLinkLine parseSimLink(const std::string& status) {
         line.connected = match[2] == "connected";
         line.received = std::stoul(match[3]);
         line.rejected = std::stoul(match[4]);
+    }
+    // "            rejected: non_finite 1, delayed 4", shown when any was.
+    std::smatch reasons;
+    if (std::regex_search(status, reasons, std::regex(R"(\n +rejected: ([^\n]*))"))) {
+        const std::string list = reasons[1];
+        const std::regex entry(R"((\w+) (\d+))");
+        for (auto it = std::sregex_iterator(list.begin(), list.end(), entry);
+             it != std::sregex_iterator(); ++it) {
+            if ((*it)[1] != "delayed") {
+                line.rejected_for_content += std::stoul((*it)[2]);
+            }
+        }
     }
     return line;
 }
@@ -92,7 +106,9 @@ TEST(DdsSimLink, DaemonAndSimTalkOverDdsOnlyAndAKilledSimGoesStale) {
     EXPECT_EQ(link.transport, "dds") << status;
     EXPECT_TRUE(link.connected || kSanitized) << status;
     EXPECT_GT(link.received, 0U) << status;
-    EXPECT_EQ(link.rejected, 0U) << "the sim produces only valid messages\n" << status;
+    // A message that DDS delivered later than sim_timeout_ms (a loaded machine at startup: seen
+    // once, 1 of 12) is refused as delayed, which is right; any other reason is the sim's.
+    EXPECT_EQ(link.rejected_for_content, 0U) << "the sim produces only valid messages\n" << status;
 
     // Killed without warning, the sim stops refreshing its input: the link goes stale.
     ::kill(sim.pid(), SIGKILL);
