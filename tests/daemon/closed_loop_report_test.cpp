@@ -206,26 +206,37 @@ TEST(ClosedLoopReport, APortSpendingABudgetCarriedInIsPassive) {
     EXPECT_NEAR(reenabled.worst_balance_j, 1.75e-6, 1e-12);
 }
 
-// A thimble recording and the virtual user's felt log of the same run, on one monotonic
-// clock: the felt pad force lines up with the ticks and is compared with the reference.
-TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
+// A recording of one thimble, "pad_device", one sample a millisecond from time_s 0 =
+// CLOCK_MONOTONIC origin_ns (what a felt log is lined up by), with the reference force
+// `reference(tick)` (device frame).
+template <typename Reference>
+std::string thimbleRecording(std::int64_t origin_ns, int ticks, Reference reference) {
     msgs::HapticStatus status;
     msgs::DeviceStatus thimble_status;
     thimble_status.device_id.assign("pad_device");
     thimble_status.kind = msgs::DeviceKind::kThimble;
-    ASSERT_TRUE(status.devices.push_back(thimble_status));
-    const std::int64_t origin_ns = 7'000'000'000'123;
+    (void)status.devices.push_back(thimble_status);
     std::string csv = telemetryCsvProvenance("0.1.0", 0, origin_ns, &status) + telemetryCsvHeader();
     msgs::TelemetrySample sample;
     sample.device_index = 0;
     sample.device_kind = msgs::DeviceKind::kThimble;
-    for (int i = 0; i < 100; ++i) {
+    for (int i = 0; i < ticks; ++i) {
         sample.tick = static_cast<std::uint64_t>(i);
         sample.stamp_ns = origin_ns + 1'000'000LL * i;
-        const bool contact = i >= 40;
-        sample.thimble.reference_force_device_n = {0.0, 0.0, contact ? -0.5 : 0.0};
+        sample.thimble.reference_force_device_n = reference(i);
         csv += telemetryCsvRow(sample, origin_ns);
     }
+    return csv;
+}
+
+// A thimble recording and the virtual user's felt log of the same run, on one monotonic
+// clock: the felt pad force lines up with the ticks and is compared with the reference.
+TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
+    const std::int64_t origin_ns = 7'000'000'000'123;
+    // 0.5 N on the pad from tick 40.
+    const std::string csv = thimbleRecording(origin_ns, 100, [](int i) {
+        return std::array<double, 3>{0.0, 0.0, i >= 40 ? -0.5 : 0.0};
+    });
     // The pad under the plate feels 0.4 N from tick 50 on (the plate arrives 10 ms late), logged
     // every millisecond half a tick before hapticd's ticks, up to tick 70 (the log then stops).
     std::string felt_log =
@@ -336,27 +347,12 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
 // pad along its normal only. The report splits the error along the plate's push (felt) and
 // across it (the reference's shear), the two adding up to the whole error.
 TEST(ClosedLoopReport, TheThimblesErrorIsSplitAlongAndAcrossThePlatesPush) {
-    msgs::HapticStatus status;
-    msgs::DeviceStatus thimble_status;
-    thimble_status.device_id.assign("pad_device");
-    thimble_status.kind = msgs::DeviceKind::kThimble;
-    ASSERT_TRUE(status.devices.push_back(thimble_status));
     const std::int64_t origin_ns = 5'000'000'000'000;
-    std::string csv = telemetryCsvProvenance("0.1.0", 0, origin_ns, &status) + telemetryCsvHeader();
     // From tick 10 the sim's pad is pressed 0.4 N into the pad (−z) and dragged 0.2 N along −x.
     const std::array<double, 3> reference{-0.2, 0.0, -0.4};
     const double reference_n = std::hypot(reference[0], reference[2]);
-    msgs::TelemetrySample sample;
-    sample.device_index = 0;
-    sample.device_kind = msgs::DeviceKind::kThimble;
-    for (int i = 0; i < 70; ++i) {
-        sample.tick = static_cast<std::uint64_t>(i);
-        sample.stamp_ns = origin_ns + 1'000'000LL * i;
-        const bool contact = i >= 10;
-        sample.thimble.reference_force_device_n = {contact ? reference[0] : 0.0, 0.0,
-                                                   contact ? reference[2] : 0.0};
-        csv += telemetryCsvRow(sample, origin_ns);
-    }
+    const std::string csv = thimbleRecording(
+        origin_ns, 70, [&](int i) { return i >= 10 ? reference : std::array<double, 3>{}; });
     // The plate, tilted so its push lies along the reference, presses 0.3 N on ticks 20-59;
     // nothing is felt before (no push felt yet: the untilted plate's −z stands for it) or after
     // (the last push felt stands).
