@@ -568,8 +568,9 @@ std::string formatReport(const std::map<int, DeviceColumns>& devices,
                     1e3 * r.peak_indentation_m);
                 out += fmt::format(
                     "  of that error, along the plate's push {:.3f} N RMS ({:.1f}%); across it "
-                    "{:.3f} N RMS ({:.1f}%): the reference's shear, which a plate pressing "
-                    "without shear cannot apply\n",
+                    "{:.3f} N RMS ({:.1f}%): the reference's direction off the plate's push (a "
+                    "sliding finger's friction, where the plate follows the contact's "
+                    "geometry)\n",
                     r.rms_error_along_push_n, 100.0 * r.alongPushFraction(),
                     r.rms_error_across_push_n, 100.0 * r.acrossPushFraction());
                 if (q.contact_ticks == 0) {

@@ -344,8 +344,9 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
 }
 
 // A finger sliding on an object feels friction across the pad; the thimble's plate pushes the
-// pad along its normal only. The report splits the error along the plate's push (felt) and
-// across it (the reference's shear), the two adding up to the whole error.
+// pad along the plate's normal. The report splits the error along the plate's push (the
+// force's size) and across it (the reference's direction off the push), the two adding up to
+// the whole error.
 TEST(ClosedLoopReport, TheThimblesErrorIsSplitAlongAndAcrossThePlatesPush) {
     const std::int64_t origin_ns = 5'000'000'000'000;
     // From tick 10 the sim's pad is pressed 0.4 N into the pad (−z) and dragged 0.2 N along −x.
@@ -384,7 +385,7 @@ TEST(ClosedLoopReport, TheThimblesErrorIsSplitAlongAndAcrossThePlatesPush) {
                 report.rms_error_n, 1e-9);
     EXPECT_NEAR(report.acrossPushFraction(), std::sqrt(across_squared) / reference_n, 1e-5);
     EXPECT_THAT(formatReport(devices, {}, {}),
-                HasSubstr(fmt::format("across it {:.3f} N RMS ({:.1f}%): the reference's shear",
+                HasSubstr(fmt::format("across it {:.3f} N RMS ({:.1f}%): the reference's direction",
                                       std::sqrt(across_squared),
                                       100.0 * std::sqrt(across_squared) / reference_n)));
 }
