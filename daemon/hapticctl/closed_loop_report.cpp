@@ -240,21 +240,23 @@ ThimbleReport thimbleReport(const DeviceColumns& device, const ContactQualitySet
         if (report.felt_attached) {
             felt = magnitude(felt_axes, i);
             if (std::isfinite(felt)) {
-                error = std::hypot((*felt_axes[0])[i] - (*reference_axes[0])[i],
-                                   (*felt_axes[1])[i] - (*reference_axes[1])[i],
-                                   (*felt_axes[2])[i] - (*reference_axes[2])[i]);
+                std::array<double, 3> difference{};
+                for (std::size_t k = 0; k < 3; ++k) {
+                    difference[k] = (*felt_axes[k])[i] - (*reference_axes[k])[i];
+                }
+                error = std::hypot(difference[0], difference[1], difference[2]);
                 if (felt > kPushDirectionFloorN) {
                     for (std::size_t k = 0; k < 3; ++k) {
                         push[k] = (*felt_axes[k])[i] / felt;
                     }
                 }
-                double reference_along = 0.0;
-                for (std::size_t k = 0; k < 3; ++k) {
-                    reference_along += (*reference_axes[k])[i] * push[k];
-                }
-                along_error = felt - reference_along;
-                across_error = std::sqrt(
-                    std::max(reference * reference - reference_along * reference_along, 0.0));
+                // The error vector's parts along the push and across it: exact on every tick,
+                // also where a felt force below the floor is not along the held push.
+                along_error =
+                    difference[0] * push[0] + difference[1] * push[1] + difference[2] * push[2];
+                across_error = std::hypot(difference[0] - along_error * push[0],
+                                          difference[1] - along_error * push[1],
+                                          difference[2] - along_error * push[2]);
                 last_felt = felt;
                 report.peak_indentation_m = std::max(report.peak_indentation_m, (*indentation)[i]);
             }

@@ -122,12 +122,13 @@ struct ThimbleReport {
     double rms_error_n{0.0};
     double peak_error_n{0.0};
     // The error split by the plate's push (the felt force's direction, which the plate's normal
-    // sets; where nothing is felt, the last one felt, at first the untilted plate's −z): along
-    // it, |felt| − reference·push, the force's size; across it, the reference's component
-    // perpendicular to the push, its direction: a plate posed to the contact's geometry (the
-    // optimiser) pushes along the contact normal, so a sliding finger's friction lands here,
-    // and only a plate tilted along the force itself would render it. rms_error_n² = along² +
-    // across².
+    // sets; where less than 1 mN is felt, the last one felt, at first the untilted plate's −z):
+    // along it, (felt − reference)·push, the force's size (|felt| − reference·push where the
+    // felt force lies along the push); across it, the rest of felt − reference (the
+    // reference's component off the push, there), its direction: a plate posed to the
+    // contact's geometry (the optimiser) pushes along the contact normal, so a sliding
+    // finger's friction lands here, and only a plate tilted along the force itself would
+    // render it. rms_error_n² = along² + across² on every tick.
     double rms_error_along_push_n{0.0};
     double rms_error_across_push_n{0.0};
     // Of |felt| over every tick (an unknown one holding the last known value), by

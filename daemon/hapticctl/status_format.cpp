@@ -59,7 +59,9 @@ std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s) 
                                        link.rejected_by_reason[i]);
             }
         }
-        out += fmt::format("            rejected: {}\n", reasons);
+        out += fmt::format(
+            "            rejected: {}\n",
+            reasons.empty() ? "by reason unknown (a hapticd that does not count them)" : reasons);
     }
     if (link.late_input_ticks > 0) {
         out += fmt::format(

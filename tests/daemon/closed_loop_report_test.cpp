@@ -4,7 +4,6 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -12,7 +11,6 @@
 #include <vector>
 
 #include "contact_quality.hpp"
-#include "haptic/msgs/names.hpp"
 #include "telemetry_csv.hpp"
 
 namespace haptic::ctl {
@@ -215,7 +213,7 @@ std::string thimbleRecording(std::int64_t origin_ns, int ticks, Reference refere
     msgs::DeviceStatus thimble_status;
     thimble_status.device_id.assign("pad_device");
     thimble_status.kind = msgs::DeviceKind::kThimble;
-    (void)status.devices.push_back(thimble_status);
+    EXPECT_TRUE(status.devices.push_back(thimble_status));
     std::string csv = telemetryCsvProvenance("0.1.0", 0, origin_ns, &status) + telemetryCsvHeader();
     msgs::TelemetrySample sample;
     sample.device_index = 0;
@@ -349,45 +347,60 @@ TEST(ClosedLoopReport, TheFeltLogOfTheThimbleLinesUpWithTheRecording) {
 // the whole error.
 TEST(ClosedLoopReport, TheThimblesErrorIsSplitAlongAndAcrossThePlatesPush) {
     const std::int64_t origin_ns = 5'000'000'000'000;
-    // From tick 10 the sim's pad is pressed 0.4 N into the pad (−z) and dragged 0.2 N along −x.
-    const std::array<double, 3> reference{-0.2, 0.0, -0.4};
-    const double reference_n = std::hypot(reference[0], reference[2]);
+    // From tick 10 the sim's pad is pressed 0.4 N into the pad (−z) and dragged 0.2 N along −x
+    // and 0.1 N along +y.
+    const std::array<double, 3> reference{-0.2, 0.1, -0.4};
+    const double reference_n = std::hypot(reference[0], reference[1], reference[2]);
     const std::string csv = thimbleRecording(
         origin_ns, 70, [&](int i) { return i >= 10 ? reference : std::array<double, 3>{}; });
     // The plate, tilted so its push lies along the reference, presses 0.3 N on ticks 20-59;
     // nothing is felt before (no push felt yet: the untilted plate's −z stands for it) or after
-    // (the last push felt stands).
+    // (the last push felt stands). Row 40 feels 0.5 mN along +x, below the floor that gives a
+    // direction (the push stays); row 45 has no plate pose (its tick is unknown, left out).
     const double felt_n = 0.3;
+    const double faint_n = 5e-4;
     std::string felt_log =
         "stamp_ns,device,finger_penetration_m,pose_known,indentation_m,force_x_n,force_y_n,"
         "force_z_n,moment_x_nm,moment_y_nm,moment_z_nm\n";
     for (int i = -5; i < 70; ++i) {
-        const double f = i >= 20 && i < 60 ? felt_n / reference_n : 0.0;
-        felt_log +=
-            fmt::format("{},pad_device,0,1,0,{},0.0,{},0,0,0\n",
-                        origin_ns + 1'000'000LL * i - 500'000, f * reference[0], f * reference[2]);
+        const double scale = i >= 20 && i < 60 ? felt_n / reference_n : 0.0;
+        std::array<double, 3> felt{scale * reference[0], scale * reference[1],
+                                   scale * reference[2]};
+        if (i == 40) {
+            felt = {faint_n, 0.0, 0.0};
+        }
+        felt_log += fmt::format("{},pad_device,0,{},0,{},{},{},0,0,0\n",
+                                origin_ns + 1'000'000LL * i - 500'000, i == 45 ? 0 : 1, felt[0],
+                                felt[1], felt[2]);
     }
     auto devices = readTelemetryCsv(csv);
     ASSERT_EQ(attachFeltLog(devices, readRecordingInfo(csv), readFeltLog(felt_log)),
               std::vector<std::string>{"pad_device"});
     const ThimbleReport report = thimbleReport(devices.at(0), {});
-    ASSERT_EQ(report.felt_ticks, 60U);
-    // Ticks 10-19, pushed along −z: 0.4 N short along it, the 0.2 N drag across it. Ticks
-    // 20-59: along the reference, 0.3 N against its |F|, nothing across. Ticks 60-69: the whole
-    // reference along the last push, nothing felt.
+    ASSERT_EQ(report.felt_ticks, 59U);
+    // Ticks 10-19, pushed along −z: 0.4 N short along it, the drag (0.2, −0.1) across it.
+    // Ticks 20-59 but 40 and 45: along the reference, 0.3 N against its |F|, nothing across.
+    // Tick 40: the faint force against the reference, split along the reference's direction
+    // u. Ticks 60-69: the whole reference along the last push, nothing felt.
+    const double faint_along_u = faint_n * reference[0] / reference_n;
     const double along_squared =
-        (10 * 0.4 * 0.4 + 40 * std::pow(felt_n - reference_n, 2) + 10 * reference_n * reference_n) /
-        60.0;
-    const double across_squared = 10 * 0.2 * 0.2 / 60.0;
+        (10 * 0.4 * 0.4 + 38 * std::pow(felt_n - reference_n, 2) +
+         std::pow(faint_along_u - reference_n, 2) + 10 * reference_n * reference_n) /
+        59.0;
+    const double across_squared =
+        (10 * (0.2 * 0.2 + 0.1 * 0.1) + faint_n * faint_n - faint_along_u * faint_along_u) / 59.0;
     EXPECT_NEAR(report.rms_error_along_push_n, std::sqrt(along_squared), 1e-5);
     EXPECT_NEAR(report.rms_error_across_push_n, std::sqrt(across_squared), 1e-5);
     EXPECT_NEAR(std::hypot(report.rms_error_along_push_n, report.rms_error_across_push_n),
-                report.rms_error_n, 1e-9);
+                report.rms_error_n, 1e-12);
+    EXPECT_NEAR(report.alongPushFraction(), std::sqrt(along_squared) / reference_n, 1e-5);
     EXPECT_NEAR(report.acrossPushFraction(), std::sqrt(across_squared) / reference_n, 1e-5);
     EXPECT_THAT(formatReport(devices, {}, {}),
-                HasSubstr(fmt::format("across it {:.3f} N RMS ({:.1f}%): the reference's direction",
-                                      std::sqrt(across_squared),
-                                      100.0 * std::sqrt(across_squared) / reference_n)));
+                HasSubstr(fmt::format(
+                    "along the plate's push {:.3f} N RMS ({:.1f}%); across it {:.3f} N "
+                    "RMS ({:.1f}%): the reference's direction",
+                    std::sqrt(along_squared), 100.0 * std::sqrt(along_squared) / reference_n,
+                    std::sqrt(across_squared), 100.0 * std::sqrt(across_squared) / reference_n)));
 }
 
 TEST(ContactQuality, AHeldContactForceHasNoChatterAndIsNotAtTheClamp) {

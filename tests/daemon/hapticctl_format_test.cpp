@@ -115,8 +115,9 @@ TEST(StatusJson, CarriesEveryFieldOfTheScreenUnderTheDocumentedNames) {
     status.sim_link.transport = msgs::SimTransport::kDds;
     status.sim_link.age_ms = -1.0;
     status.sim_link.received = 7;
-    status.sim_link.rejected = 2;
+    status.sim_link.rejected = 3;
     status.sim_link.rejected_by_reason[msgs::reasonIndex(msgs::SimInputRejection::kNotNewer)] = 2;
+    status.sim_link.rejected_by_reason[msgs::reasonIndex(msgs::SimInputRejection::kStampAhead)] = 1;
     msgs::DeviceStatus device;
     device.device_id.assign("exo");
     device.kind = msgs::DeviceKind::kExoskeleton;
@@ -147,12 +148,12 @@ TEST(StatusJson, CarriesEveryFieldOfTheScreenUnderTheDocumentedNames) {
     EXPECT_EQ(json["loop"]["wakeup_latency_us"]["p99"], 52.0);
     EXPECT_EQ(json["sim_link"]["transport"], msgs::toString(msgs::SimTransport::kDds));
     EXPECT_TRUE(json["sim_link"]["age_ms"].is_null());
-    EXPECT_EQ(json["sim_link"]["rejected"], 2);
+    EXPECT_EQ(json["sim_link"]["rejected"], 3);
     // Every reason, by its key, also those that never happened.
     ASSERT_EQ(json["sim_link"]["rejected_by_reason"].size(), msgs::kSimInputRejectionReasons);
     EXPECT_EQ(json["sim_link"]["rejected_by_reason"]["not_newer"], 2);
     EXPECT_EQ(json["sim_link"]["rejected_by_reason"]["non_finite"], 0);
-    EXPECT_EQ(json["sim_link"]["rejected_by_reason"]["stamp_ahead"], 0);
+    EXPECT_EQ(json["sim_link"]["rejected_by_reason"]["stamp_ahead"], 1);
     ASSERT_EQ(json["devices"].size(), 1U);
     EXPECT_EQ(json["devices"][0]["id"], "exo");
     EXPECT_EQ(json["devices"][0]["kind"], "exoskeleton");
@@ -235,11 +236,16 @@ TEST(StatusFormat, RejectedSimInputIsShownByReasonOnlyWhenItHappened) {
     msgs::HapticStatus status;
     status.sim_link.connected = true;
     EXPECT_THAT(formatStatus(status, 0.05), Not(HasSubstr("rejected:")));
-    status.sim_link.rejected = 5;
+    // A status from a hapticd that does not count them by reason says so.
+    status.sim_link.rejected = 7;
+    EXPECT_THAT(formatStatus(status, 0.05),
+                HasSubstr("7 rejected\n            rejected: by reason unknown"));
     status.sim_link.rejected_by_reason[msgs::reasonIndex(msgs::SimInputRejection::kNonFinite)] = 1;
     status.sim_link.rejected_by_reason[msgs::reasonIndex(msgs::SimInputRejection::kDelayed)] = 4;
-    EXPECT_THAT(formatStatus(status, 0.05),
-                HasSubstr("5 rejected\n            rejected: non_finite 1, delayed 4\n"));
+    status.sim_link.rejected_by_reason[msgs::reasonIndex(msgs::SimInputRejection::kStampAhead)] = 2;
+    EXPECT_THAT(
+        formatStatus(status, 0.05),
+        HasSubstr("7 rejected\n            rejected: non_finite 1, delayed 4, stamp_ahead 2\n"));
 }
 
 TEST(StatusFormat, SaysWhenTheSimIsNotConnected) {

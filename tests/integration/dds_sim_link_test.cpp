@@ -33,7 +33,9 @@ struct SimLinkLine {
     bool connected{false};
     unsigned long received{0};
     unsigned long rejected{0};
-    // Of those, the ones refused for their content (every reason but `delayed`).
+    // The "rejected:" line's counts: all of them, and those refused for their content (every
+    // reason but `delayed`).
+    unsigned long rejected_by_reason{0};
     unsigned long rejected_for_content{0};
 };
 
@@ -56,6 +58,7 @@ SimLinkLine parseSimLink(const std::string& status) {
         const std::regex entry(R"((\w+) (\d+))");
         for (auto it = std::sregex_iterator(list.begin(), list.end(), entry);
              it != std::sregex_iterator(); ++it) {
+            line.rejected_by_reason += std::stoul((*it)[2]);
             if ((*it)[1] != "delayed") {
                 line.rejected_for_content += std::stoul((*it)[2]);
             }
@@ -108,7 +111,10 @@ TEST(DdsSimLink, DaemonAndSimTalkOverDdsOnlyAndAKilledSimGoesStale) {
     EXPECT_GT(link.received, 0U) << status;
     // A message that DDS delivered later than sim_timeout_ms (a loaded machine at startup: seen
     // once, 1 of 12) is refused as delayed, which is right; any other reason is the sim's.
+    EXPECT_EQ(link.rejected_by_reason, link.rejected) << "every rejection has its reason\n"
+                                                      << status;
     EXPECT_EQ(link.rejected_for_content, 0U) << "the sim produces only valid messages\n" << status;
+    EXPECT_LT(link.rejected, link.received) << "most messages arrive in time\n" << status;
 
     // Killed without warning, the sim stops refreshing its input: the link goes stale.
     ::kill(sim.pid(), SIGKILL);
