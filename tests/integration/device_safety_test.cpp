@@ -5,6 +5,7 @@
 // control of the sim input. Shares RouDi's socket with end_to_end_test: same RESOURCE_LOCK.
 
 #include "device_safety_rig.hpp"
+#include "haptic/msgs/names.hpp"
 
 namespace haptic::testing {
 namespace {
@@ -103,6 +104,24 @@ TEST_F(BadSimInputTest, RejectedCountedAndDoesNotChangeTheOutput) {
     const auto status = hapticctl({"status"});
     ASSERT_EQ(status.exit_code, 0) << status.err;
     EXPECT_THAT(status.out, HasSubstr(std::to_string(after.sim_link.rejected) + " rejected"));
+    // By reason, over the real status topic: every way the injector makes a message bad is
+    // counted under its own reason, and the reasons add up to the count.
+    std::uint64_t by_reason = 0;
+    for (std::size_t i = 0; i < msgs::kSimInputRejectionReasons; ++i) {
+        by_reason += after.sim_link.rejected_by_reason[i] - before.sim_link.rejected_by_reason[i];
+    }
+    EXPECT_EQ(by_reason, rejected);
+    using Reason = msgs::SimInputRejection;
+    for (const Reason reason :
+         {Reason::kNonFinite, Reason::kDofMismatch, Reason::kDegenerateConstraint,
+          Reason::kCountOverCapacity, Reason::kBadNormal, Reason::kNegativeWeight,
+          Reason::kWrongDevice}) {
+        const std::size_t i = msgs::reasonIndex(reason);
+        EXPECT_GT(after.sim_link.rejected_by_reason[i] - before.sim_link.rejected_by_reason[i], 0U)
+            << msgs::toString(reason);
+        EXPECT_THAT(status.out, HasSubstr(std::string(msgs::toString(reason)) + " "))
+            << "the status screen's 'rejected:' line";
+    }
 }
 
 std::vector<msgs::TelemetrySample> ofDevice(const std::vector<msgs::TelemetrySample>& samples,
