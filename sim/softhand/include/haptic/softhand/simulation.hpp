@@ -56,11 +56,14 @@ struct SolverSettings {
     // energy guard passes. Real-time settings make it infinite: the first iterate that
     // passes the guard ends the step.
     double newton_tolerance_m{1e-6};
-    int max_backtracks{10};                     // halvings of a Newton step in its line search
-    int max_substep_depth{3};                   // on an energy rise, 2^3 = 8 substeps at most
-    double max_speed_m_per_s{5.0};              // node and body speed clamp
-    double contact_stiffness_n_per_m{2000.0};   // per skin node
-    double friction_stiffness_n_per_m{2000.0};  // per skin node, tangential
+    int max_backtracks{10};                    // halvings of a Newton step in its line search
+    int max_substep_depth{3};                  // on an energy rise, 2^3 = 8 substeps at most
+    double max_speed_m_per_s{5.0};             // node and body speed clamp
+    double contact_stiffness_n_per_m{2000.0};  // per skin node
+    // Per skin node, tangential. Its stick radius mu f_N / k_f is what a node may move sideways
+    // before it slips: at 2000 N/m (tens of um) the tracker's filtered jitter made the pad's
+    // friction reverse step to step in the closed loop (docs/algorithms.md §2.4.7).
+    double friction_stiffness_n_per_m{500.0};
     // A second thread (HelperThread) solves, alongside the warm-started PCG solve, the cold
     // one the step falls back to when the warm direction fails, and evaluates each line
     // search point's next halving alongside it. The steps are the same to the bit; the
