@@ -77,13 +77,7 @@ double EnergyTerms::skeleton(const Sim& sim, const Sim::Configuration& q, Assemb
                                       d.alignment_stiffness_nm_per_rad * twist * twist.transpose(),
                                       theta, pair);
         }
-        const double flexion = axis.dot(theta);
-        double violation = 0.0;
-        if (flexion > d.limit_max_rad) {
-            violation = flexion - d.limit_max_rad;
-        } else if (flexion < d.limit_min_rad) {
-            violation = flexion - d.limit_min_rad;
-        }
+        const double violation = d.limitViolation(axis.dot(theta));
         if (violation != 0.0) {
             energy +=
                 addResidualTerm(assembler, d.limit_stiffness_nm_per_rad * axis * axis.transpose(),

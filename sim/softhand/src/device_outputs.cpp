@@ -241,10 +241,7 @@ std::array<double, msgs::kMaxJointDofs> KinestheticOutput::referenceTorques(
     // anatomy, which the user's joint carries without the device, so it is taken out.
     for (std::size_t j = 0; j < 3; ++j) {
         const JointDesc& joint = sim.jointDesc(chain_.joints[j]);
-        const double violation = q[j] > joint.limit_max_rad   ? q[j] - joint.limit_max_rad
-                                 : q[j] < joint.limit_min_rad ? q[j] - joint.limit_min_rad
-                                                              : 0.0;
-        reference[j] = -coupling[j] + joint.limit_stiffness_nm_per_rad * violation;
+        reference[j] = -coupling[j] + joint.limit_stiffness_nm_per_rad * joint.limitViolation(q[j]);
     }
     return reference;
 }

@@ -96,6 +96,12 @@ struct JointDesc {
     double limit_min_rad{-1.0e9};
     double limit_max_rad{1.0e9};
     double limit_stiffness_nm_per_rad{10.0};
+    // How far a flexion angle lies past the limits (negative below the minimum), 0 inside.
+    [[nodiscard]] double limitViolation(double flexion_rad) const noexcept {
+        return flexion_rad > limit_max_rad   ? flexion_rad - limit_max_rad
+               : flexion_rad < limit_min_rad ? flexion_rad - limit_min_rad
+                                             : 0.0;
+    }
 };
 
 struct ColliderDesc {

@@ -4,9 +4,10 @@
 // the flat plate presses the FEM fingertip at several depths, and the optimiser's own force
 // model for that plate pose, F(delta) = c sum_i w_i s (exp(delta_i / s) - 1) over the pad
 // samples handsim sends that lie under the plate (w_i their linear-pad area weights, delta_i
-// how far the plate is past sample i), is fitted to the FEM's force: the stiffening depth s and the scale c. s is what
-// the optimiser needs (optimiser.pad_stiffening_depth_m; a global scale does not move its
-// optimum); c says how much stiffer the FEM pad is than the linear pad's weights. Offline.
+// how far the plate is past sample i), is fitted to the FEM's force: the stiffening depth s
+// and the scale c. s is what the optimiser needs (optimiser.pad_stiffening_depth_m; a global
+// scale does not move its optimum); c says how much stiffer the FEM pad is than the linear
+// pad's weights. Offline.
 
 #include <vector>
 
