@@ -54,9 +54,9 @@ std::string formatStatus(const msgs::HapticStatus& status, double sample_age_s) 
         std::string reasons;
         for (std::size_t i = 0; i < link.rejected_by_reason.size(); ++i) {
             if (link.rejected_by_reason[i] > 0) {
-                reasons += fmt::format("{}{} {}", reasons.empty() ? "" : ", ",
-                                       msgs::toString(static_cast<msgs::SimInputRejection>(i + 1)),
-                                       link.rejected_by_reason[i]);
+                reasons +=
+                    fmt::format("{}{} {}", reasons.empty() ? "" : ", ",
+                                msgs::toString(msgs::reasonAt(i)), link.rejected_by_reason[i]);
             }
         }
         out += fmt::format(

@@ -51,8 +51,7 @@ std::string statusJson(const msgs::HapticStatus& status, double sample_age_s) {
     const msgs::SimLinkStatus& link = status.sim_link;
     Json rejected_by_reason = Json::object();
     for (std::size_t i = 0; i < link.rejected_by_reason.size(); ++i) {
-        rejected_by_reason[msgs::toString(static_cast<msgs::SimInputRejection>(i + 1))] =
-            link.rejected_by_reason[i];
+        rejected_by_reason[msgs::toString(msgs::reasonAt(i))] = link.rejected_by_reason[i];
     }
     out["sim_link"] = Json{{"transport", msgs::toString(link.transport)},
                            {"connected", link.connected},

@@ -180,6 +180,9 @@ inline constexpr std::size_t kSimInputRejectionReasons =
 [[nodiscard]] constexpr std::size_t reasonIndex(SimInputRejection reason) noexcept {
     return static_cast<std::size_t>(reason) - 1;
 }
+[[nodiscard]] constexpr SimInputRejection reasonAt(std::size_t index) noexcept {
+    return static_cast<SimInputRejection>(index + 1);
+}
 
 struct LoopStatistics {
     double rate_hz{0.0};
