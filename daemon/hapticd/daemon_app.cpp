@@ -378,7 +378,8 @@ int runDaemon(const DaemonOptions& options) {
     // RouDi or opens a device.
     control::ControlServer control_server(config::controlSocketPath(cfg),
                                           cfg.control.operator_group, commands);
-    const std::optional<ipc::RoudiWatch> roudi_watch = ipc::joinRoudi(!dds_sim, "hapticd");
+    const std::optional<ipc::RoudiWatch> roudi_watch =
+        ipc::joinRoudi(!dds_sim, "hapticd", cfg.iceoryx);
     spdlog::info("local control on {} (operators: root and group '{}'{})",
                  control_server.path().string(), cfg.control.operator_group,
                  control_server.groupKnown() ? "" : ", which does not exist on this host");

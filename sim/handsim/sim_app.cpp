@@ -76,7 +76,8 @@ int runSim(const SimOptions& options) {
     const auto& cfg = options.config;
     // Over DDS the sim needs no RouDi (and may run on another host).
     const bool dds_sim = cfg.sim_link.transport == config::SimTransport::kDds;
-    const std::optional<ipc::RoudiWatch> roudi_watch = ipc::joinRoudi(!dds_sim, "handsim");
+    const std::optional<ipc::RoudiWatch> roudi_watch =
+        ipc::joinRoudi(!dds_sim, "handsim", cfg.iceoryx);
     std::vector<DeviceLink> links(cfg.devices.size());
     for (std::size_t i = 0; i < cfg.devices.size(); ++i) {
         const auto& device = cfg.devices[i];

@@ -211,6 +211,35 @@ TEST_F(RoudiTest, MissingRoudiIsAOneLineErrorNotAHang) {
     }
 }
 
+// iceoryx.roudi_config names the RouDi configuration the processes need: a file whose pools
+// cannot carry the largest message stops both at start, before they look for RouDi, with
+// the file, the message and the size needed (iceoryx itself would fail only when the message
+// is first sent, and lose it every time).
+TEST_F(RoudiTest, ARoudiConfigWhosePoolsCannotCarryTheMessagesStopsTheProcessesAtStart) {
+    namespace fs = std::filesystem;
+    const fs::path dir =
+        fs::temp_directory_path() / ("end_to_end_small_pools_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::copy(kConfigDir, dir, fs::copy_options::recursive);
+    std::ofstream(dir / "roudi.toml", std::ios::trunc)
+        << "[general]\nversion = 1\n[[segment]]\n[[segment.mempool]]\nsize = 1024\ncount = 512\n";
+    const std::vector<std::vector<std::string>> commands{
+        {HAPTICD_PATH, "-c", (dir / "daemon.yaml").string(), "--realtime", "ignore"},
+        {HANDSIM_PATH, "-c", (dir / "sim.yaml").string()}};
+    for (const auto& command : commands) {
+        const auto result = runCommand(command, 10s);
+        EXPECT_NE(result.exit_code, 0) << command[0];
+        EXPECT_NE(result.exit_code, -1) << command[0] << " hung";
+        EXPECT_THAT(result.err, HasSubstr("iceoryx.roudi_config " + (dir / "roudi.toml").string() +
+                                          ": no mempool holds a"))
+            << command[0];
+        EXPECT_THAT(result.err, HasSubstr("the largest pool's chunks are 1024 bytes"))
+            << command[0];
+        EXPECT_EQ(lineCount(result.err), 1U) << command[0] << ":\n" << result.err;
+    }
+    fs::remove_all(dir);
+}
+
 // Operator commands from hapticctl over haptic/command to the real daemon, and the state they
 // leave in haptic/status. Exit codes: 0 accepted, 2 refused (reason on stderr).
 TEST_F(RoudiTest, EstopAndClearFromHapticctlDriveTheDaemonStateMachine) {

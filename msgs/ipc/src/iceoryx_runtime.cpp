@@ -3,6 +3,7 @@
 #include <string>
 
 #include "haptic/ipc/ipc_error.hpp"
+#include "haptic/ipc/roudi_config_check.hpp"
 #include "iceoryx_hoofs/log/logmanager.hpp"
 #include "iceoryx_posh/runtime/posh_runtime.hpp"
 
@@ -21,9 +22,13 @@ void initIceoryxRuntime(std::string_view app_name) {
         iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name.c_str(), name.size()));
 }
 
-std::optional<RoudiWatch> joinRoudi(bool uses_iceoryx, std::string_view app_name) {
+std::optional<RoudiWatch> joinRoudi(bool uses_iceoryx, std::string_view app_name,
+                                    const std::optional<config::IceoryxConfig>& iceoryx) {
     if (!uses_iceoryx) {
         return std::nullopt;
+    }
+    if (iceoryx) {
+        checkRoudiConfig(iceoryx->roudi_config);
     }
     initIceoryxRuntime(app_name);
     return RoudiWatch();

@@ -47,8 +47,9 @@ struct DdsConfig {
     std::string participant_profile;      // a <participant profile_name> in profiles_file
 };
 
-// YAML: iceoryx: {roudi_config}. The daemon and sim do not read the RouDi config; the path
-// is recorded so scripts and status output can say which memory pools are in use.
+// YAML: iceoryx: {roudi_config}: the RouDi configuration the process's RouDi must be started
+// with. hapticd and handsim check at start that its mempools carry their messages
+// (haptic::ipc::checkRoudiConfig); they do not start RouDi.
 struct IceoryxConfig {
     std::filesystem::path roudi_config;  // absolute
 };

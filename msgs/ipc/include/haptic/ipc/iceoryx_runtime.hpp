@@ -6,6 +6,8 @@
 #include <string>
 #include <string_view>
 
+#include "haptic/config/common.hpp"
+
 namespace haptic::ipc {
 
 // RouDi's well-known socket. iceoryx 2.0 builds it from IOX_UDS_SOCKET_PATH_PREFIX and
@@ -51,9 +53,13 @@ class RoudiWatch {
     bool segment_known_{false};
 };
 
-// What hapticd and handsim do at start: with an iceoryx sim link (`uses_iceoryx`), register
-// under `app_name` and watch that RouDi; over DDS they need no RouDi and get nullopt.
-[[nodiscard]] std::optional<RoudiWatch> joinRoudi(bool uses_iceoryx, std::string_view app_name);
+// What hapticd and handsim do at start: with an iceoryx sim link (`uses_iceoryx`), check the
+// RouDi configuration their file names (`iceoryx.roudi_config`, when the file has the map;
+// checkRoudiConfig), register under `app_name` and watch that RouDi; over DDS they need no
+// RouDi and get nullopt.
+[[nodiscard]] std::optional<RoudiWatch> joinRoudi(
+    bool uses_iceoryx, std::string_view app_name,
+    const std::optional<config::IceoryxConfig>& iceoryx = std::nullopt);
 
 // EX_TEMPFAIL from sysexits.h: "try again later", which is what a restart achieves.
 inline constexpr int kRoudiLostExitCode = 75;

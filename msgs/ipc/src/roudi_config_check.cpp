@@ -1,0 +1,77 @@
+#include "haptic/ipc/roudi_config_check.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include "haptic/ipc/ipc_error.hpp"
+#include "haptic/msgs/messages.hpp"
+#include "iceoryx_hoofs/log/logmanager.hpp"
+#include "iceoryx_posh/roudi/roudi_config_toml_file_provider.hpp"
+
+namespace haptic::ipc {
+
+namespace {
+
+constexpr std::array kSimLinkMessages{
+    ShmMessageSize{"ConstraintSet", sizeof(msgs::ConstraintSet)},
+    ShmMessageSize{"ContactSurface", sizeof(msgs::ContactSurface)},
+    ShmMessageSize{"DeviceState", sizeof(msgs::DeviceState)},
+    ShmMessageSize{"HandPose", sizeof(msgs::HandPose)},
+    ShmMessageSize{"HapticStatus", sizeof(msgs::HapticStatus)},
+    ShmMessageSize{"HapticTelemetry", sizeof(msgs::HapticTelemetry)},
+    ShmMessageSize{"HapticCommand", sizeof(msgs::HapticCommand)},
+    ShmMessageSize{"HapticCommandReply", sizeof(msgs::HapticCommandReply)},
+    ShmMessageSize{"SimStatus", sizeof(msgs::SimStatus)},
+};
+
+}  // namespace
+
+std::span<const ShmMessageSize> simLinkShmMessages() {
+    return kSimLinkMessages;
+}
+
+void checkRoudiConfig(const std::filesystem::path& roudi_config,
+                      std::span<const ShmMessageSize> messages) {
+    const std::string where = "iceoryx.roudi_config " + roudi_config.string();
+    const std::string path = roudi_config.string();
+    if (path.size() > iox::roudi::ConfigFilePathString_t::capacity()) {
+        throw IpcError(where + ": path longer than iceoryx's " +
+                       std::to_string(iox::roudi::ConfigFilePathString_t::capacity()) +
+                       " characters");
+    }
+    // The parser reports through iceoryx's logger, verbose by default.
+    iox::log::LogManager::GetLogManager().SetDefaultLogLevel(
+        iox::log::LogLevel::kError, iox::log::LogLevelOutput::kHideLogLevel);
+    iox::config::CmdLineArgs_t arguments;
+    arguments.configFilePath =
+        iox::roudi::ConfigFilePathString_t(iox::cxx::TruncateToCapacity, path.c_str());
+    iox::config::TomlRouDiConfigFileProvider provider(arguments);
+    const auto parsed = provider.parse();
+    if (parsed.has_error()) {
+        const auto index = static_cast<std::size_t>(parsed.get_error());
+        throw IpcError(where + ": not a RouDi configuration iceoryx accepts (" +
+                       iox::roudi::ROUDI_CONFIG_FILE_PARSE_ERROR_STRINGS[index] + ")");
+    }
+    std::uint32_t largest_pool = 0;
+    for (const auto& segment : parsed.value().m_sharedMemorySegments) {
+        for (const auto& pool : segment.m_mempoolConfig.m_mempoolConfig) {
+            if (pool.m_chunkCount > 0) {
+                largest_pool = std::max(largest_pool, pool.m_size);
+            }
+        }
+    }
+    const auto largest = std::max_element(
+        messages.begin(), messages.end(),
+        [](const ShmMessageSize& a, const ShmMessageSize& b) { return a.bytes < b.bytes; });
+    if (largest != messages.end() && largest->bytes > largest_pool) {
+        throw IpcError(where + ": no mempool holds a " + std::string(largest->type) + " (" +
+                       std::to_string(largest->bytes) + " bytes); the largest pool's chunks are " +
+                       std::to_string(largest_pool) +
+                       " bytes. Add a [[segment.mempool]] with size >= " +
+                       std::to_string(largest->bytes) + " and restart iox-roudi with the file");
+    }
+}
+
+}  // namespace haptic::ipc
