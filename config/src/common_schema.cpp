@@ -151,7 +151,7 @@ std::vector<DeviceConfig> readDeviceList(const ListReader& list,
                            "another device named '" + device.name + "' (" + where + ")");
             }
             // Two devices on one bus answering the same id would corrupt each other's state.
-            if (other.can.interface != device.can.interface) {
+            if (other.can.bus() != device.can.bus()) {
                 continue;
             }
             const std::uint32_t mine[] = {device.can.command_id, device.can.state_id,
@@ -160,7 +160,7 @@ std::vector<DeviceConfig> readDeviceList(const ListReader& list,
                                             other.can.heartbeat_id, other.can.fault_id};
             for (const std::uint32_t id : mine) {
                 if (std::find(std::begin(theirs), std::end(theirs), id) != std::end(theirs)) {
-                    entry.fail("a device whose CAN ids on " + device.can.interface +
+                    entry.fail("a device whose CAN ids on " + device.can.bus() +
                                    " differ from those of '" + other.name + "' (" + where + ")",
                                "'" + device.name + "' also using " + hex(id));
                 }

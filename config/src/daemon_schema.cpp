@@ -52,8 +52,7 @@ EstopRelayConfig readEstopRelay(MapReader map, const std::vector<DeviceConfig>& 
     auto [status_id, id_field] =
         map.requiredWithField("status_id", spec::Integer<std::uint32_t>::hexClosed(0, 0x7FF));
     for (const auto& device : devices) {
-        if (device.can.interface != bus->can.interface ||
-            device.can.udp_port != bus->can.udp_port) {
+        if (device.can.bus() != bus->can.bus()) {
             continue;
         }
         for (const std::uint32_t id : {device.can.command_id, device.can.state_id,

@@ -584,8 +584,26 @@ TEST(ConfigReferences, CanIdsSharedAcrossDevicesOnOneBus) {
     const auto file = kDataDir / "duplicate_device_ids_across_files.yaml";
     expectError(daemonError("duplicate_device_ids_across_files.yaml"),
                 {file.string(), lineOf(file, "exo_renamed_copy"), 5, "devices[1]",
-                 "expected a device whose CAN ids on can0 differ from those of 'exo' "
+                 "expected a device whose CAN ids on SocketCAN can0 differ from those of 'exo' "
                  "(devices[0]), got 'exo_two' also using 0x101"});
+}
+
+// hapticd opens one bus per UDP port block (openBuses), whatever `interface` a UDP device
+// names: two devices there with the same ids would each take the other's frames.
+TEST(ConfigReferences, CanIdsSharedOnOneUdpBusWhateverTheInterfacesSay) {
+    const auto file = kDataDir / "duplicate_device_ids_on_one_udp_bus.yaml";
+    expectError(daemonError("duplicate_device_ids_on_one_udp_bus.yaml"),
+                {file.string(), lineOf(file, "exo_two_udp_named_can1"), 5, "devices[1]",
+                 "expected a device whose CAN ids on UDP port 47100 differ from those of 'exo' "
+                 "(devices[0]), got 'exo_two' also using 0x101"});
+}
+
+TEST(ConfigReferences, TheSameCanIdsOnTwoUdpBusesAreAccepted) {
+    const DaemonConfig config = loadDaemonConfig(kDataDir / "same_ids_on_two_udp_buses.yaml");
+    ASSERT_EQ(config.devices.size(), 2U);
+    EXPECT_EQ(config.devices[0].can.bus(), "UDP port 47100");
+    EXPECT_EQ(config.devices[1].can.bus(), "UDP port 47200");
+    EXPECT_EQ(config.devices[0].can.command_id, config.devices[1].can.command_id);
 }
 
 TEST(ConfigReferences, UnknownDdsParticipantProfile) {

@@ -131,8 +131,7 @@ OpenedBuses openBuses(const std::vector<config::DeviceConfig>& devices,
     for (std::size_t i = 0; i < devices.size(); ++i) {
         const auto& can = devices[i].can;
         const bool udp = can.transport == config::CanTransport::kUdp;
-        const std::string key =
-            udp ? "udp:" + std::to_string(can.udp_port) : "socketcan:" + can.interface;
+        const std::string key = can.bus();
         if (udp) {
             const auto [slots, inserted] = udp_slots.emplace(key, can.udp_slots);
             if (!inserted && slots->second != can.udp_slots) {

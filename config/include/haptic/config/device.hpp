@@ -79,6 +79,14 @@ struct CanConfig {
     // for this long and the device goes to its safe state by itself (exoskeleton disabled at
     // 0 N, thimble retracted) and reports fault 4, whatever happened to the host.
     int command_timeout_ms{0};
+
+    // The bus the device is on, as hapticd opens it: one per SocketCAN interface, one per UDP
+    // port block (whatever `interface` a UDP device names). Devices with the same bus share it
+    // and must not share a CAN id.
+    [[nodiscard]] std::string bus() const {
+        return transport == CanTransport::kUdp ? "UDP port " + std::to_string(udp_port)
+                                               : "SocketCAN " + interface;
+    }
 };
 
 // YAML: safety: {...}. Hard limits enforced by hapticd after rendering, whatever the method.
