@@ -205,6 +205,44 @@ TEST(ExoskeletonDriver, ReportsDeviceFaultsAndTheirClearing) {
     EXPECT_EQ(driver.faults(rig.now) & kDeviceFault, 0U);
 }
 
+// What was in flight when the device faulted or restarted does not re-arm it: after an
+// injected fault clears, or a reboot, enabled commands leave the drive limp until a disable.
+TEST(ExoskeletonDriver, AfterAFaultClearsOrARebootOnlyADisableReArmsTheDrive) {
+    const auto device = exoskeletonDevice();
+    for (const char* event : {"fault 1", "reboot"}) {
+        SCOPED_TRACE(event);
+        Rig rig(device, emu::EmulatorMode::kStream);
+        ExoskeletonDriver driver(device, rig.host);
+        for (int i = 0; i < 50; ++i) {
+            tick(rig, driver, 5.0);
+        }
+        ASSERT_NEAR(driver.state().actuator.force_n, 5.0, 0.2);
+        rig.fault(event);
+        if (std::string(event) == "fault 1") {
+            for (int i = 0; i < 5; ++i) {
+                tick(rig, driver, 5.0);
+            }
+            rig.fault("fault 0");
+        }
+        // The host keeps sending the force it had: refused, the drive stays disabled.
+        for (int i = 0; i < 50; ++i) {
+            tick(rig, driver, 5.0);
+            ASSERT_EQ(driver.state().actuator.status & protocol::kExoEnabled, 0U) << "tick " << i;
+        }
+        EXPECT_EQ(driver.state().actuator.force_n, 0.0);
+        EXPECT_TRUE(rig.emulator->awaitingSafeCommand());
+        // A disable re-arms it; then an enable renders again.
+        rig.advance(kMs);
+        ASSERT_EQ(driver.sendCommand({0.0, false}), can::IoResult::kOk);
+        rig.advance(0);
+        EXPECT_FALSE(rig.emulator->awaitingSafeCommand());
+        for (int i = 0; i < 50; ++i) {
+            tick(rig, driver, 5.0);
+        }
+        EXPECT_NEAR(driver.state().actuator.force_n, 5.0, 0.2);
+    }
+}
+
 TEST(ExoskeletonDriver, BusOffRefusesCommandsUntilTheControllerRecovers) {
     const auto device = exoskeletonDevice();
     Rig rig(device, emu::EmulatorMode::kLockstep);

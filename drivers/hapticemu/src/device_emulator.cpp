@@ -18,6 +18,7 @@ void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
         started_ = false;
         command_seen_ = false;
         timed_out_ = false;
+        awaiting_safe_command_ = reArmsOnlyOnASafeCommand();
         onReboot();
     }
     if (!started_) {
@@ -35,6 +36,9 @@ void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
         can::CanFrame frame;
         codec_base_.encodeFault(report, frame);
         send(frame, now_ns);
+        if (!report.active) {
+            awaiting_safe_command_ = reArmsOnlyOnASafeCommand();
+        }
     }
     checkCommandTimeout(now_ns);
     if (now_ns >= next_heartbeat_ns_) {
@@ -109,7 +113,10 @@ bool DeviceEmulator::onCommandAccepted(std::int64_t now_ns, bool asks_safe) noex
         timed_out_ = false;
         reportCommandTimeout(false, now_ns);
     }
-    const bool apply = !timed_out_;
+    if (awaiting_safe_command_ && asks_safe && faults_.deviceFault() == 0) {
+        awaiting_safe_command_ = false;
+    }
+    const bool apply = !holdsSafe();
     if (options_.mode == EmulatorMode::kLockstep) {
         stepModel(tickSeconds());
         sendState(now_ns);
@@ -153,11 +160,15 @@ class ExoskeletonEmulator final : private CodecOwner<protocol::ExoskeletonCodec>
     [[nodiscard]] ExoskeletonModel* exoskeletonModel() noexcept override { return &model_; }
 
   private:
+    [[nodiscard]] bool reArmsOnlyOnASafeCommand() const noexcept override { return true; }
     void stepModel(double dt_s) noexcept override {
         model_.step(dt_s, command_.force_n * faults_.forceFraction(),
-                    command_.enable && activeFault() == 0);
+                    command_.enable && activeFault() == 0 && !holdsSafe());
     }
-    void onReboot() noexcept override { command_ = protocol::ExoskeletonCommand{}; }
+    void onReboot() noexcept override {
+        command_ = protocol::ExoskeletonCommand{};
+        model_.disable();
+    }
     void sendState(std::int64_t now_ns) noexcept override {
         protocol::ExoskeletonActuatorState actuator;
         actuator.stroke_m = model_.strokeM();
@@ -229,8 +240,7 @@ class ThimbleEmulator final : private CodecOwner<protocol::ThimbleCodec>, public
     void stepModel(double dt_s) noexcept override {
         // An injected fault freezes the servos where they are; the command timeout retracts.
         if (faults_.deviceFault() == 0) {
-            std::array<double, 3> target =
-                commandTimedOut() ? retract_rad_ : target_.servo_target_rad;
+            std::array<double, 3> target = holdsSafe() ? retract_rad_ : target_.servo_target_rad;
             if (const std::uint8_t stuck = faults_.stuckServo(); stuck >= 1 && stuck <= 3) {
                 target[stuck - 1U] = std::numeric_limits<double>::quiet_NaN();  // holds
             }

@@ -60,6 +60,12 @@ class DeviceEmulator {
     // Whether the command timeout holds the device safe now, and how often it tripped.
     [[nodiscard]] bool commandTimedOut() const noexcept { return timed_out_; }
     [[nodiscard]] std::uint64_t commandTimeouts() const noexcept { return timeouts_; }
+    // The exoskeleton's drive, after a restart or once an injected device fault has cleared,
+    // obeys no setpoint until a command with the enable bit clear, as after its command
+    // timeout: the enabled force in flight before does not re-arm it. (The thimble's servos
+    // follow their setpoints again: a position device, which hapticd commands along the
+    // retract path while it holds its fault.)
+    [[nodiscard]] bool awaitingSafeCommand() const noexcept { return awaiting_safe_command_; }
     // The fault the device reports: an injected one first, else the command timeout (4).
     [[nodiscard]] std::uint8_t activeFault() const noexcept;
     [[nodiscard]] const protocol::RejectCounters& rejects() const noexcept {
@@ -78,15 +84,19 @@ class DeviceEmulator {
     virtual void stepModel(double dt_s) noexcept = 0;
     // A restart (the `reboot` fault command): the device forgets the last command.
     virtual void onReboot() noexcept = 0;
+    // Whether a restart or a cleared fault leaves the device waiting for a safe command.
+    [[nodiscard]] virtual bool reArmsOnlyOnASafeCommand() const noexcept { return false; }
     virtual void sendState(std::int64_t now_ns) noexcept = 0;
     // A valid command arrived; `asks_safe` when it commands the safe state. Returns whether
-    // its setpoint may be applied (false while the command timeout holds the device safe).
+    // its setpoint may be applied (false while the device holds its safe state: holdsSafe()).
     // Lockstep: one tick per command, then reply.
     [[nodiscard]] bool onCommandAccepted(std::int64_t now_ns, bool asks_safe) noexcept;
     void send(const can::CanFrame& frame, std::int64_t now_ns) noexcept {
         faults_.send(bus_, frame, now_ns);
     }
     [[nodiscard]] double tickSeconds() const noexcept { return 1e-9 * options_.tick_ns; }
+    // The device holds its safe state by itself: timed out, or not yet re-armed.
+    [[nodiscard]] bool holdsSafe() const noexcept { return timed_out_ || awaiting_safe_command_; }
 
     can::CanBus& bus_;
     EmulatorOptions options_;
@@ -101,6 +111,7 @@ class DeviceEmulator {
     std::int64_t last_command_ns_{0};
     bool command_seen_{false};
     bool timed_out_{false};
+    bool awaiting_safe_command_{false};
     std::uint64_t timeouts_{0};
     protocol::DeviceCodecBase& codec_base_;
     bool started_{false};

@@ -31,6 +31,11 @@ class ExoskeletonModel {
     ExoskeletonModel(const config::DeviceConfig& device, HandImpedance hand, Intent intent);
 
     void step(double dt_s, double force_command_n, bool enable) noexcept;
+    // The drive loses power (a restart): disabled, no current, at once.
+    void disable() noexcept {
+        enabled_ = false;
+        drive_force_n_ = 0.0;
+    }
     // The joint angles the user's finger aims for from now on (non-finite values are ignored).
     void setIntent(const std::array<double, 3>& intent_rad) noexcept;
     void setHandImpedance(const HandImpedance& hand) noexcept { hand_ = hand; }
