@@ -44,6 +44,27 @@ Built build(const std::string& file) {
     return out;
 }
 
+// The scene's solver keys (newton_iterations, pcg_max_iterations, helper_thread) reach the
+// solver the scene builds, through the settings handsim builds it with.
+TEST(SceneSolverLimits, TheScenesSolverKeysReachItsSolver) {
+    config::SceneConfig scene =
+        config::loadSceneConfig(std::string(HAPTIC_SOURCE_DIR) + "/config/scenes/default.yaml");
+    const SolverSettings shipped = SceneSimulation(scene, {}, realtimeSceneSettings(scene.solver))
+                                       .model()
+                                       .simulation.settings();
+    EXPECT_EQ(shipped.max_newton_iterations, 2);
+    EXPECT_EQ(shipped.pcg_max_iterations, 30);
+    scene.solver.newton_iterations = 3;
+    scene.solver.pcg_max_iterations = 7;
+    scene.solver.helper_thread = false;
+    const SolverSettings changed = SceneSimulation(scene, {}, realtimeSceneSettings(scene.solver))
+                                       .model()
+                                       .simulation.settings();
+    EXPECT_EQ(changed.max_newton_iterations, 3);
+    EXPECT_EQ(changed.pcg_max_iterations, 7);
+    EXPECT_FALSE(changed.use_helper_thread);
+}
+
 TEST(SceneSize, TheThimbleSceneBuildsTheDistalPhalanxOnly) {
     const Built built = build("thimble_only.yaml");
     EXPECT_THAT(built.size.bone_names, ElementsAre("index_distal"));

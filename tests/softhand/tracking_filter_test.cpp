@@ -17,8 +17,8 @@ constexpr double kTrackerRateHz = 90.0;  // config/user.yaml's tracker
 constexpr double kAngleNoiseRad = 0.002;
 constexpr double kPositionNoiseM = 0.0002;
 
-// sim.yaml's tracking_filter values with the angle channel on (angle_beta_s_per_rad: 10, as
-// measured); sim.yaml ships without it, filtering the wrist position only.
+// sim.yaml's tracking_filter values, the angle channel on (angle_beta_s_per_rad: 10) as
+// shipped; the key is optional, and without it only the wrist position is filtered.
 TrackingFilterSettings settingsWithAngles() {
     return {OneEuroParameters{2.0, 10.0, 1.0}, {2.0, 50.0, 1.0}};
 }
@@ -134,8 +134,9 @@ TEST(TrackingFilter, EveryParameterChangesTheLag) {
     EXPECT_GT(lags(slow_derivative).second, position_lag);
 }
 
-// As shipped (no angle_beta_s_per_rad): the wrist position is filtered as before, the angles
-// and the wrist's orientation reach the hand exactly as tracked.
+// Without angle_beta_s_per_rad (an optional key; sim.yaml ships it): the wrist position is
+// filtered as before, the angles and the wrist's orientation reach the hand exactly as
+// tracked.
 TEST(TrackingFilter, WithoutTheAngleChannelOnlyTheWristPositionIsFiltered) {
     TrackingFilterSettings settings = settingsWithAngles();
     settings.angles.reset();

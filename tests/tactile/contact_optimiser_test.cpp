@@ -205,8 +205,10 @@ TEST_F(ContactOptimiserTest, MoreSamplesThanConfiguredAreRejected) {
 }
 
 TEST_F(ContactOptimiserTest, IterationsNeverExceedTheConfiguredBound) {
-    auto settings = OptimiserSettings::fromConfig(config);
-    settings.max_iterations = 1;
+    // optimiser.max_iterations in the device file, through the mapping hapticd uses.
+    auto one_iteration = config;
+    one_iteration.optimiser.max_iterations = 1;
+    const auto settings = OptimiserSettings::fromConfig(one_iteration);
     ContactSurfaceOptimiser one_step(kinematics, settings);
     const auto command = one_step.solve(sphereSurface());
     EXPECT_EQ(command.report.iterations, 1);

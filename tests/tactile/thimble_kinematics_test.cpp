@@ -189,6 +189,28 @@ TEST_F(ThimbleKinematicsTest, PosesOutsideTheWorkspaceReportWhy) {
     EXPECT_TRUE(sut.inverse({sut.minHeightM() - 1e-4, 0.0, 0.0}, false).ok());
 }
 
+// spherical_joint_max_deg: a pose whose links lean further from the plate's normal than the
+// ball joints' cone is refused, one that stays inside it is not.
+TEST_F(ThimbleKinematicsTest, TheSphericalJointsConeLimitsThePosesItAllows) {
+    const TiltReach reach = sut.tiltReach();
+    const PlatformDofs tilted{reach.best_height_m, reach.max_tilt_rad, 0.0};
+    ASSERT_TRUE(sut.inverse(tilted).ok());
+    ConstraintValues values{};
+    ASSERT_TRUE(sut.constraints(tilted, values));
+    double widest_cone = 0.0;
+    for (std::size_t leg = 0; leg < 3; ++leg) {
+        widest_cone =
+            std::max(widest_cone, sut.config().spherical_joint_max_rad - values[11 + leg]);
+    }
+    ASSERT_GT(widest_cone, 0.0);
+    config::ThimbleConfig narrow = sut.config();
+    narrow.spherical_joint_max_rad = widest_cone - 0.01;
+    const InverseResult refused = ThimbleKinematics(narrow).inverse(tilted);
+    EXPECT_EQ(refused.error, KinematicsError::kJointCone);
+    narrow.spherical_joint_max_rad = widest_cone + 0.01;
+    EXPECT_TRUE(ThimbleKinematics(narrow).inverse(tilted).ok());
+}
+
 TEST_F(ThimbleKinematicsTest, ForwardRejectsNonFiniteAndUnassemblableAngles) {
     EXPECT_EQ(sut.forward({std::numeric_limits<double>::infinity(), 0.0, 0.0}).error,
               KinematicsError::kNonFinite);
