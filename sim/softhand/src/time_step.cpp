@@ -506,8 +506,13 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
         const bool second = advance(0.5 * h, depth + 1, report);
         return first && second;
     }
-    warm_start_ = w.first_delta.size() == n && w.first_delta.allFinite() ? w.first_delta
-                                                                         : Eigen::VectorXd::Zero(n);
+    // Not as one conditional expression: its two sides' common type is a new VectorXd, whose
+    // copy allocated on every step.
+    if (w.first_delta.size() == n && w.first_delta.allFinite()) {
+        warm_start_ = w.first_delta;
+    } else {
+        warm_start_.setZero(n);
+    }
 
     // Speed clamp: a tracking teleport must not fling tissue across the scene.
     bool speed_clamped = false;
