@@ -1,18 +1,80 @@
 #include "allocation_counter.hpp"
 
+#include <cerrno>
 #include <cstdlib>
 #include <new>
+
+// The C allocator is counted too (glibc's own entry points behind it), so that a malloc
+// reached without operator new (snprintf's buffers, Eigen's aligned_malloc, a library's
+// internals) is seen. Not under ASan or TSan, whose runtimes replace the same functions.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define HAPTIC_COUNTS_MALLOC 0
+#else
+#define HAPTIC_COUNTS_MALLOC 1
+#endif
 
 namespace {
 
 thread_local bool t_counting = false;
 thread_local std::uint64_t t_allocations = 0;
 
-void* countedAllocate(std::size_t size) {
+void count() noexcept {
     if (t_counting) {
         ++t_allocations;
     }
-    if (void* p = std::malloc(size == 0 ? 1 : size)) {
+}
+
+}  // namespace
+
+#if HAPTIC_COUNTS_MALLOC
+extern "C" {
+void* __libc_malloc(std::size_t size);
+void* __libc_calloc(std::size_t count, std::size_t size);
+void* __libc_realloc(void* p, std::size_t size);
+void* __libc_memalign(std::size_t alignment, std::size_t size);
+
+void* malloc(std::size_t size) {
+    count();
+    return __libc_malloc(size);
+}
+void* calloc(std::size_t n, std::size_t size) {
+    count();
+    return __libc_calloc(n, size);
+}
+void* realloc(void* p, std::size_t size) {
+    count();
+    return __libc_realloc(p, size);
+}
+void* aligned_alloc(std::size_t alignment, std::size_t size) {
+    count();
+    return __libc_memalign(alignment, size);
+}
+int posix_memalign(void** out, std::size_t alignment, std::size_t size) {
+    count();
+    void* p = __libc_memalign(alignment, size);
+    if (p == nullptr) {
+        return ENOMEM;
+    }
+    *out = p;
+    return 0;
+}
+}
+#endif
+
+namespace {
+
+// operator new below counts once, the malloc it calls not again.
+void* uncountedMalloc(std::size_t size) noexcept {
+#if HAPTIC_COUNTS_MALLOC
+    return __libc_malloc(size);
+#else
+    return std::malloc(size);
+#endif
+}
+
+void* countedAllocate(std::size_t size) {
+    count();
+    if (void* p = uncountedMalloc(size == 0 ? 1 : size)) {
         return p;
     }
     throw std::bad_alloc();
@@ -29,10 +91,8 @@ void* operator new[](std::size_t size) {
 // The nothrow forms too (Fast DDS's foonathan allocator uses them): otherwise ASan's own
 // nothrow new pairs with the free() below and reports an alloc-dealloc mismatch.
 void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-    if (t_counting) {
-        ++t_allocations;
-    }
-    return std::malloc(size == 0 ? 1 : size);
+    count();
+    return uncountedMalloc(size == 0 ? 1 : size);
 }
 void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
     return operator new(size, tag);

@@ -6,7 +6,8 @@
 namespace haptic::testing {
 
 // Counts heap allocations made by this thread while a scope is active (global operator new
-// is replaced in allocation_counter.cpp), as Drake's limit_malloc does. Used to prove that
+// and, outside the ASan and TSan builds, malloc, calloc, realloc, aligned_alloc and
+// posix_memalign are replaced in allocation_counter.cpp), as Drake's limit_malloc does. Used to prove that
 // code on the RT path does not allocate after start.
 class ScopedAllocationCounter {
   public:

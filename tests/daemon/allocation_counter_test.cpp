@@ -1,0 +1,49 @@
+// The counter the RT-path allocation tests rely on counts what it claims to.
+
+#include "allocation_counter.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <vector>
+
+namespace haptic::testing {
+namespace {
+
+TEST(AllocationCounter, CountsOperatorNewOnceAndNothingOutsideItsScope) {
+    auto outside = std::make_unique<int>(1);
+    const ScopedAllocationCounter counter;
+    EXPECT_EQ(counter.allocations(), 0U);
+    std::vector<double> grown;
+    grown.resize(100);
+    EXPECT_EQ(counter.allocations(), 1U);
+}
+
+#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+// Keeps the compiler from pairing an allocation with its free() and removing both.
+void* kept(void* p) {
+    asm volatile("" : : "r"(p) : "memory");
+    return p;
+}
+
+TEST(AllocationCounter, CountsTheCAllocatorToo) {
+    const ScopedAllocationCounter counter;
+    void* a = kept(std::malloc(64));
+    void* b = kept(std::calloc(4, 16));
+    a = kept(std::realloc(a, 4096));
+    void* c = nullptr;
+    ASSERT_EQ(::posix_memalign(&c, 64, 128), 0);
+    void* d = kept(std::aligned_alloc(64, 128));
+    const std::uint64_t counted = counter.allocations();
+    std::free(a);
+    std::free(b);
+    std::free(c);
+    std::free(d);
+    EXPECT_EQ(counted, 5U);
+}
+#endif
+
+}  // namespace
+}  // namespace haptic::testing
