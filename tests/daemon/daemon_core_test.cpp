@@ -335,7 +335,12 @@ TEST(DaemonCoreOverruns, TheWindowIncludesItsEdgeAndALimitOfOneRaisesAtOnce) {
     for (const std::int64_t spacing_us : {11'111, 11'223}) {  // 9 gaps: 99.999 ms, 101.0 ms
         auto core = overrunCore(10, 100 * kMs);
         for (int n = 0; n < 10; ++n) {
-            core->update(kMs + n * spacing_us * 1000, overrun);
+            const std::int64_t at = kMs + n * spacing_us * 1000;
+            core->update(at, overrun);
+            // Plain ticks between them: the loop keeps its rate (DaemonCoreRate).
+            for (int k = 1; n < 9 && k <= 11; ++k) {
+                core->update(at + k * kMs, TickTiming{});
+            }
         }
         EXPECT_EQ(core->stateMachine().faultCount(), spacing_us < 11'112 ? 1U : 0U)
             << spacing_us << " us apart";
@@ -356,6 +361,62 @@ TEST(DaemonCoreOverruns, OffAtZeroAndWithNoDeviceOnline) {
             core->update(i * kMs, overrun);
         }
         EXPECT_EQ(core->stateMachine().faultCount(), 0U) << (online ? "limit 0" : "offline");
+    }
+}
+
+// Late wake-ups that no tick's work shows and no gap makes a stall: a loop ticking below half
+// its rate over a whole window is hapticd's own fault (kFaultLoopTooSlow), raised once.
+TEST(DaemonCoreRate, BelowHalfTheRateOverAWindowIsItsOwnFaultAboveItIsNot) {
+    for (const std::int64_t period_us : {1'900, 2'100}) {  // 526 Hz, 476 Hz
+        auto owned = overrunCore(100, 1000 * kMs);
+        DaemonCore& core = *owned;
+        for (std::int64_t t = kMs; t <= 3000 * kMs; t += period_us * 1000) {
+            core.update(t, TickTiming{});
+        }
+        if (period_us < 2'000) {
+            EXPECT_EQ(core.stateMachine().faultCount(), 0U) << period_us << " us";
+            continue;
+        }
+        ASSERT_EQ(core.stateMachine().faultCount(), 1U) << "raised once";
+        EXPECT_EQ(core.stateMachine().fault(0).code, kFaultLoopTooSlow);
+        EXPECT_EQ(core.stateMachine().fault(0).device_id.view(), "hapticd");
+        EXPECT_THAT(std::string(core.stateMachine().fault(0).message.view()),
+                    ::testing::MatchesRegex("loop too slow: 476 Hz over 100[0-9] ms "
+                                            "\\(rate 1000 Hz\\)"));
+        EXPECT_EQ(core.state(), msgs::DaemonState::kFault);
+    }
+}
+
+// A stall is its own fault (110): the rate window restarts after it instead of adding a
+// second fault for the same silence; off with the overrun policy and with no device online.
+TEST(DaemonCoreRate, AStallRestartsTheWindowAndThePolicyCanBeOff) {
+    CoreSettings settings = oneMethodSettings();
+    settings.stall_limit_ns = 10 * kMs;
+    settings.overrun_limit = 100;
+    settings.overrun_window_ns = 100 * kMs;
+    DaemonCore core(settings, kOneExoskeleton);
+    core.markStarted(0);
+    DeviceReport online;
+    online.status_bits = static_cast<std::uint32_t>(msgs::DeviceStatusBit::kOnline);
+    core.setDeviceReport(0, online);
+    std::int64_t t = 0;
+    for (int i = 0; i < 50; ++i) {
+        core.update(t += kMs, TickTiming{});
+    }
+    core.update(t += 80 * kMs, TickTiming{});  // stalled: 50 ticks in 130 ms
+    for (int i = 0; i < 200; ++i) {
+        core.update(t += kMs, TickTiming{});
+    }
+    ASSERT_EQ(core.stateMachine().faultCount(), 1U);
+    EXPECT_EQ(core.stateMachine().fault(0).code, kFaultLoopStalled);
+
+    for (const bool online_device : {false, true}) {
+        auto off = overrunCore(online_device ? 0 : 100, 100 * kMs, online_device);
+        for (std::int64_t at = 5 * kMs; at <= 1000 * kMs; at += 5 * kMs) {  // 200 Hz
+            off->update(at, TickTiming{});
+        }
+        EXPECT_EQ(off->stateMachine().faultCount(), 0U)
+            << (online_device ? "policy off" : "no device online");
     }
 }
 

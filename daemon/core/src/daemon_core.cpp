@@ -312,6 +312,7 @@ void DaemonCore::update(std::int64_t now_ns, const TickTiming& timing) noexcept 
         machine_.raiseFault(kFaultLoopStalled, "hapticd", message);
     }
     countOverrun(now_ns, timing, any_online);
+    checkRate(now_ns, any_online);
     const double timeout_ms = static_cast<double>(settings_.sim_timeout_ns) * 1e-6;
     const double fade_in_s = std::max(1e-9, static_cast<double>(settings_.fade_in_ns) * 1e-9);
 
@@ -382,6 +383,40 @@ void DaemonCore::countOverrun(std::int64_t now_ns, const TickTiming& timing,
                   1e6 / settings_.rate_hz, static_cast<double>(settings_.overrun_window_ns) * 1e-6);
     machine_.raiseFault(kFaultLoopOverrunning, "hapticd", message);
     overrun_fault_latched_ = true;
+}
+
+void DaemonCore::checkRate(std::int64_t now_ns, bool any_online) noexcept {
+    if (settings_.overrun_limit == 0 || settings_.overrun_window_ns <= 0 || !any_online) {
+        rate_window_start_ns_ = -1;
+        return;
+    }
+    // A window opens with a device online, and again after a stall, which is its own fault.
+    if (rate_window_start_ns_ < 0 || last_stall_end_ns_ > rate_window_start_ns_) {
+        rate_window_start_ns_ = now_ns;
+        rate_window_ticks_ = 0;
+        return;
+    }
+    ++rate_window_ticks_;
+    const std::int64_t elapsed_ns = now_ns - rate_window_start_ns_;
+    if (elapsed_ns < settings_.overrun_window_ns) {
+        return;
+    }
+    const double rate_hz =
+        static_cast<double>(rate_window_ticks_) * 1e9 / static_cast<double>(elapsed_ns);
+    rate_window_start_ns_ = now_ns;
+    rate_window_ticks_ = 0;
+    // Raised once until an operator clears the fault list.
+    if (slow_fault_latched_ && machine_.faultCount() == 0) {
+        slow_fault_latched_ = false;
+    }
+    if (slow_fault_latched_ || !(rate_hz < 0.5 * settings_.rate_hz)) {
+        return;
+    }
+    char message[msgs::kShortTextCapacity];  // no allocation on the RT thread
+    std::snprintf(message, sizeof(message), "loop too slow: %.0f Hz over %.0f ms (rate %.0f Hz)",
+                  rate_hz, static_cast<double>(elapsed_ns) * 1e-6, settings_.rate_hz);
+    machine_.raiseFault(kFaultLoopTooSlow, "hapticd", message);
+    slow_fault_latched_ = true;
 }
 
 void DaemonCore::fillDeviceState(std::size_t device, std::int64_t now_ns,

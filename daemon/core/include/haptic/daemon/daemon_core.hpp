@@ -37,6 +37,10 @@ inline constexpr std::uint32_t kFaultLoopOverrunning = 111;
 // silent for its timeout. Both hold E-STOP, recorded in the fault list.
 inline constexpr std::uint32_t kFaultEstopPressed = 112;
 inline constexpr std::uint32_t kFaultEstopRelaySilent = 113;
+// hapticd's own loop ticking at less than half its rate over a whole overrun window while a
+// device is online, its ticks not a stall apart: the period the devices' stability margins
+// assume (1 / loop.rate_hz) is more than doubled. Part of the overrun policy.
+inline constexpr std::uint32_t kFaultLoopTooSlow = 114;
 // The most overruns a policy may count (loop.overrun_limit's upper bound).
 inline constexpr std::size_t kMaxOverrunLimit = 1000;
 
@@ -74,7 +78,9 @@ struct CoreSettings {
     // Overrun policy: `overrun_limit` ticks whose work (read + compute + write) ran past the
     // period within any `overrun_window_ns` raise kFaultLoopOverrunning while a device is
     // online: the loop still ticks, but its commands go out late too often to be trusted.
-    // A single overrun only counts. 0 turns the policy off; at most kMaxOverrunLimit.
+    // A single overrun only counts. Fewer than half the ticks `rate_hz` asks for over a
+    // window raise kFaultLoopTooSlow (late wake-ups, which no tick's work shows). 0 turns
+    // the policy off; at most kMaxOverrunLimit.
     std::uint32_t overrun_limit{0};
     std::int64_t overrun_window_ns{0};
     std::string version{};        // shown in the status
@@ -282,6 +288,11 @@ class DaemonCore {
     bool overrun_fault_latched_{false};
     HardwareEstop hardware_estop_{HardwareEstop::kNone};
     void countOverrun(std::int64_t now_ns, const TickTiming& timing, bool any_online) noexcept;
+    void checkRate(std::int64_t now_ns, bool any_online) noexcept;
+    // The rate check's window: its first tick (-1: none open) and the ticks since.
+    std::int64_t rate_window_start_ns_{-1};
+    std::uint64_t rate_window_ticks_{0};
+    bool slow_fault_latched_{false};
     LoopStatisticsCollector statistics_;
     std::uint64_t window_ticks_;
     msgs::LoopStatistics last_window_{};
