@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "haptic/softhand/elastic_tracking.hpp"
 #include "haptic/softhand/hand_builder.hpp"
@@ -38,6 +39,36 @@ config::HandConfig fingertip() {
     hand.resolution = 1;
     hand.anthropometry = {0.19, 0.085, 0.016};
     return hand;
+}
+
+// The scene's shape keys and its pose's rpy_deg reach the colliders the soft hand touches: a
+// box turned 90 degrees about z lies along y, a sphere has its radius.
+TEST(SofthandBulletCoupling, TheObjectsRotationAndSizesReachTheirColliders) {
+    config::SceneObject bar;
+    bar.name = "bar";
+    bar.shape = config::BoxShape{{0.04, 0.01, 0.01}};
+    bar.pose.rpy_rad = {0.0, 0.0, std::numbers::pi / 2.0};
+    config::SceneObject ball;
+    ball.name = "ball";
+    ball.shape = config::SphereShape{0.02};
+    ball.pose.position_m = {0.2, 0.0, 0.0};
+    config::SceneObject rod;
+    rod.name = "rod";
+    rod.shape = config::CapsuleShape{0.005, 0.03};
+    rod.pose.position_m = {-0.2, 0.0, 0.0};
+    Simulation sim;
+    const BulletCoupling coupling({bar, ball, rod}, sim);
+    const auto depth = [&](int object, const Vec3& p) {
+        return sim.queryCollider(coupling.colliderOf(object), p).phi_m;
+    };
+    // The bar's long axis is now y: 35 mm along y is inside, along x outside by 25 mm.
+    EXPECT_NEAR(depth(0, Vec3(0.0, 0.035, 0.0)), -0.005, 1e-9);
+    EXPECT_NEAR(depth(0, Vec3(0.035, 0.0, 0.0)), 0.025, 1e-9);
+    EXPECT_NEAR(depth(1, Vec3(0.2 + 0.025, 0.0, 0.0)), 0.005, 1e-9);
+    EXPECT_NEAR(depth(1, Vec3(0.2, 0.015, 0.0)), -0.005, 1e-9);
+    // The capsule's axis is z: its radius around it, its half height plus the radius along it.
+    EXPECT_NEAR(depth(2, Vec3(-0.2 + 0.007, 0.0, 0.02)), 0.002, 1e-9);
+    EXPECT_NEAR(depth(2, Vec3(-0.2, 0.0, 0.036)), 0.001, 1e-9);
 }
 
 TEST(SofthandBulletCoupling, BoxSettlesOnTheTableInBulletAndTheDuplicateFollows) {
