@@ -35,6 +35,21 @@ TEST_F(TelemetryDecimationTest, TelemetryCarriesEveryTenthTickOfBothDevices) {
     }
 }
 
+// rendering.method in the exoskeleton's file is the method hapticd starts with.
+class StartingMethodTest : public DeviceSafetyTest {
+  protected:
+    StartingMethodTest() {
+        replaceLine(config_.dir / "devices/exoskeleton.yaml", "method: linearized_subspace ",
+                    "method: anisotropic ");
+    }
+};
+
+TEST_F(StartingMethodTest, HapticdStartsWithTheMethodTheDeviceFileNames) {
+    const auto status = waitForStatus("a status", [](const auto&) { return true; });
+    EXPECT_EQ(status.rendering_method.view(), "anisotropic");
+    EXPECT_THAT(hapticctl({"status"}).out, ::testing::HasSubstr("rendering method: anisotropic"));
+}
+
 // The emulated thimble restarts (hapticemu's `reboot`): its heartbeat's uptime goes back,
 // hapticd latches fault 104 naming it, and only clear + enable render again.
 TEST_F(DeviceSafetyTest, ADeviceThatRebootsLatchesItsOwnFault) {
