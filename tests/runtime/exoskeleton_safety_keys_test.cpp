@@ -2,7 +2,7 @@
 // value and its effect read off the channel and the emulated device: the stiffness clamp
 // (safety.max_stiffness_n_per_m), the velocity fade (safety.max_velocity_m_per_s), the force
 // cap, its rate limit and the fade on a stale device state (max_force_n,
-// max_force_rate_n_per_s, fade_out_ms). The
+// max_force_rate_n_per_s, fade_out_ms), and rendering.max_constraints. The
 // clamp's value is also what the configuration's passivity margin is checked for
 // (config_test's ConfigPassivityMargin).
 
@@ -42,6 +42,42 @@ std::unique_ptr<RuntimeRig> exoRig(double max_stiffness_n_per_m, double max_velo
         std::get<config::ExoskeletonConfig>(devices[kExo].params)
             .rendering.actuator_damping_n_s_per_m = 0.0;
     });
+}
+
+// rendering.max_constraints: the channel renders the first that many constraints of a set.
+// A set whose first constraint the finger keeps and whose second it is always inside: with
+// the shipped 8 the wall pushes, with 1 only the kept constraint is seen and nothing does.
+TEST(ExoskeletonRenderingKeys, OnlyTheFirstMaxConstraintsOfASetAreRendered) {
+    for (const int max_constraints : {8, 1}) {
+        RuntimeRig rig([=](std::vector<config::DeviceConfig>& devices) {
+            std::get<config::ExoskeletonConfig>(devices[kExo].params).rendering.max_constraints =
+                max_constraints;
+        });
+        msgs::LinearConstraint kept;  // q_MCP <= 10 rad: never reached
+        kept.a = {-1.0, 0.0, 0.0};
+        kept.b = -10.0;
+        const msgs::LinearConstraint wall = rig.constraint_set.constraints[0];
+        rig.constraint_set.constraints.clear();
+        rig.constraint_set.constraints.push_back(kept);
+        rig.constraint_set.constraints.push_back(wall);
+        rig.offerContact();
+        rig.ticks(20);
+        ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
+        double largest_n = 0.0;
+        for (int i = 0; i < 300; ++i) {
+            if (i % 10 == 0) {
+                rig.offerContact();
+            }
+            rig.tick();
+            largest_n = std::max(largest_n, std::abs(rig.exoForce()));
+        }
+        ASSERT_EQ(rig.core.state(), msgs::DaemonState::kRendering) << max_constraints;
+        if (max_constraints == 8) {
+            EXPECT_GT(largest_n, 1.0);
+        } else {
+            EXPECT_EQ(largest_n, 0.0);
+        }
+    }
 }
 
 // The shipped 15 kN/m, and half of it. The rigs stay IDLE (nothing is sent), so both emulated
