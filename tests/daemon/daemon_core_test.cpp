@@ -420,6 +420,49 @@ TEST(DaemonCoreRate, AStallRestartsTheWindowAndThePolicyCanBeOff) {
     }
 }
 
+// A window shorter than 100 periods is stretched to them: one late wake-up in a 5 ms window
+// is not a slow loop. And a clear re-arms the fault even when another one (here 111 of the
+// same slow loop) was raised again before the next window closed.
+TEST(DaemonCoreRate, AShortWindowIsStretchedAndAClearReArmsTheFault) {
+    auto owned = overrunCore(100, 5 * kMs);
+    DaemonCore& core = *owned;
+    std::int64_t t = 0;
+    for (int i = 0; i < 50; ++i) {
+        core.update(t += kMs, TickTiming{});
+    }
+    core.update(t += 4 * kMs, TickTiming{});  // one late wake-up
+    for (int i = 0; i < 250; ++i) {
+        core.update(t += kMs, TickTiming{});
+    }
+    EXPECT_EQ(core.stateMachine().faultCount(), 0U);
+
+    auto slow = overrunCore(1, 1000 * kMs);
+    TickTiming overrun;
+    overrun.compute_us = 1500.0;
+    t = 0;
+    const auto tick400Hz = [&](const TickTiming& timing) {
+        for (int i = 0; i < 400; ++i) {  // one second
+            slow->update(t += 2'500'000, timing);
+        }
+    };
+    tick400Hz(TickTiming{});
+    tick400Hz(TickTiming{});
+    ASSERT_EQ(slow->stateMachine().faultCount(), 1U);
+    EXPECT_EQ(slow->stateMachine().fault(0).code, kFaultLoopTooSlow);
+    msgs::HapticCommand clear;
+    clear.kind = msgs::CommandKind::kClearFault;
+    msgs::HapticCommandReply reply;
+    ASSERT_TRUE(slow->applyCommand(clear, t, reply).accepted) << reply.message.view();
+    ASSERT_EQ(slow->stateMachine().faultCount(), 0U);
+    slow->update(t += 2'500'000, overrun);  // 111 at once (limit 1)
+    ASSERT_GE(slow->stateMachine().faultCount(), 1U);
+    EXPECT_EQ(slow->stateMachine().fault(0).code, kFaultLoopOverrunning);
+    tick400Hz(TickTiming{});
+    tick400Hz(TickTiming{});
+    ASSERT_EQ(slow->stateMachine().faultCount(), 2U) << "114 raised again after the clear, once";
+    EXPECT_EQ(slow->stateMachine().fault(1).code, kFaultLoopTooSlow);
+}
+
 // The re-arm policy (loop.sim_rearm_after_ms): a short outage fades out and back in by itself;
 // after a longer one the device renders again only after a new enable, however fresh its
 // input is; input that was never fresh since the enable is not an outage.

@@ -14,6 +14,8 @@ namespace {
 
 // The fault line hapticd logs (daemon_core.cpp, kFaultLoopStalled).
 constexpr const char* kStallFault = "fault [110] hapticd: loop stalled";
+// The same host's doing spread out: the loop starved below half its rate (kFaultLoopTooSlow).
+constexpr const char* kTooSlowFault = "fault [114] hapticd: loop too slow";
 // The line an exiting hapticd logs when the stall came between its last tick and its
 // fail-stop (daemon_app.cpp, RealtimeLoop::exitStallNs).
 constexpr const char* kFailStopStall = "fail-stop: loop stalled";
@@ -53,6 +55,7 @@ void noteStallLine(const std::string& hapticd_log, const char* marker) {
 void noteFailureAfterLoopStall(const std::string& hapticd_log, bool hapticd_running) {
     if (hapticd_running) {
         noteStallLine(hapticd_log, kStallFault);
+        noteStallLine(hapticd_log, kTooSlowFault);
     }
 }
 
@@ -61,6 +64,7 @@ void noteFailureAfterFailStopStall(const std::string& hapticd_log,
     if (hapticd_exit_code == std::optional<int>(0)) {
         noteStallLine(hapticd_log, kFailStopStall);
         noteStallLine(hapticd_log, kStallFault);
+        noteStallLine(hapticd_log, kTooSlowFault);
     }
 }
 

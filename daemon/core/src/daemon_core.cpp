@@ -397,17 +397,24 @@ void DaemonCore::checkRate(std::int64_t now_ns, bool any_online) noexcept {
         return;
     }
     ++rate_window_ticks_;
+    // At least 100 periods: over a window of a few, one late wake-up would halve the rate.
+    const auto period_ns = static_cast<std::int64_t>(1e9 / settings_.rate_hz);
     const std::int64_t elapsed_ns = now_ns - rate_window_start_ns_;
-    if (elapsed_ns < settings_.overrun_window_ns) {
+    if (elapsed_ns < std::max(settings_.overrun_window_ns, kRateWindowPeriods * period_ns)) {
         return;
     }
     const double rate_hz =
         static_cast<double>(rate_window_ticks_) * 1e9 / static_cast<double>(elapsed_ns);
     rate_window_start_ns_ = now_ns;
     rate_window_ticks_ = 0;
-    // Raised once until an operator clears the fault list.
-    if (slow_fault_latched_ && machine_.faultCount() == 0) {
-        slow_fault_latched_ = false;
+    // Raised once until an operator clears it (another fault raised meanwhile, say 111 of the
+    // same slow loop, does not keep it latched).
+    if (slow_fault_latched_) {
+        bool listed = false;
+        for (std::size_t i = 0; i < machine_.faultCount(); ++i) {
+            listed = listed || machine_.fault(i).code == kFaultLoopTooSlow;
+        }
+        slow_fault_latched_ = listed;
     }
     if (slow_fault_latched_ || !(rate_hz < 0.5 * settings_.rate_hz)) {
         return;

@@ -41,6 +41,8 @@ inline constexpr std::uint32_t kFaultEstopRelaySilent = 113;
 // device is online, its ticks not a stall apart: the period the devices' stability margins
 // assume (1 / loop.rate_hz) is more than doubled. Part of the overrun policy.
 inline constexpr std::uint32_t kFaultLoopTooSlow = 114;
+// The rate check's window is at least this many periods, whatever loop.overrun_window_ms.
+inline constexpr std::int64_t kRateWindowPeriods = 100;
 // The most overruns a policy may count (loop.overrun_limit's upper bound).
 inline constexpr std::size_t kMaxOverrunLimit = 1000;
 
