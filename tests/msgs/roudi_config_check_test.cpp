@@ -87,7 +87,17 @@ TEST_F(RoudiConfigCheck, PoolsTooSmallForTheLargestMessageNameItAndTheSizeNeeded
     EXPECT_EQ(message.find('\n'), std::string::npos) << message;
 }
 
-TEST_F(RoudiConfigCheck, APoolExactlyTheLargestMessagesSizeIsEnough) {
+TEST_F(RoudiConfigCheck, PoolsIoxRoudiRefusesAreNamed) {
+    EXPECT_THAT(messageOf(write(pools({{1024, 512}, {65536, 0}}))),
+                AllOf(HasSubstr("a mempool of size 65536 and count 0"),
+                      HasSubstr("which iox-roudi refuses")));
+    EXPECT_THAT(messageOf(write(pools({{4, 16}, {65536, 8}}))),
+                HasSubstr("a mempool of size 4 and count 16"));
+}
+
+// Sizes only: one chunk of the largest message's size passes (how many the queues need is
+// not known before the processes subscribe).
+TEST_F(RoudiConfigCheck, APoolExactlyTheLargestMessagesSizeIsEnoughForItsSize) {
     const auto largest = largestMessage();
     EXPECT_NO_THROW(haptic::ipc::checkRoudiConfig(
         write(pools({{1024, 512}, {static_cast<int>(largest.bytes), 1}}))));

@@ -8,11 +8,22 @@
 #include "haptic/ipc/ipc_error.hpp"
 #include "haptic/msgs/messages.hpp"
 #include "iceoryx_hoofs/log/logmanager.hpp"
+#include "iceoryx_posh/mepoo/chunk_header.hpp"
 #include "iceoryx_posh/roudi/roudi_config_toml_file_provider.hpp"
 
 namespace haptic::ipc {
 
 namespace {
+
+// iceoryx 2.0's MemPool: chunks of at least its 8-byte alignment, and at least one of them.
+constexpr std::uint32_t kSmallestChunkBytes = 8;
+// A chunk's payload follows its header at the header's alignment: a message aligned no more
+// strictly needs no more than its size.
+template <typename... Messages>
+constexpr bool kAlignedAsChunks = ((alignof(Messages) <= alignof(iox::mepoo::ChunkHeader)) && ...);
+static_assert(kAlignedAsChunks<msgs::ConstraintSet, msgs::ContactSurface, msgs::DeviceState,
+                               msgs::HandPose, msgs::HapticStatus, msgs::HapticTelemetry,
+                               msgs::HapticCommand, msgs::HapticCommandReply, msgs::SimStatus>);
 
 constexpr std::array kSimLinkMessages{
     ShmMessageSize{"ConstraintSet", sizeof(msgs::ConstraintSet)},
@@ -41,9 +52,10 @@ void checkRoudiConfig(const std::filesystem::path& roudi_config,
                        std::to_string(iox::roudi::ConfigFilePathString_t::capacity()) +
                        " characters");
     }
-    // The parser reports through iceoryx's logger, verbose by default.
+    // The parser reports through iceoryx's logger, verbose by default; its warnings (a TOML
+    // error's line and column) stay visible.
     iox::log::LogManager::GetLogManager().SetDefaultLogLevel(
-        iox::log::LogLevel::kError, iox::log::LogLevelOutput::kHideLogLevel);
+        iox::log::LogLevel::kWarn, iox::log::LogLevelOutput::kHideLogLevel);
     iox::config::CmdLineArgs_t arguments;
     arguments.configFilePath =
         iox::roudi::ConfigFilePathString_t(iox::cxx::TruncateToCapacity, path.c_str());
@@ -57,9 +69,14 @@ void checkRoudiConfig(const std::filesystem::path& roudi_config,
     std::uint32_t largest_pool = 0;
     for (const auto& segment : parsed.value().m_sharedMemorySegments) {
         for (const auto& pool : segment.m_mempoolConfig.m_mempoolConfig) {
-            if (pool.m_chunkCount > 0) {
-                largest_pool = std::max(largest_pool, pool.m_size);
+            // What iox-roudi's memory manager refuses at start (it terminates on them).
+            if (pool.m_chunkCount == 0 || pool.m_size < kSmallestChunkBytes) {
+                throw IpcError(where + ": a mempool of size " + std::to_string(pool.m_size) +
+                               " and count " + std::to_string(pool.m_chunkCount) +
+                               ", which iox-roudi refuses (size at least " +
+                               std::to_string(kSmallestChunkBytes) + ", count at least 1)");
             }
+            largest_pool = std::max(largest_pool, pool.m_size);
         }
     }
     const auto largest = std::max_element(

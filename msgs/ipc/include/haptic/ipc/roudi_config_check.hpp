@@ -23,8 +23,10 @@ struct ShmMessageSize {
 
 // Parses `roudi_config` with iceoryx's own RouDi configuration parser (iceoryx_posh_config)
 // and checks that some mempool's chunk holds each message. Throws IpcError with one line
-// naming the file and what is wrong: not a RouDi configuration (iceoryx's reason), or the
-// largest message no pool holds and the size its pool needs.
+// naming the file and what is wrong: not a RouDi configuration (iceoryx's reason), a pool
+// iox-roudi refuses (count 0, size below 8), or the largest message no pool holds and the
+// size its pool needs. Sizes only: whether a pool has chunks enough for the queues is not
+// known before the processes subscribe.
 void checkRoudiConfig(const std::filesystem::path& roudi_config,
                       std::span<const ShmMessageSize> messages = simLinkShmMessages());
 
