@@ -150,6 +150,19 @@ std::vector<DeviceConfig> readDeviceList(const ListReader& list,
                 entry.fail("a device with a unique name",
                            "another device named '" + device.name + "' (" + where + ")");
             }
+            // UDP blocks [udp_port, udp_port + udp_slots) that overlap are one bus in all but
+            // name: their parties hear each other on the shared ports.
+            const auto& a = device.can;
+            const auto& b = other.can;
+            if (a.transport == CanTransport::kUdp && b.transport == CanTransport::kUdp &&
+                a.udp_port != b.udp_port && a.udp_port < b.udp_port + b.udp_slots &&
+                b.udp_port < a.udp_port + a.udp_slots) {
+                entry.fail("a device whose UDP port block does not overlap that of '" + other.name +
+                               "' (" + where + ", ports " + std::to_string(b.udp_port) + "-" +
+                               std::to_string(b.udp_port + b.udp_slots - 1) + ")",
+                           "'" + device.name + "' on ports " + std::to_string(a.udp_port) + "-" +
+                               std::to_string(a.udp_port + a.udp_slots - 1));
+            }
             // Two devices on one bus answering the same id would corrupt each other's state.
             if (other.can.bus() != device.can.bus()) {
                 continue;

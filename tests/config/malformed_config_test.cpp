@@ -598,6 +598,14 @@ TEST(ConfigReferences, CanIdsSharedOnOneUdpBusWhateverTheInterfacesSay) {
                  "(devices[0]), got 'exo_two' also using 0x101"});
 }
 
+TEST(ConfigReferences, OverlappingUdpPortBlocksAreRefused) {
+    const auto file = kDataDir / "overlapping_udp_blocks.yaml";
+    expectError(daemonError("overlapping_udp_blocks.yaml"),
+                {file.string(), lineOf(file, "exo_two_udp_overlapping"), 5, "devices[1]",
+                 "expected a device whose UDP port block does not overlap that of 'exo' "
+                 "(devices[0], ports 47100-47107), got 'exo_two' on ports 47104-47111"});
+}
+
 TEST(ConfigReferences, TheSameCanIdsOnTwoUdpBusesAreAccepted) {
     const DaemonConfig config = loadDaemonConfig(kDataDir / "same_ids_on_two_udp_buses.yaml");
     ASSERT_EQ(config.devices.size(), 2U);

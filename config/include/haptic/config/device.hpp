@@ -60,7 +60,7 @@ struct EnumTraits<CanTransport> {
 };
 
 // YAML: can: {...}. Ids are 11-bit standard ids, pairwise distinct within a device; the
-// daemon and sim loaders also reject two devices on one interface sharing an id.
+// daemon and sim loaders also reject two devices on one bus (bus()) sharing an id.
 struct CanConfig {
     std::string interface;  // SocketCAN interface name (1-15 chars), e.g. "can0"
     // Optional keys transport (default socketcan), udp_port and udp_slots (only with
