@@ -4,14 +4,7 @@
 #include <cstdlib>
 #include <new>
 
-// The C allocator is counted too (glibc's own entry points behind it), so that a malloc
-// reached without operator new (snprintf's buffers, Eigen's aligned_malloc, a library's
-// internals) is seen. Not under ASan or TSan, whose runtimes replace the same functions.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define HAPTIC_COUNTS_MALLOC 0
-#else
-#define HAPTIC_COUNTS_MALLOC 1
-#endif
+#include "allocation_counter_config.hpp"
 
 namespace {
 
@@ -26,6 +19,9 @@ void count() noexcept {
 
 }  // namespace
 
+// The C allocator is counted too (glibc's own entry points behind it), so that a malloc
+// reached without operator new (snprintf's buffers, Eigen's aligned_malloc, a library's
+// internals) is seen. Not under a sanitizer that replaces the same functions.
 #if HAPTIC_COUNTS_MALLOC
 extern "C" {
 void* __libc_malloc(std::size_t size);

@@ -9,6 +9,8 @@
 #include <memory>
 #include <vector>
 
+#include "allocation_counter_config.hpp"
+
 namespace haptic::testing {
 namespace {
 
@@ -21,7 +23,7 @@ TEST(AllocationCounter, CountsOperatorNewOnceAndNothingOutsideItsScope) {
     EXPECT_EQ(counter.allocations(), 1U);
 }
 
-#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+#if HAPTIC_COUNTS_MALLOC
 // Keeps the compiler from pairing an allocation with its free() and removing both.
 void* kept(void* p) {
     asm volatile("" : : "r"(p) : "memory");
