@@ -92,6 +92,29 @@ TEST(SofthandHandBuilder, WholeHandHasSixteenBonesAndStaysTogetherUnderGravity) 
     }
 }
 
+// hand.anthropometry.hand_breadth_m spreads the fingers across the palm: the index and the
+// little finger's proximal phalanges sit that much further apart, in proportion.
+TEST(SofthandHandBuilder, TheHandsBreadthSpreadsTheFingers) {
+    const auto spread = [](double breadth_m) {
+        config::HandConfig hand = handConfig(config::HandModel::kHand, 0);
+        hand.anthropometry.hand_breadth_m = breadth_m;
+        const HandModel model = buildHand(hand, {});
+        Vec3 index = Vec3::Zero();
+        Vec3 little = Vec3::Zero();
+        for (const auto& bone : model.bones) {
+            if (bone.name == "index_proximal") {
+                index = bone.rest_position_m;
+            } else if (bone.name == "little_proximal") {
+                little = bone.rest_position_m;
+            }
+        }
+        return std::abs(index.y() - little.y());
+    };
+    const double shipped = spread(0.085);
+    ASSERT_GT(shipped, 0.02);
+    EXPECT_NEAR(spread(0.1) / shipped, 0.1 / 0.085, 1e-6);
+}
+
 TEST(SofthandHandBuilder, ResolutionOutsideZeroToEightIsRefused) {
     EXPECT_THROW((void)buildHand(handConfig(config::HandModel::kFingertip, -1), {}),
                  std::invalid_argument);
