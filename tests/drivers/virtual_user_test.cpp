@@ -109,6 +109,38 @@ TEST(VirtualUser, TheExoskeletonsForceMovesTheFingerAwayFromItsIntent) {
                 0.2 * std::abs(deflection));
 }
 
+// hand_impedance's inertia and damping set how fast the finger gives way to the exoskeleton's
+// force (its stiffness, where it settles): four times the damping or ten times the
+// inertia, and 20 ms after a 3 N push the finger has moved less; a second later all three
+// rest where the same stiffness puts them.
+TEST(VirtualUser, TheHandsInertiaAndDampingSetHowFastTheFingerGivesWay) {
+    const auto deflection = [](const config::VirtualUserConfig& config, int ticks) {
+        WornDevices free_user(config), pushed_user(config);
+        for (int tick = 0; tick < ticks; ++tick) {
+            const double t = 1e-3 * tick;
+            free_user.step(t, 0.0);
+            pushed_user.step(t, tick >= 100 ? 3.0 : 0.0);
+        }
+        const double t = 1e-3 * (ticks - 1);
+        return pushed_user.user.actualPose(t).flexion_rad[kIndexMcp] -
+               free_user.user.actualPose(t).flexion_rad[kIndexMcp];
+    };
+    const auto shipped = shippedUser();
+    auto damped = shipped;
+    auto heavy = shipped;
+    for (std::size_t j = 0; j < 3; ++j) {
+        damped.hand_impedance.damping_nms_per_rad[j] *= 4.0;
+        heavy.hand_impedance.inertia_kg_m2[j] *= 10.0;
+    }
+    const double early = deflection(shipped, 120);
+    ASSERT_GT(early, 0.005);
+    EXPECT_LT(deflection(damped, 120), 0.75 * early);
+    EXPECT_LT(deflection(heavy, 120), 0.5 * early);
+    const double settled = deflection(shipped, 1100);
+    EXPECT_NEAR(deflection(damped, 1100), settled, 0.1 * settled);
+    EXPECT_NEAR(deflection(heavy, 1100), settled, 0.1 * settled);
+}
+
 // How far the user's finger reaches into the virtual block: the script puts the distal
 // capsule's lowest point kPressDepth (3 mm) below the top face while pressing; the user's skin
 // (the scene's tissue mesh, rigid on its bones) reaches as deep, give or take the mesh's
