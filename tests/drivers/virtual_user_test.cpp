@@ -66,6 +66,19 @@ TEST(VirtualUser, ShippedFileWearsBothDevicesAndTracksTheDefaultScene) {
     EXPECT_GT(slid.wrist.position_m.x(), pressed.wrist.position_m.x() + 0.02);
 }
 
+// The scene's tracking.loop: the script (6 s) repeats, or holds its last pose.
+TEST(VirtualUser, TheScriptLoopsOrHoldsItsLastPoseAsTheSceneSays) {
+    auto config = shippedUser();
+    ASSERT_TRUE(config.scene.tracking.loop);
+    const VirtualUser looping(config);
+    config.scene.tracking.loop = false;
+    const VirtualUser once(config);
+    EXPECT_EQ(looping.intent(7.0).wrist.position_m, looping.intent(1.0).wrist.position_m);
+    EXPECT_NE(once.intent(7.0).wrist.position_m, once.intent(1.0).wrist.position_m);
+    EXPECT_EQ(once.intent(7.0).wrist.position_m, once.intent(30.0).wrist.position_m);
+    EXPECT_EQ(once.intent(1.0).wrist.position_m, looping.intent(1.0).wrist.position_m);
+}
+
 TEST(VirtualUser, WithoutForceTheFingerFollowsItsIntent) {
     WornDevices worn(shippedUser());
     double worst_rad = 0.0;
