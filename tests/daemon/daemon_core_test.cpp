@@ -352,6 +352,30 @@ TEST(DaemonCoreOverruns, TheWindowIncludesItsEdgeAndALimitOfOneRaisesAtOnce) {
     EXPECT_EQ(core->stateMachine().faultCount(), 1U);
 }
 
+// After a clear the overrun policy counts afresh and raises again, even when another fault
+// came first (the latch followed an empty fault list, which that fault kept from it).
+TEST(DaemonCoreOverruns, AClearReArmsTheFaultEvenWhenAnotherComesFirst) {
+    auto owned = overrunCore(3, 100 * kMs);
+    DaemonCore& core = *owned;
+    TickTiming overrun;
+    overrun.compute_us = 1200.0;
+    std::int64_t t = 0;
+    for (int i = 0; i < 3; ++i) {
+        core.update(t += kMs, overrun);
+    }
+    ASSERT_EQ(core.stateMachine().faultCount(), 1U);
+    msgs::HapticCommand clear;
+    clear.kind = msgs::CommandKind::kClearFault;
+    msgs::HapticCommandReply reply;
+    ASSERT_TRUE(core.applyCommand(clear, t, reply).accepted) << reply.message.view();
+    core.raiseFault(100, "exo", "heartbeat lost");
+    for (int i = 0; i < 3; ++i) {
+        core.update(t += kMs, overrun);
+    }
+    ASSERT_EQ(core.stateMachine().faultCount(), 2U);
+    EXPECT_EQ(core.stateMachine().fault(1).code, kFaultLoopOverrunning);
+}
+
 TEST(DaemonCoreOverruns, OffAtZeroAndWithNoDeviceOnline) {
     TickTiming overrun;
     overrun.write_us = 5000.0;

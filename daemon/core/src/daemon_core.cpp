@@ -364,8 +364,9 @@ void DaemonCore::countOverrun(std::int64_t now_ns, const TickTiming& timing,
     if (limit == 0 || !any_online || !(work_us > 1e6 / settings_.rate_hz)) {
         return;
     }
-    // Raised once until an operator clears the fault list; counted afresh after the clear.
-    if (overrun_fault_latched_ && machine_.faultCount() == 0) {
+    // Raised once until an operator clears it; counted afresh after the clear (another fault
+    // raised since the clear does not keep it latched).
+    if (overrun_fault_latched_ && !faultListed(kFaultLoopOverrunning)) {
         overrun_fault_latched_ = false;
         overrun_count_ = 0;
     }
@@ -383,6 +384,15 @@ void DaemonCore::countOverrun(std::int64_t now_ns, const TickTiming& timing,
                   1e6 / settings_.rate_hz, static_cast<double>(settings_.overrun_window_ns) * 1e-6);
     machine_.raiseFault(kFaultLoopOverrunning, "hapticd", message);
     overrun_fault_latched_ = true;
+}
+
+bool DaemonCore::faultListed(std::uint32_t code) const noexcept {
+    for (std::size_t i = 0; i < machine_.faultCount(); ++i) {
+        if (machine_.fault(i).code == code) {
+            return true;
+        }
+    }
+    return false;
 }
 
 void DaemonCore::checkRate(std::int64_t now_ns, bool any_online) noexcept {
@@ -409,13 +419,7 @@ void DaemonCore::checkRate(std::int64_t now_ns, bool any_online) noexcept {
     rate_window_ticks_ = 0;
     // Raised once until an operator clears it (another fault raised meanwhile, say 111 of the
     // same slow loop, does not keep it latched).
-    if (slow_fault_latched_) {
-        bool listed = false;
-        for (std::size_t i = 0; i < machine_.faultCount(); ++i) {
-            listed = listed || machine_.fault(i).code == kFaultLoopTooSlow;
-        }
-        slow_fault_latched_ = listed;
-    }
+    slow_fault_latched_ = slow_fault_latched_ && faultListed(kFaultLoopTooSlow);
     if (slow_fault_latched_ || !(rate_hz < 0.5 * settings_.rate_hz)) {
         return;
     }

@@ -291,6 +291,9 @@ class DaemonCore {
     HardwareEstop hardware_estop_{HardwareEstop::kNone};
     void countOverrun(std::int64_t now_ns, const TickTiming& timing, bool any_online) noexcept;
     void checkRate(std::int64_t now_ns, bool any_online) noexcept;
+    // Whether the fault list holds a fault with this code (hapticd's own latches re-arm once
+    // an operator's clear has removed theirs).
+    [[nodiscard]] bool faultListed(std::uint32_t code) const noexcept;
     // The rate check's window: its first tick (-1: none open) and the ticks since.
     std::int64_t rate_window_start_ns_{-1};
     std::uint64_t rate_window_ticks_{0};
