@@ -35,6 +35,24 @@ TEST_F(TelemetryDecimationTest, TelemetryCarriesEveryTenthTickOfBothDevices) {
     }
 }
 
+// log_level in daemon.yaml: at warn, hapticd's start-up lines at info level are not logged.
+class WarnLogLevelTest : public DeviceSafetyTest {
+  protected:
+    WarnLogLevelTest() {
+        replaceLine(config_.dir / "daemon.yaml", "log_level: info ", "log_level: warn ");
+    }
+};
+
+TEST_F(DeviceSafetyTest, AtTheShippedLogLevelHapticdLogsItsStartAtInfo) {
+    (void)waitForStatus("a status", [](const auto&) { return true; });
+    EXPECT_THAT(daemon_->stderrText(), ::testing::HasSubstr(" info: local control on "));
+}
+
+TEST_F(WarnLogLevelTest, AtWarnHapticdLogsNothingAtInfo) {
+    (void)waitForStatus("a status", [](const auto&) { return true; });
+    EXPECT_THAT(daemon_->stderrText(), ::testing::Not(::testing::HasSubstr(" info: ")));
+}
+
 // rendering.method in the exoskeleton's file is the method hapticd starts with.
 class StartingMethodTest : public DeviceSafetyTest {
   protected:
