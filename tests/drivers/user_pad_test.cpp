@@ -33,21 +33,26 @@ config::UserPadConfig shippedPad() {
 }
 
 // The deepest any point of the sphere lies beyond the plate's plane (the side the plate came
-// from), by sampling its surface on a fine grid: the indentation, found the slow way.
+// from), by sampling its surface on a fine grid: the indentation, found the slow way. Plain
+// doubles in the loop: the sanitizer build is unoptimised, where a million Eigen temporaries
+// per case take minutes.
 double deepestSphereSample(const Eigen::Vector3d& centre, double radius,
                            const tactile::PlatformPose& plate) {
     const Eigen::Vector3d normal = plate.plateNormal();  // from the plate into the finger
+    // (plate - point) . normal = (plate - centre) . normal - radius * (direction . normal)
+    const double centre_depth = (plate.position_m - centre).dot(normal);
+    const double nx = normal.x(), ny = normal.y(), nz = normal.z();
     double deepest = -std::numeric_limits<double>::infinity();
     constexpr int kSteps = 720;
     for (int i = 0; i <= kSteps; ++i) {
         const double polar = std::numbers::pi * i / kSteps;
+        const double sin_polar = std::sin(polar);
+        const double cos_polar = std::cos(polar);
         for (int j = 0; j < 2 * kSteps; ++j) {
             const double azimuth = std::numbers::pi * j / kSteps;
-            const Eigen::Vector3d point =
-                centre + radius * Eigen::Vector3d(std::sin(polar) * std::cos(azimuth),
-                                                  std::sin(polar) * std::sin(azimuth),
-                                                  std::cos(polar));
-            deepest = std::max(deepest, (plate.position_m - point).dot(normal));
+            const double along_normal = sin_polar * std::cos(azimuth) * nx +
+                                        sin_polar * std::sin(azimuth) * ny + cos_polar * nz;
+            deepest = std::max(deepest, centre_depth - radius * along_normal);
         }
     }
     return deepest;
@@ -62,17 +67,32 @@ tactile::InverseResult plateAt(const config::ThimbleConfig& thimble, double heig
 // The deepest point of the phalanx's surface (a cylinder of `radius` about `axis` over
 // [-half, half] from `centre`, flat at -half, and the round tip at +half) that lies over the
 // plate's disc, past the plate's plane, by sampling the surface: the indentation, the slow way.
+// Plain doubles in the loop, as above (three million samples per case).
 double deepestPhalanxSample(const Eigen::Vector3d& centre, const Eigen::Vector3d& axis, double half,
                             double radius, const tactile::PlatformPose& plate,
                             double plate_radius) {
     const Eigen::Vector3d normal = plate.plateNormal();
     const Eigen::Vector3d side_u = axis.unitOrthogonal();
     const Eigen::Vector3d side_v = axis.cross(side_u);
+    const double n[3] = {normal.x(), normal.y(), normal.z()};
+    const Eigen::Vector3d from_plate = centre - plate.position_m;
+    const double c[3] = {from_plate.x(), from_plate.y(), from_plate.z()};
+    const double plate_radius_sq = plate_radius * plate_radius;
     double deepest = -std::numeric_limits<double>::infinity();
-    const auto sample = [&](const Eigen::Vector3d& point) {
-        const Eigen::Vector3d offset = point - plate.position_m;
-        if ((offset - offset.dot(normal) * normal).norm() <= plate_radius) {
-            deepest = std::max(deepest, -offset.dot(normal));
+    // offset = centre + along * axis + across (from the plate's centre)
+    const auto sample = [&](const double along_axis[3], const double across[3]) {
+        double offset[3];
+        for (int k = 0; k < 3; ++k) {
+            offset[k] = c[k] + along_axis[k] + across[k];
+        }
+        const double height = offset[0] * n[0] + offset[1] * n[1] + offset[2] * n[2];
+        double in_plane_sq = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            const double in_plane = offset[k] - height * n[k];
+            in_plane_sq += in_plane * in_plane;
+        }
+        if (in_plane_sq <= plate_radius_sq) {
+            deepest = std::max(deepest, -height);
         }
     };
     constexpr int kAround = 720;
@@ -80,13 +100,19 @@ double deepestPhalanxSample(const Eigen::Vector3d& centre, const Eigen::Vector3d
     for (int i = 0; i < kAround; ++i) {
         const double angle = 2.0 * std::numbers::pi * i / kAround;
         const Eigen::Vector3d radial = std::cos(angle) * side_u + std::sin(angle) * side_v;
+        const double across[3] = {radius * radial.x(), radius * radial.y(), radius * radial.z()};
         for (int j = 0; j <= kAlong; ++j) {
-            sample(centre + (-half + 2.0 * half * j / kAlong) * axis + radius * radial);
+            const double along = -half + 2.0 * half * j / kAlong;
+            const double along_axis[3] = {along * axis.x(), along * axis.y(), along * axis.z()};
+            sample(along_axis, across);
         }
         for (int j = 0; j <= kAround / 4; ++j) {  // the tip's hemisphere
             const double polar = 0.5 * std::numbers::pi * j / (kAround / 4);
-            sample(centre + half * axis +
-                   radius * (std::cos(polar) * axis + std::sin(polar) * radial));
+            const double tip = half + radius * std::cos(polar);
+            const double along_axis[3] = {tip * axis.x(), tip * axis.y(), tip * axis.z()};
+            const double tip_across[3] = {std::sin(polar) * across[0], std::sin(polar) * across[1],
+                                          std::sin(polar) * across[2]};
+            sample(along_axis, tip_across);
         }
     }
     return deepest;
