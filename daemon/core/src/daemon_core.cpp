@@ -32,7 +32,11 @@ DaemonCore::DaemonCore(CoreSettings settings, std::vector<DeviceDescriptor> devi
     : settings_(std::move(settings)),
       machine_(settings_.known_methods, settings_.rendering_method),
       statistics_(settings_.rate_hz),
-      window_ticks_(static_cast<std::uint64_t>(std::max(1.0, settings_.rate_hz))) {
+      window_ticks_(static_cast<std::uint64_t>(std::max(1.0, settings_.rate_hz))),
+      // At least 100 periods: over a window of a few, one late wake-up would halve the rate.
+      rate_window_ns_(
+          std::max(settings_.overrun_window_ns,
+                   kRateWindowPeriods * static_cast<std::int64_t>(1e9 / settings_.rate_hz))) {
     devices_.reserve(devices.size());
     for (auto& descriptor : devices) {
         devices_.push_back(DeviceSlot{std::move(descriptor)});
@@ -407,10 +411,8 @@ void DaemonCore::checkRate(std::int64_t now_ns, bool any_online) noexcept {
         return;
     }
     ++rate_window_ticks_;
-    // At least 100 periods: over a window of a few, one late wake-up would halve the rate.
-    const auto period_ns = static_cast<std::int64_t>(1e9 / settings_.rate_hz);
     const std::int64_t elapsed_ns = now_ns - rate_window_start_ns_;
-    if (elapsed_ns < std::max(settings_.overrun_window_ns, kRateWindowPeriods * period_ns)) {
+    if (elapsed_ns < rate_window_ns_) {
         return;
     }
     const double rate_hz =

@@ -18,7 +18,7 @@ void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
         started_ = false;
         command_seen_ = false;
         timed_out_ = false;
-        awaiting_safe_command_ = reArmsOnlyOnASafeCommand();
+        awaiting_safe_command_ = re_arms_only_on_a_safe_command_;
         onReboot();
     }
     if (!started_) {
@@ -37,7 +37,7 @@ void DeviceEmulator::tick(std::int64_t now_ns) noexcept {
         codec_base_.encodeFault(report, frame);
         send(frame, now_ns);
         if (!report.active) {
-            awaiting_safe_command_ = reArmsOnlyOnASafeCommand();
+            awaiting_safe_command_ = re_arms_only_on_a_safe_command_;
         }
     }
     checkCommandTimeout(now_ns);
@@ -139,7 +139,10 @@ class ExoskeletonEmulator final : private CodecOwner<protocol::ExoskeletonCodec>
   public:
     ExoskeletonEmulator(const config::DeviceConfig& device, can::CanBus& bus,
                         EmulatorOptions options)
-        : CodecOwner(device), DeviceEmulator(bus, options, codec_, device), model_(device) {}
+        // A force device: after a restart or a fault it obeys no enable still in flight.
+        : CodecOwner(device),
+          DeviceEmulator(bus, options, codec_, device, ReArm::kOnlyOnASafeCommand),
+          model_(device) {}
 
     void handleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept override {
         const protocol::ExoskeletonMessage message = codec_.decode(frame);
@@ -160,7 +163,6 @@ class ExoskeletonEmulator final : private CodecOwner<protocol::ExoskeletonCodec>
     [[nodiscard]] ExoskeletonModel* exoskeletonModel() noexcept override { return &model_; }
 
   private:
-    [[nodiscard]] bool reArmsOnlyOnASafeCommand() const noexcept override { return true; }
     void stepModel(double dt_s) noexcept override {
         model_.step(dt_s, command_.force_n * faults_.forceFraction(),
                     command_.enable && activeFault() == 0 && !holdsSafe());
@@ -200,7 +202,9 @@ class ThimbleEmulator final : private CodecOwner<protocol::ThimbleCodec>, public
   public:
     ThimbleEmulator(const config::DeviceConfig& device, can::CanBus& bus, EmulatorOptions options)
         : CodecOwner(device),
-          DeviceEmulator(bus, options, codec_, device),
+          // A position device: its servos follow their setpoints, the retract path hapticd
+          // commands while it holds a fault among them.
+          DeviceEmulator(bus, options, codec_, device, ReArm::kOnAnyCommand),
           model_(device),
           retract_rad_(retractAngles(device)) {
         target_.servo_target_rad = model_.angleRad();

@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <tuple>
 
 #include "haptic/ipc/ipc_error.hpp"
 #include "haptic/msgs/messages.hpp"
@@ -19,23 +20,19 @@ namespace {
 constexpr std::uint32_t kSmallestChunkBytes = 8;
 // A chunk's payload follows its header at the header's alignment: a message aligned no more
 // strictly needs no more than its size.
-template <typename... Messages>
-constexpr bool kAlignedAsChunks = ((alignof(Messages) <= alignof(iox::mepoo::ChunkHeader)) && ...);
-static_assert(kAlignedAsChunks<msgs::ConstraintSet, msgs::ContactSurface, msgs::DeviceState,
-                               msgs::HandPose, msgs::HapticStatus, msgs::HapticTelemetry,
-                               msgs::HapticCommand, msgs::HapticCommandReply, msgs::SimStatus>);
+static_assert(std::apply(
+    [](auto... message) {
+        return ((alignof(typename decltype(message)::type) <= alignof(iox::mepoo::ChunkHeader)) &&
+                ...);
+    },
+    msgs::kShmMessageTypes));
 
-constexpr std::array kSimLinkMessages{
-    ShmMessageSize{"ConstraintSet", sizeof(msgs::ConstraintSet)},
-    ShmMessageSize{"ContactSurface", sizeof(msgs::ContactSurface)},
-    ShmMessageSize{"DeviceState", sizeof(msgs::DeviceState)},
-    ShmMessageSize{"HandPose", sizeof(msgs::HandPose)},
-    ShmMessageSize{"HapticStatus", sizeof(msgs::HapticStatus)},
-    ShmMessageSize{"HapticTelemetry", sizeof(msgs::HapticTelemetry)},
-    ShmMessageSize{"HapticCommand", sizeof(msgs::HapticCommand)},
-    ShmMessageSize{"HapticCommandReply", sizeof(msgs::HapticCommandReply)},
-    ShmMessageSize{"SimStatus", sizeof(msgs::SimStatus)},
-};
+constexpr auto kSimLinkMessages = std::apply(
+    [](auto... message) {
+        return std::array{
+            ShmMessageSize{message.name, sizeof(typename decltype(message)::type)}...};
+    },
+    msgs::kShmMessageTypes);
 
 }  // namespace
 

@@ -300,6 +300,7 @@ class DaemonCore {
     bool slow_fault_latched_{false};
     LoopStatisticsCollector statistics_;
     std::uint64_t window_ticks_;
+    std::int64_t rate_window_ns_;  // fault 114's window
     msgs::LoopStatistics last_window_{};
     std::int64_t last_snapshot_ns_{0};
     std::uint64_t received_at_last_snapshot_{0};

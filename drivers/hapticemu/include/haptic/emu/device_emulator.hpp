@@ -75,17 +75,18 @@ class DeviceEmulator {
   protected:
     // `codec` must already be constructed: derived classes hold it in a base listed before
     // DeviceEmulator (base-from-member), never in a member of their own.
+    // What a restart or a cleared fault leaves the device waiting for before it obeys again.
+    enum class ReArm { kOnAnyCommand, kOnlyOnASafeCommand };
     DeviceEmulator(can::CanBus& bus, EmulatorOptions options, protocol::DeviceCodecBase& codec,
-                   const config::DeviceConfig& device) noexcept
+                   const config::DeviceConfig& device, ReArm re_arm) noexcept
         : bus_(bus),
           options_(options),
           command_timeout_ns_(static_cast<std::int64_t>(device.can.command_timeout_ms) * 1'000'000),
+          re_arms_only_on_a_safe_command_(re_arm == ReArm::kOnlyOnASafeCommand),
           codec_base_(codec) {}
     virtual void stepModel(double dt_s) noexcept = 0;
     // A restart (the `reboot` fault command): the device forgets the last command.
     virtual void onReboot() noexcept = 0;
-    // Whether a restart or a cleared fault leaves the device waiting for a safe command.
-    [[nodiscard]] virtual bool reArmsOnlyOnASafeCommand() const noexcept { return false; }
     virtual void sendState(std::int64_t now_ns) noexcept = 0;
     // A valid command arrived; `asks_safe` when it commands the safe state. Returns whether
     // its setpoint may be applied (false while the device holds its safe state: holdsSafe()).
@@ -108,6 +109,7 @@ class DeviceEmulator {
     void reportCommandTimeout(bool active, std::int64_t now_ns) noexcept;
 
     std::int64_t command_timeout_ns_;
+    bool re_arms_only_on_a_safe_command_;
     std::int64_t last_command_ns_{0};
     bool command_seen_{false};
     bool timed_out_{false};

@@ -11,6 +11,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <string_view>
+#include <tuple>
 #include <type_traits>
 
 #include "haptic/msgs/bounded_array.hpp"
@@ -361,14 +363,26 @@ inline constexpr bool kIsShmMessage =
     std::is_trivially_copyable_v<T>&& std::is_standard_layout_v<T> &&
     sizeof(T) <= kMaxShmPayloadBytes;
 
-static_assert(kIsShmMessage<ConstraintSet>);
-static_assert(kIsShmMessage<ContactSurface>);
-static_assert(kIsShmMessage<DeviceState>);
-static_assert(kIsShmMessage<HandPose>);
-static_assert(kIsShmMessage<HapticStatus>);
-static_assert(kIsShmMessage<HapticTelemetry>);
-static_assert(kIsShmMessage<HapticCommand>);
-static_assert(kIsShmMessage<HapticCommandReply>);
-static_assert(kIsShmMessage<SimStatus>);
+// Every twin hapticd and handsim put through RouDi, each with its name for error messages:
+// the one list the checks here and the RouDi configuration check (haptic/ipc) walk.
+template <typename Message>
+struct ShmMessageType {
+    using type = Message;
+    std::string_view name;
+};
+inline constexpr std::tuple kShmMessageTypes{
+    ShmMessageType<ConstraintSet>{"ConstraintSet"},
+    ShmMessageType<ContactSurface>{"ContactSurface"},
+    ShmMessageType<DeviceState>{"DeviceState"},
+    ShmMessageType<HandPose>{"HandPose"},
+    ShmMessageType<HapticStatus>{"HapticStatus"},
+    ShmMessageType<HapticTelemetry>{"HapticTelemetry"},
+    ShmMessageType<HapticCommand>{"HapticCommand"},
+    ShmMessageType<HapticCommandReply>{"HapticCommandReply"},
+    ShmMessageType<SimStatus>{"SimStatus"},
+};
+static_assert(std::apply(
+    [](auto... message) { return (kIsShmMessage<typename decltype(message)::type> && ...); },
+    kShmMessageTypes));
 
 }  // namespace haptic::msgs
