@@ -35,6 +35,52 @@ TEST_F(TelemetryDecimationTest, TelemetryCarriesEveryTenthTickOfBothDevices) {
     }
 }
 
+// loop.status_rate_hz: hapticd snapshots its status that often and publishes each snapshot
+// once; the period is read off the snapshots' own stamps (the RT thread's clock), per step of
+// their sequence number, so a status the test's reader missed does not count as a long one.
+class StatusPeriodTest : public DeviceSafetyTest {
+  protected:
+    std::vector<double> statusPeriodsMs(std::size_t count) {
+        std::vector<msgs::HapticStatus> statuses;
+        (void)waitForStatus("statuses", [&](const msgs::HapticStatus& s) {
+            statuses.push_back(s);
+            return statuses.size() >= count;
+        });
+        std::vector<double> periods_ms;
+        for (std::size_t i = 1; i < statuses.size(); ++i) {
+            const auto& before = statuses[i - 1].header;
+            const auto& after = statuses[i].header;
+            EXPECT_GT(after.seq, before.seq) << "each snapshot is published once";
+            if (after.seq > before.seq) {
+                periods_ms.push_back(static_cast<double>(after.stamp_ns - before.stamp_ns) * 1e-6 /
+                                     static_cast<double>(after.seq - before.seq));
+            }
+        }
+        std::sort(periods_ms.begin(), periods_ms.end());
+        return periods_ms;
+    }
+};
+
+class StatusRateTest : public StatusPeriodTest {
+  protected:
+    StatusRateTest() {
+        replaceLine(config_.dir / "daemon.yaml", "status_rate_hz: 20 ", "status_rate_hz: 5 ");
+    }
+};
+
+TEST_F(StatusPeriodTest, AtTheShippedRateAStatusEvery50Ms) {
+    const auto periods_ms = statusPeriodsMs(21);
+    ASSERT_GE(periods_ms.size(), 10U);
+    // A snapshot is due at the first 1 ms tick at least a period after the last.
+    EXPECT_NEAR(periods_ms[periods_ms.size() / 2], 50.0, 2.0);
+}
+
+TEST_F(StatusRateTest, AtFiveHertzAStatusEvery200Ms) {
+    const auto periods_ms = statusPeriodsMs(8);
+    ASSERT_GE(periods_ms.size(), 5U);
+    EXPECT_NEAR(periods_ms[periods_ms.size() / 2], 200.0, 2.0);
+}
+
 // log_level in daemon.yaml: at warn, hapticd's start-up lines at info level are not logged.
 class WarnLogLevelTest : public DeviceSafetyTest {
   protected:
