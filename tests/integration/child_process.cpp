@@ -133,7 +133,7 @@ CommandResult runCommand(const std::vector<std::string>& argv, std::chrono::mill
     return result;
 }
 
-std::vector<std::string> withFifoPriority(std::vector<std::string> argv, int priority) {
+bool fifoPermitted() {
     // Probed on a thread of its own, so the test process keeps its normal policy.
     static const bool permitted = [] {
         bool ok = false;
@@ -145,7 +145,11 @@ std::vector<std::string> withFifoPriority(std::vector<std::string> argv, int pri
         probe.join();
         return ok && ::access("/usr/bin/chrt", X_OK) == 0;
     }();
-    if (!permitted) {
+    return permitted;
+}
+
+std::vector<std::string> withFifoPriority(std::vector<std::string> argv, int priority) {
+    if (!fifoPermitted()) {
         return argv;
     }
     argv.insert(argv.begin(), {"/usr/bin/chrt", "--fifo", std::to_string(priority)});

@@ -44,6 +44,10 @@ struct CommandResult {
 };
 CommandResult runCommand(const std::vector<std::string>& argv, std::chrono::milliseconds timeout);
 
+// Whether this process may start others under SCHED_FIFO (root, CAP_SYS_NICE or
+// LimitRTPRIO) with chrt.
+bool fifoPermitted();
+
 // `argv` run under SCHED_FIFO `priority` (util-linux's chrt) where this host allows it, as is.
 // For the emulated devices: their firmware runs on its own microcontroller, so a device that
 // misses its state or heartbeat period because a loaded CI machine starved a normal-priority

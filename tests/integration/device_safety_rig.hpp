@@ -198,9 +198,11 @@ class DeviceSafetyTest : public ::testing::Test {
         std::vector<std::string> argv = daemon_launcher_;
         for (const std::string& part :
              {std::string(HAPTICD_PATH), std::string("-c"), (config_.dir / "daemon.yaml").string(),
-              std::string("--realtime"), std::string("ignore"), std::string("--dds-domain"),
-              domain()}) {
+              std::string("--dds-domain"), domain()}) {
             argv.push_back(part);
+        }
+        if (!daemon_realtime_from_config_) {
+            argv.insert(argv.end(), {"--realtime", "ignore"});
         }
         argv.insert(argv.end(), extra.begin(), extra.end());
         daemon_ = std::make_unique<ChildProcess>(argv, "hapticd");
@@ -304,6 +306,9 @@ class DeviceSafetyTest : public ::testing::Test {
     // A test that stalls hapticd's loop itself sets this: its stall fault is no reason to run
     // it again (loop_stall_retry.hpp).
     bool loop_stalls_on_purpose_{false};
+    // Whether hapticd takes loop.realtime from daemon.yaml (enforce as shipped) instead of
+    // --realtime ignore: a fixture's constructor sets it.
+    bool daemon_realtime_from_config_{false};
     // More arguments for the exoskeleton's hapticemu (a fixture's constructor sets them).
     std::vector<std::string> exo_emulator_args_;
     // What goes before RouDi's, hapticd's and handsim's commands (a fixture's constructor sets

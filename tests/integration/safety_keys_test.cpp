@@ -81,6 +81,85 @@ TEST_F(StatusRateTest, AtFiveHertzAStatusEvery200Ms) {
     EXPECT_NEAR(periods_ms[periods_ms.size() / 2], 200.0, 2.0);
 }
 
+// loop.realtime, loop.priority and loop.cpu_affinity: hapticd as shipped (realtime: enforce,
+// no --realtime override) puts its RT thread, and only it, under SCHED_FIFO at the configured
+// priority on the configured core, read back from /proc; where SCHED_FIFO is not permitted it
+// refuses to start and says why.
+struct ThreadScheduling {
+    int policy{-1};
+    int rt_priority{-1};
+    std::string cpus;  // Cpus_allowed_list
+};
+
+ThreadScheduling schedulingOf(const fs::path& task) {
+    ThreadScheduling out;
+    std::ifstream stat_file(task / "stat");
+    const std::string stat((std::istreambuf_iterator<char>(stat_file)),
+                           std::istreambuf_iterator<char>());
+    // Fields after the command's closing parenthesis, from the third (state) on.
+    std::istringstream fields(stat.substr(stat.rfind(')') + 2));
+    std::vector<std::string> field{std::istream_iterator<std::string>(fields),
+                                   std::istream_iterator<std::string>()};
+    if (field.size() > 38) {
+        out.rt_priority = std::stoi(field[40 - 3]);
+        out.policy = std::stoi(field[41 - 3]);
+    }
+    std::ifstream status(task / "status");
+    for (std::string line; std::getline(status, line);) {
+        if (line.rfind("Cpus_allowed_list:", 0) == 0) {
+            out.cpus = line.substr(line.find_first_not_of(" \t", 18));
+        }
+    }
+    return out;
+}
+
+class RealtimeKeysTest : public DeviceSafetyTest {
+  protected:
+    RealtimeKeysTest() {
+        daemon_realtime_from_config_ = true;
+        replaceLine(config_.dir / "daemon.yaml", "priority: 80 ", "priority: 42 ");
+        replaceLine(config_.dir / "daemon.yaml", "cpu_affinity: -1 ", "cpu_affinity: 1 ");
+    }
+    void SetUp() override {
+        if (!fifoPermitted() || ::sysconf(_SC_NPROCESSORS_ONLN) < 2) {
+            GTEST_SKIP() << "needs SCHED_FIFO (root, CAP_SYS_NICE or LimitRTPRIO) and two cores";
+        }
+        DeviceSafetyTest::SetUp();
+    }
+};
+
+TEST_F(RealtimeKeysTest, TheRtThreadRunsAtTheConfiguredPriorityOnTheConfiguredCore) {
+    const fs::path tasks = fs::path("/proc") / std::to_string(daemon_->pid()) / "task";
+    int rt_threads = 0;
+    for (const auto& task : fs::directory_iterator(tasks)) {
+        std::ifstream comm_file(task.path() / "comm");
+        std::string comm;
+        std::getline(comm_file, comm);
+        const ThreadScheduling scheduling = schedulingOf(task.path());
+        if (comm == "hapticd-rt") {
+            ++rt_threads;
+            EXPECT_EQ(scheduling.policy, SCHED_FIFO);
+            EXPECT_EQ(scheduling.rt_priority, 42);
+            EXPECT_EQ(scheduling.cpus, "1");
+        } else {
+            EXPECT_EQ(scheduling.policy, SCHED_OTHER) << comm;
+        }
+    }
+    EXPECT_EQ(rt_threads, 1);
+    EXPECT_THAT(daemon_->stderrText(),
+                ::testing::HasSubstr("real-time: mlockall, SCHED_FIFO 42, CPU 1"));
+    // Without CAP_SYS_NICE (and no LimitRTPRIO), enforce refuses to run the loop at all.
+    ASSERT_EQ(daemon_->terminate(), std::optional<int>(0)) << daemon_->stderrText();
+    daemon_.reset();
+    const CommandResult refused = runCommand(
+        {"/usr/bin/setpriv", "--inh-caps=-sys_nice", "--bounding-set=-sys_nice", HAPTICD_PATH, "-c",
+         (config_.dir / "daemon.yaml").string(), "--dds-domain", domain()},
+        20s);
+    EXPECT_NE(refused.exit_code, 0);
+    EXPECT_THAT(refused.err, ::testing::HasSubstr("real-time setup failed ("));
+    EXPECT_THAT(refused.err, ::testing::HasSubstr("SCHED_FIFO priority 42 (needs CAP_SYS_NICE"));
+}
+
 // log_level in daemon.yaml: at warn, hapticd's start-up lines at info level are not logged.
 class WarnLogLevelTest : public DeviceSafetyTest {
   protected:
