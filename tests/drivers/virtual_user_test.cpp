@@ -228,33 +228,42 @@ TEST(VirtualUser, TheTrackerSamplesAtItsRateAndDeliversAfterItsLatency) {
     }
 }
 
-TEST(VirtualUser, TrackerNoiseHasTheConfiguredSpreadAndIsRepeatable) {
+TEST(VirtualUser, TrackerNoiseHasTheConfiguredSpreadAndIsRepeatablePerSeed) {
     auto config = shippedUser();
     config.tracker.rate_hz = 1000;
     config.tracker.latency_ms = 0.0;
     config.tracker.position_noise_m = 0.001;
     config.tracker.angle_noise_rad = 0.01;
     WornDevices a(config), b(config);
+    auto reseeded = config;
+    reseeded.tracker.seed = config.tracker.seed + 1;  // tracker.seed in user.yaml
+    WornDevices c(reseeded);
     double sum_squared_m = 0.0, sum_squared_rad = 0.0;
     int samples = 0;
+    int differing = 0;
     for (int tick = 0; tick < 3000; ++tick) {
         const double t = 1e-3 * tick;
         const std::int64_t now_ns = 1'000'000LL * tick;
         a.step(t, 0.0);
         b.step(t, 0.0);
+        c.step(t, 0.0);
         const auto pose_a = a.user.track(now_ns, t);
         const auto pose_b = b.user.track(now_ns, t);
+        const auto pose_c = c.user.track(now_ns, t);
         ASSERT_EQ(pose_a.has_value(), pose_b.has_value());
+        ASSERT_EQ(pose_a.has_value(), pose_c.has_value());
         if (!pose_a) {
             continue;
         }
         EXPECT_EQ(pose_a->wrist_position_m, pose_b->wrist_position_m) << "same seed, same noise";
+        differing += pose_a->wrist_position_m != pose_c->wrist_position_m ? 1 : 0;
         const auto actual = a.user.actualPose(t);
         sum_squared_m += std::pow(pose_a->wrist_position_m[0] - actual.wrist.position_m.x(), 2);
         sum_squared_rad += std::pow(pose_a->joint_angles_rad[0] - actual.flexion_rad[0], 2);
         ++samples;
     }
     ASSERT_GT(samples, 2900);
+    EXPECT_EQ(differing, samples) << "another seed, other noise";
     EXPECT_NEAR(std::sqrt(sum_squared_m / samples), 0.001, 0.0001);
     EXPECT_NEAR(std::sqrt(sum_squared_rad / samples), 0.01, 0.001);
 }
