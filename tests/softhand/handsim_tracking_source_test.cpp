@@ -1,0 +1,217 @@
+// handsim's tracking sources (scene tracking.source, sim.yaml tracking_filter) as handsim
+// builds them (makeTrackingSource, the executable's own code): a replay file is replayed,
+// held or looped as tracking.loop says; poses from a HandPose topic, written here by a real
+// Fast DDS writer, pass as they come without a filter and through the One Euro filter each
+// tracking_filter key shapes.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "HandPosePubSubTypes.h"
+#include "haptic/config/scene.hpp"
+#include "haptic/config/sim.hpp"
+#include "haptic/ipc/dds_participant.hpp"
+#include "haptic/msgs/conversions.hpp"
+#include "haptic/softhand/scene_simulation.hpp"
+#include "haptic/softhand/tracking_input.hpp"
+#include "tracking_source.hpp"
+
+namespace haptic::handsim {
+namespace {
+
+using ::testing::HasSubstr;
+using namespace std::chrono_literals;
+
+const std::string kConfigDir = HAPTIC_CONFIG_DIR;
+
+config::SceneConfig thimbleScene() {
+    return config::loadSceneConfig(kConfigDir + "/scenes/thimble_only.yaml");
+}
+
+ipc::DdsParticipant makeParticipant() {
+    return ipc::DdsParticipant(
+        ipc::DdsSettings{static_cast<std::uint32_t>(100 + ::getpid() % 100),
+                         kConfigDir + "/dds_profiles.xml", "haptic_participant"},
+        "handsim_tracking_source_test");
+}
+
+// One replay row: t, wrist xyz, quaternion (w x y z), 15 angles all `angle`.
+std::string replayRow(double t_s, double x_m, double angle_rad) {
+    std::string row = std::to_string(t_s) + ", " + std::to_string(x_m) + ", 0, 0.1, 1, 0, 0, 0";
+    for (int i = 0; i < 15; ++i) {
+        row += ", " + std::to_string(angle_rad);
+    }
+    return row + "\n";
+}
+
+TEST(HandsimTrackingSource, AReplaySceneReplaysItsFileAndHoldsOrLoopsAsTrackingLoopSays) {
+    const auto file = std::filesystem::temp_directory_path() /
+                      ("handsim_replay_" + std::to_string(::getpid()) + ".csv");
+    std::ofstream(file) << "# t_s, wrist xyz, quaternion, 15 angles\n"
+                        << replayRow(0.0, 0.0, 0.1) << replayRow(1.0, 0.02, 0.5);
+    auto scene = thimbleScene();
+    scene.tracking.source = config::TrackingSource::kReplay;
+    scene.tracking.replay_file = file;
+    const softhand::SceneSimulation sim(scene, {});
+    auto participant = makeParticipant();
+    for (const bool loop : {false, true}) {
+        scene.tracking.loop = loop;
+        const auto source = makeTrackingSource(scene, sim, participant);
+        EXPECT_EQ(source->describe(),
+                  "replay of " + file.string() + " (2 frames" + (loop ? ", looping)" : ")"));
+        EXPECT_NEAR(source->initialPose().wrist.position_m.x(), 0.0, 1e-12);
+        std::string rejection;
+        const auto middle = source->poll(0.25, rejection);
+        ASSERT_TRUE(middle.has_value());
+        EXPECT_NEAR(middle->wrist.position_m.x(), 0.005, 1e-9);
+        EXPECT_NEAR(middle->wrist.position_m.z(), 0.1, 1e-9);
+        EXPECT_NEAR(middle->flexion_rad[7], 0.2, 1e-9);
+        const auto later = source->poll(1.25, rejection);
+        ASSERT_TRUE(later.has_value());
+        EXPECT_NEAR(later->wrist.position_m.x(), loop ? 0.005 : 0.02, 1e-9)
+            << (loop ? "looped to the start" : "held at the end");
+        EXPECT_TRUE(rejection.empty()) << rejection;
+    }
+    std::filesystem::remove(file);
+}
+
+// What each source made of the same stream of HandPose samples.
+struct Response {
+    std::vector<double> wrist_x_m;
+    std::vector<double> angle_rad;
+};
+
+class TopicSourceTest : public ::testing::Test {
+  protected:
+    TopicSourceTest()
+        : scene_(topicScene()),
+          sim_(scene_, {}),
+          participant_(makeParticipant()),
+          writer_(participant_.createWriter<idl::HandPosePubSubType>(scene_.tracking.topic,
+                                                                     ipc::TopicKind::kStream)),
+          rest_(sim_.trackedHand().buildPose()) {}
+
+    static config::SceneConfig topicScene() {
+        auto scene = thimbleScene();
+        scene.tracking.source = config::TrackingSource::kTopic;
+        // tracking.topic: a name of this process's own, so no other test's poses arrive.
+        scene.tracking.topic = "tracking/test_" + std::to_string(::getpid());
+        return scene;
+    }
+
+    // A tracker at 90 Hz: the hand at rest, then the wrist 10 mm along x and every flexion
+    // angle 0.2 rad further, held. Each source polls every sample.
+    std::vector<Response> run(
+        const std::vector<std::optional<config::TrackingFilterConfig>>& filters) {
+        std::vector<std::unique_ptr<TrackingSource>> sources;
+        for (const auto& filter : filters) {
+            sources.push_back(makeTrackingSource(scene_, sim_, participant_, filter));
+        }
+        const auto deadline = std::chrono::steady_clock::now() + 20s;
+        while (writer_.matchedReaders() < static_cast<int>(sources.size()) &&
+               std::chrono::steady_clock::now() < deadline) {
+            std::this_thread::sleep_for(10ms);
+        }
+        EXPECT_EQ(writer_.matchedReaders(), static_cast<int>(sources.size()));
+        std::vector<Response> responses(sources.size());
+        constexpr std::int64_t kPeriodNs = 11'111'111;
+        for (int i = 0; i < 90; ++i) {
+            softhand::HandPoseInput pose = rest_;
+            if (i >= 10) {
+                pose.wrist.position_m.x() += 0.01;
+                for (double& angle : pose.flexion_rad) {
+                    angle += 0.2;
+                }
+            }
+            msgs::HandPose message = softhand::toMessage(pose);
+            message.header.seq = static_cast<std::uint64_t>(i + 1);
+            message.header.stamp_ns = 1'000'000'000 + i * kPeriodNs;
+            message.header.source_id.assign("tracking_source_test");
+            message.confidence = 1.0;
+            EXPECT_TRUE(writer_.write(msgs::toIdl(message)));
+            for (std::size_t s = 0; s < sources.size(); ++s) {
+                std::optional<softhand::HandPoseInput> polled;
+                std::string rejection;
+                const auto sample_deadline = std::chrono::steady_clock::now() + 5s;
+                while (!polled && std::chrono::steady_clock::now() < sample_deadline) {
+                    polled = sources[s]->poll(0.0, rejection);
+                    if (!polled) {
+                        std::this_thread::sleep_for(1ms);
+                    }
+                }
+                EXPECT_TRUE(rejection.empty()) << rejection;
+                if (!polled) {
+                    ADD_FAILURE() << "source " << s << " received no sample " << i;
+                    return responses;
+                }
+                responses[s].wrist_x_m.push_back(polled->wrist.position_m.x() -
+                                                 rest_.wrist.position_m.x());
+                responses[s].angle_rad.push_back(polled->flexion_rad[4] - rest_.flexion_rad[4]);
+            }
+        }
+        return responses;
+    }
+
+    config::SceneConfig scene_;
+    softhand::SceneSimulation sim_;
+    ipc::DdsParticipant participant_;
+    ipc::DdsWriter<idl::HandPose> writer_;
+    softhand::HandPoseInput rest_;
+};
+
+TEST_F(TopicSourceTest, EachTrackingFilterKeyShapesTheStepResponse) {
+    const auto shipped = config::loadSimConfig(kConfigDir + "/sim.yaml").tracking_filter;
+    ASSERT_TRUE(shipped.has_value());
+    ASSERT_TRUE(shipped->angle_beta_s_per_rad.has_value());
+    auto slower = *shipped;
+    slower.min_cutoff_hz = 0.5;
+    auto faster_in_motion = *shipped;
+    faster_in_motion.position_beta_s_per_m = 500.0;
+    auto other_derivative = *shipped;
+    other_derivative.derivative_cutoff_hz = 10.0;
+    auto no_angles = *shipped;
+    no_angles.angle_beta_s_per_rad.reset();
+    const auto responses =
+        run({std::nullopt, shipped, slower, faster_in_motion, other_derivative, no_angles});
+    ASSERT_EQ(responses.size(), 6U);
+    for (const auto& response : responses) {
+        ASSERT_EQ(response.wrist_x_m.size(), 90U);
+    }
+    const auto& raw = responses[0];
+    const auto& filtered = responses[1];
+    // Without tracking_filter the samples pass as they come.
+    EXPECT_NEAR(raw.wrist_x_m[9], 0.0, 1e-12);
+    EXPECT_NEAR(raw.wrist_x_m[10], 0.01, 1e-12);
+    EXPECT_NEAR(raw.angle_rad[10], 0.2, 1e-12);
+    // Through the shipped filter the step arrives over several samples and settles.
+    EXPECT_GT(filtered.wrist_x_m[10], 0.0);
+    EXPECT_LT(filtered.wrist_x_m[10], 0.009);
+    EXPECT_GT(filtered.angle_rad[10], 0.0);
+    EXPECT_LT(filtered.angle_rad[10], 0.18);
+    EXPECT_NEAR(filtered.wrist_x_m[89], 0.01, 1e-4);
+    EXPECT_NEAR(filtered.angle_rad[89], 0.2, 2e-3);
+    // min_cutoff_hz: a lower cutoff lags more.
+    EXPECT_LT(responses[2].wrist_x_m[12], filtered.wrist_x_m[12]);
+    // position_beta_s_per_m: a higher beta opens the cutoff with the speed, lagging less;
+    // the angles keep theirs.
+    EXPECT_GT(responses[3].wrist_x_m[12], filtered.wrist_x_m[12]);
+    EXPECT_NEAR(responses[3].angle_rad[12], filtered.angle_rad[12], 1e-12);
+    // derivative_cutoff_hz: the speed that opens the cutoff is smoothed differently.
+    EXPECT_GT(std::abs(responses[4].wrist_x_m[12] - filtered.wrist_x_m[12]), 1e-6);
+    // Without angle_beta_s_per_rad the angles pass unfiltered; the wrist is filtered as before.
+    EXPECT_NEAR(responses[5].angle_rad[10], 0.2, 1e-12);
+    EXPECT_NEAR(responses[5].wrist_x_m[12], filtered.wrist_x_m[12], 1e-12);
+}
+
+}  // namespace
+}  // namespace haptic::handsim
