@@ -28,6 +28,8 @@ void* __libc_malloc(std::size_t size);
 void* __libc_calloc(std::size_t count, std::size_t size);
 void* __libc_realloc(void* p, std::size_t size);
 void* __libc_memalign(std::size_t alignment, std::size_t size);
+void* __libc_valloc(std::size_t size);
+void* __libc_pvalloc(std::size_t size);
 
 void* malloc(std::size_t size) {
     count();
@@ -45,8 +47,32 @@ void* aligned_alloc(std::size_t alignment, std::size_t size) {
     count();
     return __libc_memalign(alignment, size);
 }
+void* reallocarray(void* p, std::size_t count_of, std::size_t size) {
+    count();
+    if (size != 0 && count_of > static_cast<std::size_t>(-1) / size) {
+        errno = ENOMEM;
+        return nullptr;
+    }
+    return __libc_realloc(p, count_of * size);
+}
+void* memalign(std::size_t alignment, std::size_t size) {
+    count();
+    return __libc_memalign(alignment, size);
+}
+void* valloc(std::size_t size) {
+    count();
+    return __libc_valloc(size);
+}
+void* pvalloc(std::size_t size) {
+    count();
+    return __libc_pvalloc(size);
+}
 int posix_memalign(void** out, std::size_t alignment, std::size_t size) {
     count();
+    // What glibc refuses: not a power of two, or not a multiple of a pointer's size.
+    if (alignment % sizeof(void*) != 0 || (alignment & (alignment - 1)) != 0 || alignment == 0) {
+        return EINVAL;
+    }
     void* p = __libc_memalign(alignment, size);
     if (p == nullptr) {
         return ENOMEM;

@@ -3,7 +3,9 @@
 #include "allocation_counter.hpp"
 
 #include <gtest/gtest.h>
+#include <malloc.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
@@ -38,12 +40,17 @@ TEST(AllocationCounter, CountsTheCAllocatorToo) {
     void* c = nullptr;
     ASSERT_EQ(::posix_memalign(&c, 64, 128), 0);
     void* d = kept(std::aligned_alloc(64, 128));
+    void* e = kept(::memalign(64, 128));
+    void* f = kept(::valloc(128));
+    void* g = kept(::pvalloc(128));
+    b = kept(::reallocarray(b, 8, 16));
+    void* refused = nullptr;
+    EXPECT_EQ(::posix_memalign(&refused, 24, 128), EINVAL) << "not a power of two";
     const std::uint64_t counted = counter.allocations();
-    std::free(a);
-    std::free(b);
-    std::free(c);
-    std::free(d);
-    EXPECT_EQ(counted, 5U);
+    for (void* p : {a, b, c, d, e, f, g}) {
+        std::free(p);
+    }
+    EXPECT_EQ(counted, 10U);
 }
 #endif
 
