@@ -42,6 +42,20 @@ class BusWatchingTest : public DeviceSafetyTest {
         DeviceSafetyTest::TearDown();
     }
 
+    // IDLE with both devices READY and no fault, and for 200 ms no exoskeleton command that
+    // enables the drive: after a restart or a clear, nothing but `enable` re-arms it.
+    void expectIdleAndDisabledUntilEnable() {
+        waitForStatus("IDLE with both devices READY and no fault", [](const msgs::HapticStatus& s) {
+            return s.state == msgs::DaemonState::kIdle && s.faults.empty() &&
+                   s.devices.size() == 2 && s.devices[kExo].state == msgs::DeviceRunState::kReady &&
+                   s.devices[kThimble].state == msgs::DeviceRunState::kReady;
+        });
+        const auto idle = exo_bus_.listen(std::chrono::milliseconds(200));
+        EXPECT_FALSE(std::any_of(idle.begin(), idle.end(), [](const auto& h) {
+            return enabledWithForce(h.message, 0.0);
+        })) << "enabled without an operator";
+    }
+
     // The largest servo angle off the thimble's retract pose (rad).
     double fromRetract(const std::array<double, 3>& angles) const {
         double largest = 0.0;

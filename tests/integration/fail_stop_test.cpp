@@ -213,15 +213,7 @@ TEST_F(FailStopTest, SigkillLeavesBothDevicesSafeByThemselvesAndARestartRendersA
     // Restart, as systemd's Restart= would: same RouDi, IDLE (the devices' timeout is the
     // dead predecessor's and is acknowledged, not raised), force only after `enable`.
     startDaemon();
-    waitForStatus("IDLE with both devices READY and no fault", [](const msgs::HapticStatus& s) {
-        return s.state == msgs::DaemonState::kIdle && s.faults.empty() && s.devices.size() == 2 &&
-               s.devices[kExo].state == msgs::DeviceRunState::kReady &&
-               s.devices[kThimble].state == msgs::DeviceRunState::kReady;
-    });
-    const auto idle = exo_bus_.listen(200ms);
-    EXPECT_FALSE(std::any_of(idle.begin(), idle.end(), [](const auto& h) {
-        return enabledWithForce(h.message, 0.0);
-    })) << "enabled without an operator";
+    expectIdleAndDisabledUntilEnable();
     ASSERT_TRUE(command("enable"));
     waitForStatus("RENDERING after the restart", [](const msgs::HapticStatus& s) {
         return s.state == msgs::DaemonState::kRendering && s.faults.empty();
@@ -364,15 +356,7 @@ TEST_F(RoudiLostTest, WhileRenderingHapticdWritesTheSafeCommandsBeforeExitingFor
     sim_.reset();
     startRoudi();
     startDaemon();
-    waitForStatus("IDLE with both devices READY and no fault", [](const msgs::HapticStatus& s) {
-        return s.state == msgs::DaemonState::kIdle && s.faults.empty() && s.devices.size() == 2 &&
-               s.devices[kExo].state == msgs::DeviceRunState::kReady &&
-               s.devices[kThimble].state == msgs::DeviceRunState::kReady;
-    });
-    const auto idle = exo_bus_.listen(200ms);
-    EXPECT_FALSE(std::any_of(idle.begin(), idle.end(), [](const auto& h) {
-        return enabledWithForce(h.message, 0.0);
-    })) << "enabled without an operator";
+    expectIdleAndDisabledUntilEnable();
 }
 
 TEST_F(FailStopTest, SigtermWritesTheSafeCommandsWithinTwoTicksAndExitsCleanly) {

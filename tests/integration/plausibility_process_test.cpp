@@ -192,14 +192,7 @@ TEST_F(PlausibilityProcessTest,
     ASSERT_TRUE(exo_emu_->sendCommand("clear"));
     std::this_thread::sleep_for(100ms);  // the next heartbeat reports no fault
     ASSERT_TRUE(command("clear"));
-    waitForStatus("IDLE, both devices READY", [](const msgs::HapticStatus& s) {
-        return s.state == msgs::DaemonState::kIdle && s.faults.empty() &&
-               s.devices[kExo].state == msgs::DeviceRunState::kReady;
-    });
-    const auto idle = exo_bus_.listen(200ms);
-    EXPECT_FALSE(std::any_of(idle.begin(), idle.end(), [](const auto& h) {
-        return enabledWithForce(h.message, 0.0);
-    })) << "enabled without an operator";
+    expectIdleAndDisabledUntilEnable();
     ASSERT_TRUE(command("enable"));
     bool pushing = false;
     for (auto deadline = std::chrono::steady_clock::now() + 5s;
