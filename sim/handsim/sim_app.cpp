@@ -243,7 +243,9 @@ int runSim(const SimOptions& options) {
                 message = std::remove_cvref_t<decltype(message)>{};
                 physics.fill(index, message);
                 message.tracking = origin;
-                message.header = {++link.seq, stamp, {}};
+                message.header = {};
+                message.header.seq = ++link.seq;
+                message.header.stamp_ns = stamp;
                 message.header.source_id.assign(name);
             };
             if (dds_link) {
@@ -285,7 +287,9 @@ int runSim(const SimOptions& options) {
         const auto now = std::chrono::steady_clock::now();
         if (now - last_status >= std::chrono::milliseconds(500)) {
             msgs::SimStatus status;
-            status.header = {++status_seq, stamp, {}};
+            status.header = {};
+            status.header.seq = ++status_seq;
+            status.header.stamp_ns = stamp;
             status.header.source_id.assign(cfg.scene.name);
             status.rate_hz = static_cast<double>(step_times_us.size()) /
                              std::chrono::duration<double>(now - last_status).count();

@@ -835,6 +835,24 @@ TEST_F(DaemonCoreTest, RejectsNonFiniteAndWrongDeviceInputAndCountsThem) {
     EXPECT_FALSE(status.sim_link.connected);
 }
 
+// A sim from another release (over iceoryx, its twin in shared memory): the header's schema
+// version is checked first, since in another layout every other field means something else.
+TEST_F(DaemonCoreTest, RefusesInputOfAnotherSchemaVersionFirst) {
+    auto constraints = validConstraintSet("exo_index");
+    constraints.header.schema_version = msgs::kSchemaVersion + 1;
+    constraints.dof = 7;  // what another layout might put here: not the reason given
+    EXPECT_THAT(sut.offerConstraintSet(0, constraints, 0), Eq(InputRejection::kOtherSchema));
+    auto surface = validContactSurface("thimble_index");
+    surface.header.schema_version = 0;
+    EXPECT_THAT(sut.offerContactSurface(1, surface, 0), Eq(InputRejection::kOtherSchema));
+    EXPECT_THAT(sut.rejectedCount(0, InputRejection::kOtherSchema), Eq(1U));
+    EXPECT_THAT(sut.rejectedCount(1, InputRejection::kOtherSchema), Eq(1U));
+    EXPECT_THAT(sut.simFade(0), Eq(0.0));
+    EXPECT_EQ(daemon::describe(InputRejection::kOtherSchema),
+              "header.schema_version is not this build's (a sim from another release)");
+    EXPECT_STREQ(msgs::toString(InputRejection::kOtherSchema), "other_schema");
+}
+
 // A sample's normal follows the same length rule as a row's contact (docs/hapticd.md).
 TEST_F(DaemonCoreTest, TakesASampleNormalWithinTheLengthRuleOnly) {
     auto long_normal = validContactSurface("thimble_index");

@@ -116,6 +116,9 @@ class Filler {
     }
 
     void fill(MessageHeader& h) {
+        // The schema version stays this build's, or the reader refuses the message.
+        (void)measure(2);
+        h.schema_version = kSchemaVersion;
         fill(h.seq);
         fill(h.stamp_ns);
         fill(h.source_id);
@@ -376,7 +379,7 @@ TEST(MessageRoundTrip, SimStatus) {
 }
 
 TEST(MessageConversion, RejectsEnumOutsideItsRange) {
-    idl::HapticStatus status;
+    idl::HapticStatus status = toIdl(HapticStatus{});
     status.state(static_cast<idl::DaemonState>(99));
     HapticStatus twin;
     const ConversionResult result = fromIdl(status, twin);
@@ -385,7 +388,7 @@ TEST(MessageConversion, RejectsEnumOutsideItsRange) {
 }
 
 TEST(MessageConversion, RejectsSequenceLongerThanCapacity) {
-    idl::ContactSurface surface;
+    idl::ContactSurface surface = toIdl(ContactSurface{});
     surface.samples().resize(kMaxContactSamples + 1);
     ContactSurface twin;
     const ConversionResult result = fromIdl(surface, twin);

@@ -55,6 +55,8 @@ std::string_view describe(InputRejection reason) noexcept {
                    "clock or a corrupt stamp)";
         case InputRejection::kNegativeWeight:
             return "negative sample weight";
+        case InputRejection::kOtherSchema:
+            return "header.schema_version is not this build's (a sim from another release)";
         case InputRejection::kCount_:
             break;
     }
@@ -105,6 +107,10 @@ InputRejection validateContact(const msgs::ContactKinematics& contact, std::uint
 
 InputRejection validate(const msgs::ConstraintSet& message, std::string_view device_id,
                         std::uint16_t joint_count) noexcept {
+    // First: in another release's layout every other field means something else.
+    if (message.header.schema_version != msgs::kSchemaVersion) {
+        return InputRejection::kOtherSchema;
+    }
     if (message.header.source_id.view() != device_id) {
         return InputRejection::kWrongDevice;
     }
@@ -139,6 +145,9 @@ InputRejection validate(const msgs::ConstraintSet& message, std::string_view dev
 }
 
 InputRejection validate(const msgs::ContactSurface& message, std::string_view device_id) noexcept {
+    if (message.header.schema_version != msgs::kSchemaVersion) {
+        return InputRejection::kOtherSchema;
+    }
     if (message.header.source_id.view() != device_id) {
         return InputRejection::kWrongDevice;
     }

@@ -119,13 +119,29 @@ static_assert(static_cast<std::uint32_t>(idl::COMMAND_SET_METHOD) ==
 
 idl::MessageHeader toIdl(const MessageHeader& in) {
     idl::MessageHeader out;
+    out.schema_version(in.schema_version);
     out.seq(in.seq);
     out.stamp_ns(in.stamp_ns);
     copyString(in.source_id, out.source_id());
     return out;
 }
 
+// The first check of every message: read in another release's layout, the rest of it means
+// something else (a field added, moved or resized).
+bool schemaMatches(const idl::MessageHeader& in, const char* message, ConversionResult& result) {
+    if (in.schema_version() == kSchemaVersion) {
+        return true;
+    }
+    result.error = std::string(message) +
+                   ".header.schema_version: " + std::to_string(in.schema_version()) +
+                   ", this build reads " + std::to_string(kSchemaVersion) +
+                   " (the sender is from another release; hapticd, handsim, hapticemu and "
+                   "hapticctl must come from one)";
+    return false;
+}
+
 void fromIdl(const idl::MessageHeader& in, MessageHeader& out) {
+    out.schema_version = in.schema_version();
     out.seq = in.seq();
     out.stamp_ns = in.stamp_ns();
     copyString(in.source_id(), out.source_id);
@@ -191,6 +207,9 @@ idl::ConstraintSet toIdl(const ConstraintSet& in) {
 
 ConversionResult fromIdl(const idl::ConstraintSet& in, ConstraintSet& out) {
     ConversionResult result;
+    if (!schemaMatches(in.header(), "ConstraintSet", result)) {
+        return result;
+    }
     if (!fitsCapacity(in.constraints().size(), out.constraints, "ConstraintSet.constraints",
                       result)) {
         return result;
@@ -241,6 +260,9 @@ idl::ContactSurface toIdl(const ContactSurface& in) {
 
 ConversionResult fromIdl(const idl::ContactSurface& in, ContactSurface& out) {
     ConversionResult result;
+    if (!schemaMatches(in.header(), "ContactSurface", result)) {
+        return result;
+    }
     if (!fitsCapacity(in.samples().size(), out.samples, "ContactSurface.samples", result)) {
         return result;
     }
@@ -274,6 +296,10 @@ idl::DeviceState toIdl(const DeviceState& in) {
 }
 
 ConversionResult fromIdl(const idl::DeviceState& in, DeviceState& out) {
+    ConversionResult result;
+    if (!schemaMatches(in.header(), "DeviceState", result)) {
+        return result;
+    }
     fromIdl(in.header(), out.header);
     out.joint_count = in.joint_count();
     out.joint_position_rad = in.joint_position_rad();
@@ -284,7 +310,7 @@ ConversionResult fromIdl(const idl::DeviceState& in, DeviceState& out) {
     out.platform_position_m = in.platform_position_m();
     out.platform_orientation_wxyz = in.platform_orientation_wxyz();
     out.status_bits = in.status_bits();
-    return {};
+    return result;
 }
 
 // ---- HandPose ---------------------------------------------------------------------------
@@ -301,6 +327,9 @@ idl::HandPose toIdl(const HandPose& in) {
 
 ConversionResult fromIdl(const idl::HandPose& in, HandPose& out) {
     ConversionResult result;
+    if (!schemaMatches(in.header(), "HandPose", result)) {
+        return result;
+    }
     if (!fitsCapacity(in.joint_angles_rad().size(), out.joint_angles_rad,
                       "HandPose.joint_angles_rad", result)) {
         return result;
@@ -380,6 +409,9 @@ idl::HapticStatus toIdl(const HapticStatus& in) {
 
 ConversionResult fromIdl(const idl::HapticStatus& in, HapticStatus& out) {
     ConversionResult result;
+    if (!schemaMatches(in.header(), "HapticStatus", result)) {
+        return result;
+    }
     if (!fitsCapacity(in.devices().size(), out.devices, "HapticStatus.devices", result) ||
         !fitsCapacity(in.faults().size(), out.faults, "HapticStatus.faults", result) ||
         !convertEnum(in.state(), DaemonState::kEstop, out.state, "HapticStatus.state", result) ||
@@ -491,6 +523,9 @@ idl::HapticTelemetry toIdl(const HapticTelemetry& in) {
 
 ConversionResult fromIdl(const idl::HapticTelemetry& in, HapticTelemetry& out) {
     ConversionResult result;
+    if (!schemaMatches(in.header(), "HapticTelemetry", result)) {
+        return result;
+    }
     if (!fitsCapacity(in.samples().size(), out.samples, "HapticTelemetry.samples", result)) {
         return result;
     }
@@ -547,6 +582,9 @@ idl::HapticCommand toIdl(const HapticCommand& in) {
 
 ConversionResult fromIdl(const idl::HapticCommand& in, HapticCommand& out) {
     ConversionResult result;
+    if (!schemaMatches(in.header(), "HapticCommand", result)) {
+        return result;
+    }
     if (!convertEnum(in.kind(), CommandKind::kClearFault, out.kind, "HapticCommand.kind", result)) {
         return result;
     }
@@ -567,11 +605,15 @@ idl::HapticCommandReply toIdl(const HapticCommandReply& in) {
 }
 
 ConversionResult fromIdl(const idl::HapticCommandReply& in, HapticCommandReply& out) {
+    ConversionResult result;
+    if (!schemaMatches(in.header(), "HapticCommandReply", result)) {
+        return result;
+    }
     fromIdl(in.header(), out.header);
     out.request_id = in.request_id();
     out.accepted = in.accepted();
     copyString(in.message(), out.message);
-    return {};
+    return result;
 }
 
 // ---- SimStatus --------------------------------------------------------------------------
@@ -597,6 +639,10 @@ idl::SimStatus toIdl(const SimStatus& in) {
 }
 
 ConversionResult fromIdl(const idl::SimStatus& in, SimStatus& out) {
+    ConversionResult result;
+    if (!schemaMatches(in.header(), "SimStatus", result)) {
+        return result;
+    }
     fromIdl(in.header(), out.header);
     out.rate_hz = in.rate_hz();
     out.steps = in.steps();
@@ -612,7 +658,7 @@ ConversionResult fromIdl(const idl::SimStatus& in, SimStatus& out) {
     out.inputs_rejected = in.inputs_rejected();
     copyString(in.last_rejection(), out.last_rejection);
     out.steps_rescaled = in.steps_rescaled();
-    return {};
+    return result;
 }
 
 }  // namespace haptic::msgs

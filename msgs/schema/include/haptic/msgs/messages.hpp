@@ -23,7 +23,16 @@ namespace haptic::msgs {
 
 using DeviceId = FixedString<kIdCapacity>;
 
+// The layout of the messages: bump it with any change to a message here or in idl/ (a field
+// added, removed, moved or resized, a capacity). Every message carries it first
+// (MessageHeader, first member of each), and every reader refuses another one, over DDS
+// (conversions), iceoryx (hapticd's sim input validation) and the control socket: peers from
+// two releases, say a handsim on another PC, would otherwise read each other's fields as
+// something else. tests/msgs/schema_version_test.cpp records the layout it stands for.
+inline constexpr std::uint16_t kSchemaVersion = 1;
+
 struct MessageHeader {
+    std::uint16_t schema_version{kSchemaVersion};
     std::uint64_t seq{0};
     std::int64_t stamp_ns{0};
     DeviceId source_id{};  // device name or scene name
@@ -170,10 +179,11 @@ enum class SimInputRejection : std::uint8_t {
     kDegenerateConstraint,  // a constraint normal of zero length, or a contact beyond 1 m / 10 rad
     kBadNormal,             // a contact normal that is not unit length
     kNegativeWeight,
-    kNotNewer,    // its header.seq does not advance (and it is no restart): a replay or duplicate
-    kDelayed,     // older than sim_timeout_ns by its stamp (see DaemonCore::freshness())
-    kBadStamp,    // header.stamp_ns is 0 or negative
-    kStampAhead,  // stamped ahead of the sim's learnt clock by more than sim_timeout_ns
+    kNotNewer,     // its header.seq does not advance (and it is no restart): a replay or duplicate
+    kDelayed,      // older than sim_timeout_ns by its stamp (see DaemonCore::freshness())
+    kBadStamp,     // header.stamp_ns is 0 or negative
+    kStampAhead,   // stamped ahead of the sim's learnt clock by more than sim_timeout_ns
+    kOtherSchema,  // header.schema_version is not kSchemaVersion: a sim from another release
     kCount_,
 };
 // SimLinkStatus::rejected_by_reason has one count per reason, kNone left out.
@@ -384,5 +394,13 @@ inline constexpr std::tuple kShmMessageTypes{
 static_assert(std::apply(
     [](auto... message) { return (kIsShmMessage<typename decltype(message)::type> && ...); },
     kShmMessageTypes));
+// The header, and so its schema_version, at the start of every message: readable whatever
+// the rest of another release's layout.
+static_assert(std::apply(
+    [](auto... message) {
+        return ((offsetof(typename decltype(message)::type, header) == 0) && ...);
+    },
+    kShmMessageTypes));
+static_assert(offsetof(MessageHeader, schema_version) == 0);
 
 }  // namespace haptic::msgs

@@ -103,6 +103,8 @@ namespace haptic::msgs {
             return "bad_stamp";
         case SimInputRejection::kStampAhead:
             return "stamp_ahead";
+        case SimInputRejection::kOtherSchema:
+            return "other_schema";
         case SimInputRejection::kCount_:
             break;
     }

@@ -1,0 +1,120 @@
+// msgs::kSchemaVersion: every message carries it first, every reader refuses another one, and
+// this file records the layout the version stands for, so a layout change without a new
+// version fails here rather than between two releases in a lab.
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <string>
+#include <tuple>
+
+#include "ConstraintSetPubSubTypes.h"
+#include "ContactSurfacePubSubTypes.h"
+#include "DeviceStatePubSubTypes.h"
+#include "HandPosePubSubTypes.h"
+#include "HapticCommandPubSubTypes.h"
+#include "HapticStatusPubSubTypes.h"
+#include "HapticTelemetryPubSubTypes.h"
+#include "SimStatusPubSubTypes.h"
+#include "haptic/msgs/conversions.hpp"
+#include "haptic/msgs/messages.hpp"
+
+namespace haptic::msgs {
+namespace {
+
+// Each twin with its IDL type and the IDL type's Fast DDS support.
+template <typename Twin, typename Idl, typename PubSub>
+struct Kind {
+    using twin = Twin;
+    using idl_type = Idl;
+    using pub_sub = PubSub;
+    const char* name;
+};
+constexpr std::tuple kKinds{
+    Kind<ConstraintSet, idl::ConstraintSet, idl::ConstraintSetPubSubType>{"ConstraintSet"},
+    Kind<ContactSurface, idl::ContactSurface, idl::ContactSurfacePubSubType>{"ContactSurface"},
+    Kind<DeviceState, idl::DeviceState, idl::DeviceStatePubSubType>{"DeviceState"},
+    Kind<HandPose, idl::HandPose, idl::HandPosePubSubType>{"HandPose"},
+    Kind<HapticStatus, idl::HapticStatus, idl::HapticStatusPubSubType>{"HapticStatus"},
+    Kind<HapticTelemetry, idl::HapticTelemetry, idl::HapticTelemetryPubSubType>{"HapticTelemetry"},
+    Kind<HapticCommand, idl::HapticCommand, idl::HapticCommandPubSubType>{"HapticCommand"},
+    Kind<HapticCommandReply, idl::HapticCommandReply, idl::HapticCommandReplyPubSubType>{
+        "HapticCommandReply"},
+    Kind<SimStatus, idl::SimStatus, idl::SimStatusPubSubType>{"SimStatus"},
+};
+
+TEST(SchemaVersion, EveryMessageCarriesItAndEveryConversionRefusesAnother) {
+    int kinds = 0;
+    std::apply(
+        [&](auto... kind) {
+            (
+                [&] {
+                    using K = decltype(kind);
+                    ++kinds;
+                    typename K::twin sent{};
+                    EXPECT_EQ(sent.header.schema_version, kSchemaVersion) << kind.name;
+                    typename K::idl_type wire = toIdl(sent);
+                    EXPECT_EQ(wire.header().schema_version(), kSchemaVersion) << kind.name;
+                    typename K::twin received{};
+                    received.header.schema_version = 0;
+                    EXPECT_TRUE(fromIdl(wire, received).ok()) << kind.name;
+                    EXPECT_EQ(received.header.schema_version, kSchemaVersion) << kind.name;
+
+                    for (const std::uint16_t other :
+                         {std::uint16_t{0}, static_cast<std::uint16_t>(kSchemaVersion + 1)}) {
+                        wire.header().schema_version(other);
+                        const ConversionResult result = fromIdl(wire, received);
+                        EXPECT_EQ(result.error,
+                                  std::string(kind.name) +
+                                      ".header.schema_version: " + std::to_string(other) +
+                                      ", this build reads " + std::to_string(kSchemaVersion) +
+                                      " (the sender is from another release; hapticd, handsim, "
+                                      "hapticemu and hapticctl must come from one)");
+                    }
+                }(),
+                ...);
+        },
+        kKinds);
+    EXPECT_EQ(kinds, static_cast<int>(std::tuple_size_v<decltype(kShmMessageTypes)>));
+}
+
+// FNV-1a over each message's twin size and alignment and its IDL type's largest CDR size.
+std::uint64_t layoutFingerprint() {
+    std::uint64_t hash = 14695981039346656037ULL;
+    const auto mix = [&](std::uint64_t value) {
+        for (int byte = 0; byte < 8; ++byte) {
+            hash ^= (value >> (8 * byte)) & 0xFF;
+            hash *= 1099511628211ULL;
+        }
+    };
+    std::apply(
+        [&](auto... kind) {
+            (
+                [&] {
+                    using K = decltype(kind);
+                    typename K::pub_sub support;
+                    mix(sizeof(typename K::twin));
+                    mix(alignof(typename K::twin));
+                    mix(support.m_typeSize);
+                }(),
+                ...);
+        },
+        kKinds);
+    return hash;
+}
+
+TEST(SchemaVersion, TheRecordedLayoutIsTheBuiltOne) {
+    // What kSchemaVersion 1 stands for. A change to a message (a field added, removed or
+    // resized, a capacity) changes this: then raise msgs::kSchemaVersion (messages.hpp) and
+    // record both here. A reorder of fields of one size escapes it: raise the version then too.
+    constexpr std::uint16_t kRecordedVersion = 1;
+    constexpr std::uint64_t kRecordedFingerprint = 0xe60ee61972022600;
+    EXPECT_EQ(kSchemaVersion, kRecordedVersion);
+    EXPECT_EQ(layoutFingerprint(), kRecordedFingerprint)
+        << "a message's layout changed: raise msgs::kSchemaVersion and record the new "
+           "fingerprint 0x"
+        << std::hex << layoutFingerprint();
+}
+
+}  // namespace
+}  // namespace haptic::msgs
