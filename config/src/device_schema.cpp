@@ -40,7 +40,21 @@ std::string readInterface(MapReader& can) {
 
 CanConfig readCan(MapReader can) {
     CanConfig out;
-    out.interface = readInterface(can);
+    out.transport = can.optional("transport", CanTransport::kSocketCan, spec::Enum<CanTransport>{});
+    // Each transport's own keys name its bus; the other's would be read and then do nothing.
+    if (out.transport == CanTransport::kSocketCan) {
+        out.interface = readInterface(can);
+        out.fd = can.optional("fd", false, spec::Boolean{});
+    } else {
+        for (const char* key : {"interface", "fd"}) {
+            if (const auto field = can.take(key)) {
+                field->fail(
+                    "can.transport: socketcan with this key (a UDP bus is named by "
+                    "can.udp_port)",
+                    "can.transport: udp");
+            }
+        }
+    }
 
     // The bit rate is the interface's (ip link, or systemd-networkd's [CAN] BitRate=): hapticd
     // neither sets nor can check it, so a key here would only look like a setting.
@@ -50,7 +64,6 @@ CanConfig readCan(MapReader can) {
             "<interface> type can bitrate ..., or systemd-networkd's [CAN] BitRate=), remove "
             "the key");
     }
-    out.fd = can.optional("fd", false, spec::Boolean{});
 
     // 11-bit standard ids; each must be distinct or frames of one kind would be parsed as
     // another.
@@ -76,7 +89,6 @@ CanConfig readCan(MapReader can) {
     // because past that the device is no longer watching for its host.
     out.command_timeout_ms = can.required("command_timeout_ms", spec::Integer<int>::closed(2, 100));
 
-    out.transport = can.optional("transport", CanTransport::kSocketCan, spec::Enum<CanTransport>{});
     const auto udp_port = can.take("udp_port");
     const auto udp_slots = can.take("udp_slots");
     if (out.transport != CanTransport::kUdp) {

@@ -304,11 +304,15 @@ int main(int argc, char** argv) {
         if (interface.empty()) {
             interface = first.can.interface;
         }
+        if (bus_kind == "socketcan" && interface.empty()) {
+            throw std::runtime_error("--bus socketcan: " + first.source.string() +
+                                     " names no can.interface (its can.transport is udp); "
+                                     "give --interface");
+        }
         std::vector<std::uint32_t> command_ids;
         for (const EmulatedDevice& device : devices) {
             const auto& can = device.config.can;
-            if (user_path.empty() &&
-                (can.udp_port != first.can.udp_port || can.interface != first.can.interface)) {
+            if (user_path.empty() && can.bus() != first.can.bus()) {
                 throw std::runtime_error("device '" + device.config.name +
                                          "' is on another bus than '" + first.name +
                                          "'; one hapticemu emulates one bus");

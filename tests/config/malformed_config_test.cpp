@@ -369,6 +369,20 @@ TEST(ConfigOutOfRange, UdpPortWithoutUdpTransport) {
                  "expected can.transport: udp with this key"});
 }
 
+// The SocketCAN keys with a UDP bus would be read and do nothing: refused, like udp_port on
+// SocketCAN.
+TEST(ConfigOutOfRange, SocketCanKeysWithUdpTransport) {
+    for (const auto& [name, key] : {std::pair{"interface_with_udp_transport.yaml", "interface"},
+                                    std::pair{"fd_with_udp_transport.yaml", "fd"}}) {
+        const auto file = kDataDir / "devices" / name;
+        expectError(deviceError(name),
+                    {file.string(), lineOf(file, std::string(key) + ":"),
+                     static_cast<int>(std::string(key).size()) + 5, "can." + std::string(key),
+                     "expected can.transport: socketcan with this key (a UDP bus is named by "
+                     "can.udp_port), got can.transport: udp"});
+    }
+}
+
 TEST(ConfigOutOfRange, UdpPortBlockPastLastPort) {
     const auto file = kDataDir / "devices/udp_port_block_past_65535.yaml";
     expectError(deviceError("udp_port_block_past_65535.yaml"),
@@ -588,12 +602,12 @@ TEST(ConfigReferences, CanIdsSharedAcrossDevicesOnOneBus) {
                  "(devices[0]), got 'exo_two' also using 0x101"});
 }
 
-// hapticd opens one bus per UDP port block (openBuses), whatever `interface` a UDP device
-// names: two devices there with the same ids would each take the other's frames.
-TEST(ConfigReferences, CanIdsSharedOnOneUdpBusWhateverTheInterfacesSay) {
+// hapticd opens one bus per UDP port block (openBuses): two devices there with the same ids
+// would each take the other's frames.
+TEST(ConfigReferences, CanIdsSharedOnOneUdpBus) {
     const auto file = kDataDir / "duplicate_device_ids_on_one_udp_bus.yaml";
     expectError(daemonError("duplicate_device_ids_on_one_udp_bus.yaml"),
-                {file.string(), lineOf(file, "exo_two_udp_named_can1"), 5, "devices[1]",
+                {file.string(), lineOf(file, "exo_two_udp.yaml"), 5, "devices[1]",
                  "expected a device whose CAN ids on UDP port 47100 differ from those of 'exo' "
                  "(devices[0]), got 'exo_two' also using 0x101"});
 }

@@ -62,9 +62,10 @@ struct EnumTraits<CanTransport> {
 // YAML: can: {...}. Ids are 11-bit standard ids, pairwise distinct within a device; the
 // daemon and sim loaders also reject two devices on one bus (bus()) sharing an id.
 struct CanConfig {
-    std::string interface;  // SocketCAN interface name (1-15 chars), e.g. "can0"
-    // Optional keys transport (default socketcan), udp_port and udp_slots (only with
-    // transport: udp; defaults 47000 and 8; hapticemu -d <file> joins the same block).
+    // Optional key transport (default socketcan). With socketcan: interface (required) and fd;
+    // with udp: udp_port and udp_slots (defaults 47000 and 8; hapticemu -d <file> joins the
+    // same block). Each transport refuses the other's keys.
+    std::string interface;  // SocketCAN interface name (1-15 chars), e.g. "can0"; empty on UDP
     CanTransport transport{CanTransport::kSocketCan};
     std::uint16_t udp_port{47000};  // first port of the UDP bus's port block
     std::uint16_t udp_slots{8};     // parties on the UDP bus (2..32)
@@ -81,8 +82,7 @@ struct CanConfig {
     int command_timeout_ms{0};
 
     // The bus the device is on, as hapticd opens it: one per SocketCAN interface, one per UDP
-    // port block (whatever `interface` a UDP device names). Devices with the same bus share it
-    // and must not share a CAN id.
+    // port block. Devices with the same bus share it and must not share a CAN id.
     [[nodiscard]] std::string bus() const {
         return transport == CanTransport::kUdp ? "UDP port " + std::to_string(udp_port)
                                                : "SocketCAN " + interface;
