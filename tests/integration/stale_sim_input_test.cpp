@@ -104,5 +104,24 @@ TEST_F(StaleSimInputTest, AReplayedOrDelayedMessageIsRefusedSoTheForceFadesAsIfT
     EXPECT_TRUE(pushesWithin(1s)) << "fresh input did not bring the force back";
 }
 
+// loop.sim_timeout_ms at 150 ms (shipped 20): the force outlasts the replay's start by at
+// least the fade's start, 3/4 of the timeout, less the last fresh message's lead (up to one
+// injector period and its stdin poll), and still goes within the timeout's bound. With the
+// shipped value it went in 15-19 ms here (the test above prints it), with 150 ms in 148-150.
+class LongSimTimeoutTest : public StaleSimInputTest {
+  protected:
+    LongSimTimeoutTest() {
+        replaceLine(config_.dir / "daemon.yaml", "sim_timeout_ms: 20 ", "sim_timeout_ms: 150 ");
+        sim_timeout_ms_ = 150;
+    }
+};
+
+TEST_F(LongSimTimeoutTest, TheForceOutlastsARefusedInputForThreeQuartersOfTheTimeout) {
+    const double gone_ms = expectForceGoneAfter("replay");
+    EXPECT_GE(gone_ms, 0.75 * sim_timeout_ms_ - static_cast<double>(kInjectorLagNs) * 1e-6);
+    ASSERT_TRUE(injector_->sendCommand("fresh"));
+    EXPECT_TRUE(pushesWithin(1s)) << "fresh input did not bring the force back";
+}
+
 }  // namespace
 }  // namespace haptic::testing
