@@ -95,8 +95,25 @@ TEST(ExoskeletonDriver, ForceFollowsTheCommandThroughTheActuatorLag) {
     EXPECT_EQ(driver.codec().rejects().total(), 0U);
 }
 
-TEST(ExoskeletonDriver, DetectsAStoppedHeartbeatAtTheConfiguredTimeout) {
-    const auto device = exoskeletonDevice();
+// The link's and the device's timeouts are the device file's can.heartbeat_timeout_ms,
+// state_timeout_ms and command_timeout_ms: each test below runs with the shipped values (50,
+// 10 and 10 ms) and with others (80, 25 and 20 ms).
+config::DeviceConfig exoskeletonWithTimeouts(bool shipped) {
+    auto device = exoskeletonDevice();
+    if (!shipped) {
+        device.can.heartbeat_timeout_ms = 80;
+        device.can.state_timeout_ms = 25;
+        device.can.command_timeout_ms = 20;
+    }
+    return device;
+}
+
+class ExoskeletonDriverTimeouts : public ::testing::TestWithParam<bool> {};
+INSTANTIATE_TEST_SUITE_P(DeviceFile, ExoskeletonDriverTimeouts, ::testing::Values(true, false),
+                         [](const auto& info) { return info.param ? "Shipped" : "Changed"; });
+
+TEST_P(ExoskeletonDriverTimeouts, DetectsAStoppedHeartbeatAtTheConfiguredTimeout) {
+    const auto device = exoskeletonWithTimeouts(GetParam());
     Rig rig(device, emu::EmulatorMode::kLockstep);
     ExoskeletonDriver driver(device, rig.host);
     for (int i = 0; i < 20; ++i) {
@@ -119,8 +136,8 @@ TEST(ExoskeletonDriver, DetectsAStoppedHeartbeatAtTheConfiguredTimeout) {
     EXPECT_EQ(driver.link().heartbeatLossCount(), 1U);
 }
 
-TEST(ExoskeletonDriver, DetectsStaleStateWhenTheDeviceStopsAnswering) {
-    const auto device = exoskeletonDevice();
+TEST_P(ExoskeletonDriverTimeouts, DetectsStaleStateWhenTheDeviceStopsAnswering) {
+    const auto device = exoskeletonWithTimeouts(GetParam());
     Rig rig(device, emu::EmulatorMode::kLockstep);
     ExoskeletonDriver driver(device, rig.host);
     tick(rig, driver, 0.0);
@@ -140,8 +157,8 @@ TEST(ExoskeletonDriver, DetectsStaleStateWhenTheDeviceStopsAnswering) {
 // The device's own watchdog, as the real device runs it: stream mode (model on the clock,
 // state every tick). Silence past can.command_timeout_ms disables it at 0 N with fault 4; a
 // host that resumes with force is ignored until it commands the safe state.
-TEST(ExoskeletonDriver, CommandTimeoutDisablesTheDeviceUntilADisableAcknowledgesIt) {
-    const auto device = exoskeletonDevice();
+TEST_P(ExoskeletonDriverTimeouts, CommandTimeoutDisablesTheDeviceUntilADisableAcknowledgesIt) {
+    const auto device = exoskeletonWithTimeouts(GetParam());
     Rig rig(device, emu::EmulatorMode::kStream);
     ExoskeletonDriver driver(device, rig.host);
     for (int i = 0; i < 50; ++i) {

@@ -120,28 +120,35 @@ double deepestPhalanxSample(const Eigen::Vector3d& centre, const Eigen::Vector3d
 
 TEST(UserPad, ALevelPlateIndentsThePadByItsHeightPastFirstContact) {
     const auto thimble = shippedThimble();
-    const auto pad = shippedPad();
-    UserPad user_pad(thimble, pad, 0.0);
-    // The pad's outermost point: the phalanx's centre 12 mm from the device origin
-    // (T_finger_device) plus the fingertip's 8 mm radius.
-    const double first_contact = user_pad.firstContactHeightM();
-    EXPECT_NEAR(first_contact, 0.020, 1e-12);
-    for (const double depth : {0.0005, 0.001, 0.002, 0.0035}) {
-        const auto plate = plateAt(thimble, first_contact - depth, 0.0, 0.0);
-        ASSERT_TRUE(plate.ok());
-        const FeltPadContact felt = user_pad.feel(plate.servo_rad);
-        ASSERT_TRUE(felt.pose_known);
-        EXPECT_NEAR(felt.indentation_m, depth, 1e-9);
-        // Hertz: F = 4/3 E* sqrt(R) delta^1.5, straight into the finger (-z), on the axis.
-        const double hertz =
-            4.0 / 3.0 * pad.effective_modulus_pa * std::sqrt(pad.radius_m) * std::pow(depth, 1.5);
-        EXPECT_NEAR(felt.force_device_n.z(), -hertz, 1e-9);
-        EXPECT_NEAR(felt.force_device_n.head<2>().norm(), 0.0, 1e-9);
-        EXPECT_NEAR(felt.moment_device_nm.norm(), 0.0, 1e-9);
+    // The shipped pad, and user.yaml's pad.radius_m and pad.effective_modulus_pa changed.
+    auto other = shippedPad();
+    other.radius_m = 0.010;
+    other.effective_modulus_pa = 2.0 * other.effective_modulus_pa;
+    for (const auto& pad : {shippedPad(), other}) {
+        UserPad user_pad(thimble, pad, 0.0);
+        // The pad's outermost point: the phalanx's centre 12 mm from the device origin
+        // (T_finger_device) plus the fingertip's radius.
+        const double first_contact = user_pad.firstContactHeightM();
+        EXPECT_NEAR(first_contact, 0.012 + pad.radius_m, 1e-12);
+        for (const double depth : {0.0005, 0.001, 0.002, 0.0035}) {
+            const auto plate = plateAt(thimble, first_contact - depth, 0.0, 0.0);
+            ASSERT_TRUE(plate.ok());
+            const FeltPadContact felt = user_pad.feel(plate.servo_rad);
+            ASSERT_TRUE(felt.pose_known);
+            EXPECT_NEAR(felt.indentation_m, depth, 1e-9);
+            // Hertz: F = 4/3 E* sqrt(R) delta^1.5, straight into the finger (-z), on the axis.
+            const double hertz = 4.0 / 3.0 * pad.effective_modulus_pa * std::sqrt(pad.radius_m) *
+                                 std::pow(depth, 1.5);
+            EXPECT_NEAR(felt.force_device_n.z(), -hertz, 1e-9);
+            EXPECT_NEAR(felt.force_device_n.head<2>().norm(), 0.0, 1e-9);
+            EXPECT_NEAR(felt.moment_device_nm.norm(), 0.0, 1e-9);
+        }
     }
-    // The shipped pad: about 0.24 N at 1 mm, 0.67 N at 2 mm (E* 62.7 kPa, R 8 mm).
-    EXPECT_NEAR(user_pad.forceAt(0.001), 0.236, 0.002);
-    EXPECT_NEAR(user_pad.forceAt(0.002), 0.669, 0.002);
+    // The shipped pad: about 0.24 N at 1 mm, 0.67 N at 2 mm (E* 62.7 kPa, R 8 mm); the other,
+    // twice as stiff and 10 mm round: 0.24 x 2 x sqrt(10 / 8).
+    EXPECT_NEAR(UserPad(thimble, shippedPad(), 0.0).forceAt(0.001), 0.236, 0.002);
+    EXPECT_NEAR(UserPad(thimble, shippedPad(), 0.0).forceAt(0.002), 0.669, 0.002);
+    EXPECT_NEAR(UserPad(thimble, other, 0.0).forceAt(0.001), 0.236 * 2.0 * std::sqrt(1.25), 0.005);
 }
 
 TEST(UserPad, ATiltedPlateIndentsAsDeepAsTheSphereReachesPastIt) {

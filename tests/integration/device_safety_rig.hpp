@@ -151,7 +151,7 @@ class DeviceSafetyTest : public ::testing::Test {
             return;
         }
         exo_emu_ = startEmulator("devices/exoskeleton.yaml", exo_emulator_args_);
-        thimble_emu_ = startEmulator("devices/thimble.yaml");
+        thimble_emu_ = startEmulator("devices/thimble.yaml", thimble_emulator_args_);
         startDaemon();
         participant_ = std::make_unique<ipc::DdsParticipant>(
             ipc::DdsSettings{static_cast<std::uint32_t>(std::stoi(domain())),
@@ -311,6 +311,7 @@ class DeviceSafetyTest : public ::testing::Test {
     bool daemon_realtime_from_config_{false};
     // More arguments for the exoskeleton's hapticemu (a fixture's constructor sets them).
     std::vector<std::string> exo_emulator_args_;
+    std::vector<std::string> thimble_emulator_args_;
     // What goes before RouDi's, hapticd's and handsim's commands (a fixture's constructor sets
     // them; for example setpriv, to run one as another user).
     std::vector<std::string> roudi_launcher_;

@@ -649,5 +649,62 @@ TEST_F(EstopRelayTest, APressedOrSilentRelayStopsTheDevicesAndOnlyAnOperatorReAr
     ASSERT_TRUE(command("clear"));
 }
 
+// estop_relay.bus_device, status_id and timeout_ms changed from the shipped exo, 0x0E0 and
+// 30 ms: the relay on the thimble's bus (its hapticemu emulates it; the two devices are on
+// separate UDP blocks here), at 0x0E1, with a longer timeout. Its press stops both devices and
+// names it; its silence is a press only after the longer timeout.
+class EstopRelayOnTheThimblesBusTest : public EstopRelayTest {
+  protected:
+    static constexpr int kLongTimeoutMs = kRelayTimeoutMs + 120;
+    EstopRelayOnTheThimblesBusTest() {
+        replaceLine(config_.dir / "daemon.yaml", "bus_device: exo ", "bus_device: thimble ");
+        replaceLine(config_.dir / "daemon.yaml", "status_id: 0x0E0 ", "status_id: 0x0E1 ");
+        replaceLine(config_.dir / "daemon.yaml",
+                    "timeout_ms: " + std::to_string(kRelayTimeoutMs) + " ",
+                    "timeout_ms: " + std::to_string(kLongTimeoutMs) + " ");
+        exo_emulator_args_.clear();
+        thimble_emulator_args_ = {"--estop-relay", "0x0E1"};
+    }
+};
+
+TEST_F(EstopRelayOnTheThimblesBusTest, TheRelayIsHeardWhereAndAsTheKeysSay) {
+    renderUntilTheExoskeletonPushes();
+    ASSERT_TRUE(thimble_emu_->sendCommand("estop press"));
+    auto status = waitForStatus("E-STOP", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kEstop && !s.faults.empty();
+    });
+    ASSERT_EQ(status.faults.size(), 1U) << faultsOf(status);
+    EXPECT_EQ(status.faults[0].code, daemon::kFaultEstopPressed);
+    EXPECT_THAT(std::string(status.faults[0].message.view()),
+                ::testing::HasSubstr("0x0e1 on thimble's bus"));
+    ASSERT_TRUE(thimble_emu_->sendCommand("estop release"));
+    std::this_thread::sleep_for(50ms);
+    ASSERT_TRUE(command("clear"));
+    ASSERT_TRUE(command("enable"));
+    ASSERT_TRUE(heardEnabledWithin(20s))
+        << "the exoskeleton did not come back after clear and enable";
+
+    // Silent: limp no sooner than the timeout after the relay's last status (sent at most one
+    // 10 ms period before the silence), and within it and two ticks.
+    const std::int64_t silence_ns = monotonicNs();
+    ASSERT_TRUE(thimble_emu_->sendCommand("estop silence"));
+    const auto limp_ns = limpAfter(silence_ns, 1500ms);
+    ASSERT_TRUE(limp_ns.has_value()) << "the exoskeleton never went limp after the silence";
+    std::printf(
+        "E-stop relay on the thimble's bus silent: exoskeleton limp after %.2f ms "
+        "(timeout %d ms)\n",
+        static_cast<double>(*limp_ns) * 1e-6, kLongTimeoutMs);
+    EXPECT_GE(*limp_ns, (kLongTimeoutMs - 12) * kTickNs);
+    EXPECT_LE(*limp_ns, kLongTimeoutMs * kTickNs + 2 * kTickNs + kEstopSlackNs);
+    status = waitForStatus("E-STOP from the silent relay", [](const msgs::HapticStatus& s) {
+        return s.state == msgs::DaemonState::kEstop && !s.faults.empty();
+    });
+    ASSERT_EQ(status.faults.size(), 1U) << faultsOf(status);
+    EXPECT_EQ(status.faults[0].code, daemon::kFaultEstopRelaySilent);
+    ASSERT_TRUE(thimble_emu_->sendCommand("estop resume"));
+    std::this_thread::sleep_for(50ms);
+    ASSERT_TRUE(command("clear"));
+}
+
 }  // namespace
 }  // namespace haptic::testing

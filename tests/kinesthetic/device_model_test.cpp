@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include "haptic/config/device.hpp"
 
@@ -60,14 +62,58 @@ TEST(ExoskeletonDevice, StrokeGrowsWithFlexionAcrossTheShippedJointLimits) {
     EXPECT_TRUE(sut.isUnderactuated());
 }
 
+// finger.phalanx_lengths_m, shipped and with a longer middle phalanx.
 TEST(ExoskeletonDevice, StraightFingerTipIsTheSumOfThePhalanges) {
-    const auto exo = shippedExoskeleton();
-    const ExoskeletonDevice sut(exo);
-    PointVector x;
-    sut.contactPoint(pose(0.0, 0.0, 0.0), x);
-    const auto& lengths = exo.finger.phalanx_lengths_m;
-    EXPECT_NEAR(x[0], lengths[0] + lengths[1] + lengths[2], 1e-15);
-    EXPECT_NEAR(x[1], 0.0, 1e-15);
+    auto longer = shippedExoskeleton();
+    longer.finger.phalanx_lengths_m[1] += 0.005;
+    for (const auto& exo : {shippedExoskeleton(), longer}) {
+        const ExoskeletonDevice sut(exo);
+        PointVector x;
+        sut.contactPoint(pose(0.0, 0.0, 0.0), x);
+        const auto& lengths = exo.finger.phalanx_lengths_m;
+        EXPECT_NEAR(x[0], lengths[0] + lengths[1] + lengths[2], 1e-15);
+        EXPECT_NEAR(x[1], 0.0, 1e-15);
+    }
+}
+
+// The stroke of a planar rod from the actuator's base pivot to the attachment on the proximal
+// phalanx, turned with it, plus the distal couplings; built with Eigen's rotation, not the
+// device model's own lever.
+double strokeByGeometry(const config::LinkageConfig& linkage, const ConfigVector& q) {
+    const Eigen::Vector2d attachment =
+        Eigen::Rotation2Dd(q[0]) *
+        Eigen::Vector2d(linkage.proximal_attachment_m[0], linkage.proximal_attachment_m[1]);
+    const Eigen::Vector2d base(linkage.actuator_base_m[0], linkage.actuator_base_m[1]);
+    return (attachment - base).norm() - linkage.rod_length_m +
+           linkage.distal_coupling_m_per_rad[0] * q[1] +
+           linkage.distal_coupling_m_per_rad[1] * q[2];
+}
+
+// Every linkage key, changed alone: the device model's stroke follows the geometry's.
+TEST(ExoskeletonDevice, EachLinkageKeyMovesTheStrokeAsTheGeometrySays) {
+    const auto shipped = shippedExoskeleton();
+    std::vector<config::ExoskeletonConfig> variants(5, shipped);
+    variants[0].linkage.actuator_base_m[0] -= 0.004;
+    variants[1].linkage.proximal_attachment_m[1] += 0.003;
+    variants[2].linkage.rod_length_m += 0.001;
+    variants[3].linkage.distal_coupling_m_per_rad[0] *= 2.0;
+    variants[4].linkage.distal_coupling_m_per_rad[1] *= 2.0;
+    for (const ConfigVector& q : {pose(0.0, 0.0, 0.0), pose(0.7, 0.4, 0.2), pose(1.2, 1.5, 1.0)}) {
+        ActuatorVector stroke_shipped;
+        ExoskeletonDevice(shipped).actuatorCoordinates(q, stroke_shipped);
+        EXPECT_NEAR(stroke_shipped[0], strokeByGeometry(shipped.linkage, q), 1e-12);
+        for (std::size_t v = 0; v < variants.size(); ++v) {
+            ActuatorVector stroke;
+            ExoskeletonDevice(variants[v]).actuatorCoordinates(q, stroke);
+            EXPECT_NEAR(stroke[0], strokeByGeometry(variants[v].linkage, q), 1e-12) << v;
+            if (v == 2) {
+                EXPECT_NEAR(stroke[0] - stroke_shipped[0], -0.001, 1e-12) << "a longer rod";
+            }
+            if (v == 0 || v == 1 || q[1] + q[2] > 0.0) {
+                EXPECT_GT(std::abs(stroke[0] - stroke_shipped[0]), 1e-5) << v;
+            }
+        }
+    }
 }
 
 TEST(ExoskeletonDevice, RejectsNonPositivePhalanx) {

@@ -117,6 +117,16 @@ class TopicSourceTest : public ::testing::Test {
         for (const auto& filter : filters) {
             sources.push_back(makeTrackingSource(scene_, sim_, participant_, filter));
         }
+        std::vector<std::int64_t> stamps_ns;
+        for (int i = 0; i < 90; ++i) {
+            stamps_ns.push_back(1'000'000'000 + i * kTrackerPeriodNs);
+        }
+        return run(sources, stamps_ns, 10);
+    }
+
+    // Samples stamped `stamps_ns`, the step from sample `step_at` on, through each source.
+    std::vector<Response> run(const std::vector<std::unique_ptr<TrackingSource>>& sources,
+                              const std::vector<std::int64_t>& stamps_ns, std::size_t step_at) {
         const auto deadline = std::chrono::steady_clock::now() + 20s;
         while (writer_.matchedReaders() < static_cast<int>(sources.size()) &&
                std::chrono::steady_clock::now() < deadline) {
@@ -124,10 +134,9 @@ class TopicSourceTest : public ::testing::Test {
         }
         EXPECT_EQ(writer_.matchedReaders(), static_cast<int>(sources.size()));
         std::vector<Response> responses(sources.size());
-        constexpr std::int64_t kPeriodNs = 11'111'111;
-        for (int i = 0; i < 90; ++i) {
+        for (std::size_t i = 0; i < stamps_ns.size(); ++i) {
             softhand::HandPoseInput pose = rest_;
-            if (i >= 10) {
+            if (i >= step_at) {
                 pose.wrist.position_m.x() += 0.01;
                 for (double& angle : pose.flexion_rad) {
                     angle += 0.2;
@@ -135,7 +144,7 @@ class TopicSourceTest : public ::testing::Test {
             }
             msgs::HandPose message = softhand::toMessage(pose);
             message.header.seq = static_cast<std::uint64_t>(i + 1);
-            message.header.stamp_ns = 1'000'000'000 + i * kPeriodNs;
+            message.header.stamp_ns = stamps_ns[i];
             message.header.source_id.assign("tracking_source_test");
             message.confidence = 1.0;
             EXPECT_TRUE(writer_.write(msgs::toIdl(message)));
@@ -162,6 +171,7 @@ class TopicSourceTest : public ::testing::Test {
         return responses;
     }
 
+    static constexpr std::int64_t kTrackerPeriodNs = 11'111'111;
     config::SceneConfig scene_;
     softhand::SceneSimulation sim_;
     ipc::DdsParticipant participant_;
@@ -211,6 +221,32 @@ TEST_F(TopicSourceTest, EachTrackingFilterKeyShapesTheStepResponse) {
     // Without angle_beta_s_per_rad the angles pass unfiltered; the wrist is filtered as before.
     EXPECT_NEAR(responses[5].angle_rad[10], 0.2, 1e-12);
     EXPECT_NEAR(responses[5].wrist_x_m[12], filtered.wrist_x_m[12], 1e-12);
+}
+
+// tracking.timeout_ms (default 100): a gap in the tracker's samples longer than it restarts
+// the filter at the next sample (it passes as it comes); a shorter one is filtered across.
+TEST_F(TopicSourceTest, AGapLongerThanTheTrackingTimeoutRestartsTheFilter) {
+    const auto filter = config::loadSimConfig(kConfigDir + "/sim.yaml").tracking_filter;
+    ASSERT_TRUE(filter.has_value());
+    ASSERT_EQ(scene_.tracking.timeout_ms, 100);
+    auto longer = scene_;
+    longer.tracking.timeout_ms = 300;
+    std::vector<std::unique_ptr<TrackingSource>> sources;
+    sources.push_back(makeTrackingSource(scene_, sim_, participant_, filter));
+    sources.push_back(makeTrackingSource(longer, sim_, participant_, filter));
+    std::vector<std::int64_t> stamps_ns;
+    for (int i = 0; i < 5; ++i) {
+        stamps_ns.push_back(1'000'000'000 + i * kTrackerPeriodNs);
+    }
+    stamps_ns.push_back(stamps_ns.back() + 150'000'000);  // 150 ms without a sample
+    const auto responses = run(sources, stamps_ns, 5);
+    ASSERT_EQ(responses.size(), 2U);
+    ASSERT_EQ(responses[0].wrist_x_m.size(), 6U);
+    ASSERT_EQ(responses[1].wrist_x_m.size(), 6U);
+    EXPECT_NEAR(responses[0].wrist_x_m[5], 0.01, 1e-12) << "restarted: the sample as it came";
+    EXPECT_NEAR(responses[0].angle_rad[5], 0.2, 1e-12);
+    EXPECT_LT(responses[1].wrist_x_m[5], 0.009) << "filtered across a gap within the timeout";
+    EXPECT_GT(responses[1].wrist_x_m[5], 0.0);
 }
 
 }  // namespace

@@ -204,6 +204,26 @@ TEST_F(ContactOptimiserTest, MoreSamplesThanConfiguredAreRejected) {
     EXPECT_EQ(command.report.outcome, SolveOutcome::kRejectedInput);
 }
 
+// optimiser.pad_samples at 16 (shipped 64), through the mapping hapticd uses: a surface of
+// the shipped size is refused, one of 16 samples is solved.
+TEST_F(ContactOptimiserTest, TheSampleBoundIsTheDeviceFilesPadSamples) {
+    auto sixteen = config;
+    sixteen.optimiser.pad_samples = 16;
+    ContactSurfaceOptimiser bounded(kinematics, OptimiserSettings::fromConfig(sixteen));
+    const msgs::ContactSurface shipped_size = planeSurface(0.0, 0.001);
+    ASSERT_EQ(shipped_size.samples.size(), 64U);
+    EXPECT_EQ(bounded.solve(shipped_size).report.input.error, InputError::kTooManySamples);
+    EXPECT_EQ(sut.solve(shipped_size).report.input.error, InputError::kNone);
+    const HalfSpaceObstacle plane(
+        Eigen::Vector3d(0.0, 0.0, pad.parameters().contact_height_m - 0.001),
+        Eigen::Vector3d(0.0, 0.0, -1.0));
+    const msgs::ContactSurface small = pad.contactSurface(plane, 16, SampleWeighting::kArea);
+    ASSERT_EQ(small.samples.size(), 16U);
+    const auto command = bounded.solve(small);
+    EXPECT_EQ(command.report.input.error, InputError::kNone);
+    EXPECT_EQ(command.report.outcome, SolveOutcome::kMatched);
+}
+
 TEST_F(ContactOptimiserTest, IterationsNeverExceedTheConfiguredBound) {
     // optimiser.max_iterations in the device file, through the mapping hapticd uses.
     auto one_iteration = config;

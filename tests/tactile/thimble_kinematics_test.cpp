@@ -5,7 +5,9 @@
 
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <random>
+#include <vector>
 
 #include "allocation_counter.hpp"
 #include "haptic/config/device.hpp"
@@ -107,6 +109,64 @@ TEST_F(ThimbleKinematicsTest, EverySphericalJointStaysInItsLegPlaneAndLinksKeepT
     }
 }
 
+// geometry.base_radius_m, platform_radius_m, crank_length_m, link_length_m and
+// leg_angles_deg, each changed alone: the legs the inverse kinematics finds close with the
+// changed values (as checked above), the servo angles differ from the shipped device's for the
+// same pose, and the forward kinematics brings the pose back.
+TEST_F(ThimbleKinematicsTest, EachGeometryKeyShapesTheLegs) {
+    const config::ThimbleConfig shipped = sut.config();
+    std::vector<config::ThimbleConfig> variants(5, shipped);
+    variants[0].geometry.base_radius_m *= 1.1;
+    variants[1].geometry.platform_radius_m *= 0.9;
+    variants[2].geometry.crank_length_m *= 1.1;
+    variants[3].geometry.link_length_m *= 1.05;
+    variants[4].geometry.leg_angles_rad[1] += 0.1;
+    for (std::size_t v = 0; v < variants.size(); ++v) {
+        const ThimbleKinematics changed(variants[v]);
+        const auto& g = variants[v].geometry;
+        const double h = changed.centrePose().height_m;
+        int poses = 0;
+        for (const PlatformDofs& dofs :
+             {PlatformDofs{h, 0.0, 0.0}, PlatformDofs{h, 0.1, 0.0}, PlatformDofs{h, 0.0, -0.1}}) {
+            const InverseResult ik = changed.inverse(dofs);
+            if (!ik.ok()) {
+                continue;
+            }
+            ++poses;
+            for (std::size_t i = 0; i < 3; ++i) {
+                const double gamma = g.leg_angles_rad[i];
+                const Eigen::Vector3d e(std::cos(gamma), std::sin(gamma), 0.0);
+                const Eigen::Vector3d joint =
+                    ik.pose.position_m + ik.pose.rotation * (g.platform_radius_m * e);
+                const Eigen::Vector3d elbow =
+                    g.base_radius_m * e +
+                    g.crank_length_m * (std::cos(ik.servo_rad[i]) * e +
+                                        std::sin(ik.servo_rad[i]) * Eigen::Vector3d::UnitZ());
+                EXPECT_NEAR(Eigen::Vector3d::UnitZ().cross(e).dot(joint), 0.0, 1e-12) << v;
+                EXPECT_NEAR((joint - elbow).norm(), g.link_length_m, 1e-12) << v;
+            }
+            // A level plate sits alike over legs placed anywhere on the circle: the placement
+            // shows only when it tilts.
+            const bool level = dofs.tilt_x_rad == 0.0 && dofs.tilt_y_rad == 0.0;
+            const InverseResult as_shipped = sut.inverse(dofs, false);
+            if (as_shipped.ok() && !(v == 4 && level)) {
+                double largest = 0.0;
+                for (std::size_t i = 0; i < 3; ++i) {
+                    largest =
+                        std::max(largest, std::abs(ik.servo_rad[i] - as_shipped.servo_rad[i]));
+                }
+                EXPECT_GT(largest, 1e-3) << "variant " << v;
+            }
+            const ForwardResult fk = changed.forward(ik.servo_rad);
+            ASSERT_TRUE(fk.ok()) << v;
+            EXPECT_NEAR(fk.dofs.height_m, dofs.height_m, 1e-9) << v;
+            EXPECT_NEAR(fk.dofs.tilt_x_rad, dofs.tilt_x_rad, 1e-9) << v;
+            EXPECT_NEAR(fk.dofs.tilt_y_rad, dofs.tilt_y_rad, 1e-9) << v;
+        }
+        EXPECT_GE(poses, 2) << "variant " << v;
+    }
+}
+
 TEST_F(ThimbleKinematicsTest, AnalyticJacobiansMatchCentralDifferences) {
     std::mt19937_64 rng(11);
     constexpr double kStep = 1e-7;  // rad, or m for the height
@@ -187,6 +247,23 @@ TEST_F(ThimbleKinematicsTest, PosesOutsideTheWorkspaceReportWhy) {
               KinematicsError::kNonFinite);
     // Without the workspace check the same reachable-but-forbidden pose still has angles.
     EXPECT_TRUE(sut.inverse({sut.minHeightM() - 1e-4, 0.0, 0.0}, false).ok());
+}
+
+// max_tilt_deg at 10 deg (shipped 30): a tilt the shipped device reaches is refused, and the
+// workspace projection brings it back to 10 deg.
+TEST_F(ThimbleKinematicsTest, TheTiltLimitIsTheDeviceFilesMaxTilt) {
+    const double h = sut.centrePose().height_m;
+    const PlatformDofs tilted{h, 0.2, 0.1};  // 12.8 deg
+    ASSERT_TRUE(sut.inverse(tilted).ok());
+    config::ThimbleConfig ten_degrees = sut.config();
+    ten_degrees.max_tilt_rad = 10.0 * std::numbers::pi / 180.0;
+    const ThimbleKinematics limited(ten_degrees);
+    EXPECT_EQ(limited.inverse(tilted).error, KinematicsError::kTiltLimit);
+    const PlatformDofs projected = limited.projectToWorkspace(tilted);
+    EXPECT_NEAR(std::hypot(projected.tilt_x_rad, projected.tilt_y_rad), ten_degrees.max_tilt_rad,
+                1e-12);
+    EXPECT_NEAR(projected.tilt_x_rad / projected.tilt_y_rad, 2.0, 1e-12) << "same direction";
+    EXPECT_TRUE(limited.inverse(projected).ok());
 }
 
 // spherical_joint_max_deg: a pose whose links lean further from the plate's normal than the
