@@ -213,6 +213,36 @@ TEST(NonlinearSubspace, TheProxyStaysWithinTheActuatorsStroke) {
     EXPECT_TRUE(out.limited);
 }
 
+// actuator.stroke_min_m, the stroke's other end: a contact that needs the rod drawn in is
+// rendered at the minimum stroke; with the minimum raised above the present stroke, nothing is
+// drawn.
+TEST(NonlinearSubspace, TheProxyStaysAboveTheActuatorsMinimumStroke) {
+    const auto config = shippedExoskeleton();
+    const ConfigVector q = pose();
+    const double opposite = kNormalAngle - std::numbers::pi;
+    const msgs::LinearConstraint row = fingertipContact(config, q, 0.2, opposite);
+    RenderOutput out;
+    const double alpha = render(unclampedExoskeleton(), RenderingMethod::kSubspace, row, q, &out);
+    EXPECT_EQ(out.fault, RenderFault::kNone);
+    EXPECT_TRUE(out.limited);
+    const ExoskeletonDevice exo(config);
+    ActuatorVector ell;
+    exo.actuatorCoordinates(q, ell);
+    ActuationMatrix B;
+    exo.actuationMatrix(q, B);
+    ASSERT_LT(alpha, 0.0);
+    EXPECT_NEAR(ell[0] + B.col(0).squaredNorm() * alpha / kTrackingStiffness,
+                config.actuator.stroke_min_m, 1e-12);
+
+    config::ExoskeletonConfig raised = config;
+    raised.actuator.max_force_n = 1e6;
+    raised.actuator.stroke_min_m = ell[0] + 0.001;  // the stroke already 1 mm below its minimum
+    const msgs::LinearConstraint shallow = fingertipContact(config, q, 0.001, opposite);
+    EXPECT_EQ(render(ExoskeletonDevice(raised), RenderingMethod::kSubspace, shallow, q, &out), 0.0);
+    EXPECT_TRUE(out.limited);
+    EXPECT_EQ(out.fault, RenderFault::kNone);
+}
+
 // Two contacts: every contact is checked at the chosen alpha. A clear contact the push drives
 // into, or two contacts that need pushes both ways, are infeasible for one actuator.
 TEST(NonlinearSubspace, AContactThePushDrivesIntoIsReported) {

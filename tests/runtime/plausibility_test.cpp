@@ -138,6 +138,64 @@ TEST(Plausibility, TheForceToleranceKeyDecidesWhatIsImplausible) {
     EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U);
 }
 
+// actuator.lag_time_constant_s is the lag hapticd expects the drive's force to follow its
+// command with. A drive as shipped (5 ms) under a file that says 100 ms: while the force ramps
+// up (the 500 N/s slew limit), what it measures runs ahead of what hapticd expects by far more
+// than the tolerance, and it is judged implausible; the same file with a drive of its own
+// 100 ms is plausible.
+TEST(Plausibility, TheActuatorLagKeyIsTheLagTheForceIsJudgedBy) {
+    const auto slow = [](std::vector<config::DeviceConfig>& devices) {
+        std::get<config::ExoskeletonConfig>(devices[kExo].params).actuator.lag_time_constant_s =
+            0.1;
+    };
+    {
+        RuntimeRig rig(slow);  // hapticd and the drive agree
+        renderWithForce(rig);
+        renderTicks(rig, 300);
+        EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U);
+    }
+    RuntimeRig rig(slow);
+    const auto shipped_drive =
+        config::loadDeviceConfig(std::string(HAPTIC_CONFIG_DIR) + "/devices/exoskeleton.yaml");
+    rig.emulators[kExo] = emu::makeEmulator(shipped_drive, rig.target, emu::EmulatorOptions{});
+    rig.offerContact();
+    rig.ticks(20);
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
+    renderTicks(rig, 400);
+    const std::string message = onlyFault(rig, runtime::kFaultImplausibleFeedback, "exo");
+    EXPECT_THAT(message, HasSubstr("device measures "));
+}
+
+// servos.lag_time_constant_s likewise for the thimble: servos as shipped (30 ms) under a file
+// that says 300 ms leave the angles hapticd expects during the retract's large move.
+TEST(Plausibility, TheServoLagKeyIsTheLagTheAnglesAreJudgedBy) {
+    const auto slow = [](std::vector<config::DeviceConfig>& devices) {
+        std::get<config::ThimbleConfig>(devices[kThimble].params).servos.lag_time_constant_s = 0.3;
+    };
+    const auto renderAndRetract = [](RuntimeRig& rig) {
+        rig.offerContact();
+        rig.ticks(20);
+        ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
+        renderTicks(rig, 800);
+        // Every servo moves now (refused if the rendering already faulted).
+        (void)rig.command(msgs::CommandKind::kDisable);
+        renderTicks(rig, 800);
+    };
+    {
+        RuntimeRig rig(slow);  // hapticd and the servos agree
+        renderAndRetract(rig);
+        EXPECT_EQ(rig.core.stateMachine().faultCount(), 0U);
+        EXPECT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
+    }
+    RuntimeRig rig(slow);
+    const auto shipped_servos =
+        config::loadDeviceConfig(std::string(HAPTIC_CONFIG_DIR) + "/devices/thimble.yaml");
+    rig.emulators[kThimble] = emu::makeEmulator(shipped_servos, rig.target, emu::EmulatorOptions{});
+    renderAndRetract(rig);
+    EXPECT_THAT(onlyFault(rig, runtime::kFaultImplausibleFeedback, "thimble"),
+                HasSubstr(" deg expected for "));
+}
+
 // A device that falls silent is judged by the link monitor, not on its last state.
 TEST(Plausibility, OnlyAFreshContradictionCountsNotAStaleState) {
     RuntimeRig rig;

@@ -55,6 +55,31 @@ TEST(SofthandHandBuilder, FingertipSceneBuildsOnlyTheDistalPhalanx) {
     EXPECT_NEAR(lowest, -0.008, 0.002);
 }
 
+// hand.anthropometry.hand_length_m sets the phalanges' lengths in proportion, and
+// fingertip_diameter_m the pad's reach below the bone.
+TEST(SofthandHandBuilder, TheHandsLengthAndFingertipDiameterSizeTheFinger) {
+    const auto lowestNode = [](const HandModel& model) {
+        double lowest = 0.0;
+        for (int i = 0; i < model.simulation.nodeCount(); ++i) {
+            lowest = std::min(lowest, model.simulation.nodePosition(i).z());
+        }
+        return lowest;
+    };
+    const config::HandConfig shipped = handConfig(config::HandModel::kFingertip, 1);
+    config::HandConfig longer = shipped;
+    longer.anthropometry.hand_length_m = 0.21;
+    config::HandConfig wider = shipped;
+    wider.anthropometry.fingertip_diameter_m = 0.020;
+    const HandModel shipped_model = buildHand(shipped, {});
+    const HandModel longer_model = buildHand(longer, {});
+    const HandModel wider_model = buildHand(wider, {});
+    EXPECT_NEAR(longer_model.bones.front().length_m / shipped_model.bones.front().length_m,
+                0.21 / 0.19, 1e-12);
+    EXPECT_NEAR(lowestNode(wider_model) / lowestNode(shipped_model), 0.020 / 0.016, 0.02);
+    EXPECT_NEAR(lowestNode(longer_model), lowestNode(shipped_model), 1e-4)
+        << "the length does not change the pad's reach";
+}
+
 TEST(SofthandHandBuilder, FingerSceneHasThreeJointedPhalangesOnAKinematicPalm) {
     const HandModel model = buildHand(handConfig(config::HandModel::kFinger, 1), {});
     ASSERT_EQ(model.bones.size(), 4u);

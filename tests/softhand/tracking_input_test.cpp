@@ -264,6 +264,54 @@ TEST(SceneSimulationScripted, PressSlideEdgeForcesRiseAndFallAndOutputsFollow) {
     EXPECT_GE(pressed_constraints, 1U);
 }
 
+// objects[].friction in the scene file: the shipped thimble scene's press and slide over its
+// block (friction 0.5), and the same with 0.2 and 0.9. While the pad slides on the top face
+// the block's shear never exceeds mu times its normal load (Coulomb), and it grows with mu.
+TEST(SceneSimulationScripted, TheObjectsFrictionBoundsTheSlidingPadsShear) {
+    const auto shearOverLoad = [](double mu) {
+        config::SceneConfig scene = config::loadSceneConfig(std::string(HAPTIC_SOURCE_DIR) +
+                                                            "/config/scenes/thimble_only.yaml");
+        config::SceneObject* block = nullptr;
+        for (auto& object : scene.objects) {
+            if (object.name == "block") {
+                block = &object;
+            }
+        }
+        EXPECT_NE(block, nullptr);
+        EXPECT_EQ(block->friction, 0.5);
+        block->friction = mu;
+        SceneSimulation sim(scene, {}, realtimeSceneSettings(scene.solver));
+        const PressSlideEdgeScript script(sim.trackedHand(), scene.hand, *block, true);
+        sim.reset(script.at(0.0));
+        const int collider = sim.coupling().colliderOf(1);
+        const double dt = 1.0 / scene.rate_hz;
+        double shear = 0.0;
+        double load = 0.0;
+        double worst_ratio = 0.0;
+        for (int step = 1; step * dt <= 3.0; ++step) {
+            const double t = step * dt;
+            EXPECT_EQ(sim.setHandPose(script.at(t)), std::nullopt);
+            (void)sim.step(dt);
+            const Vec3 force = sim.model().simulation.forceOnCollider(collider);
+            if (t > 1.5 && force.z() < -0.05) {  // pressed on the top face and sliding
+                shear += force.head<2>().norm();
+                load += -force.z();
+                worst_ratio = std::max(worst_ratio, force.head<2>().norm() / -force.z());
+            }
+        }
+        EXPECT_GT(load, 0.0) << "mu " << mu;
+        EXPECT_LE(worst_ratio, mu * 1.02) << "mu " << mu;
+        return load > 0.0 ? shear / load : 0.0;
+    };
+    const double low = shearOverLoad(0.2);
+    const double shipped = shearOverLoad(0.5);
+    const double high = shearOverLoad(0.9);
+    std::printf("mean shear / load while sliding: %.3f at mu 0.2, %.3f at 0.5, %.3f at 0.9\n", low,
+                shipped, high);
+    EXPECT_LT(low, shipped);
+    EXPECT_LT(shipped, high);
+}
+
 // The shipped whole-hand scene (config/scenes/whole_hand.yaml: five fingers and the palm at
 // resolution 0, 200 Hz) through handsim's real-time limits for the first 3 s of its script:
 // the index presses the block and its pad samples go into the face, and nothing is refused.

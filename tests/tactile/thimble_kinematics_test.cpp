@@ -249,6 +249,27 @@ TEST_F(ThimbleKinematicsTest, PosesOutsideTheWorkspaceReportWhy) {
     EXPECT_TRUE(sut.inverse({sut.minHeightM() - 1e-4, 0.0, 0.0}, false).ok());
 }
 
+// finger_calibration.contact_height_m and max_indentation_m set the lowest plate height: the
+// shipped device reaches a height that half the indentation, or a pad 1 mm further off,
+// refuses.
+TEST_F(ThimbleKinematicsTest, TheLowestPlateIsContactHeightLessMaxIndentation) {
+    const auto& calibration = sut.config().finger_calibration;
+    const double low = sut.minHeightM() + 0.25 * calibration.max_indentation_m;
+    ASSERT_TRUE(sut.inverse({low, 0.0, 0.0}).ok());
+    config::ThimbleConfig half = sut.config();
+    half.finger_calibration.max_indentation_m *= 0.5;
+    const ThimbleKinematics shallower(half);
+    EXPECT_DOUBLE_EQ(shallower.minHeightM(),
+                     calibration.contact_height_m - half.finger_calibration.max_indentation_m);
+    EXPECT_EQ(shallower.inverse({low, 0.0, 0.0}).error, KinematicsError::kIndentationLimit);
+    config::ThimbleConfig further = sut.config();
+    further.finger_calibration.contact_height_m += 0.001;
+    const ThimbleKinematics raised(further);
+    EXPECT_DOUBLE_EQ(raised.minHeightM(), sut.minHeightM() + 0.001);
+    EXPECT_EQ(raised.inverse({sut.minHeightM() + 0.0005, 0.0, 0.0}).error,
+              KinematicsError::kIndentationLimit);
+}
+
 // max_tilt_deg at 10 deg (shipped 30): a tilt the shipped device reaches is refused, and the
 // workspace projection brings it back to 10 deg.
 TEST_F(ThimbleKinematicsTest, TheTiltLimitIsTheDeviceFilesMaxTilt) {
