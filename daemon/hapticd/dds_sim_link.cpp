@@ -126,12 +126,18 @@ void DdsSimLink::drain(Device& device) {
         }
     };
     // Each convertible message is stored at once: a later unconvertible one must not leave a
-    // half-overwritten twin behind to be stored.
+    // half-overwritten twin behind to be stored (one of another schema is stored for its
+    // header, which the RT thread refuses before it reads anything else).
     if (device.descriptor.kind == msgs::DeviceKind::kExoskeleton) {
         while (device.constraint_reader.take(device.idl_constraints)) {
             const auto result = msgs::fromIdl(device.idl_constraints, device.constraints);
             if (!result.ok()) {
                 reject(result.error);
+                // Another release's message goes on all the same, its header alone read: the
+                // RT thread refuses it first, as other_schema, and the status counts it.
+                if (device.constraints.header.schema != msgs::kSchema) {
+                    device.constraint_slot.store(device.constraints);
+                }
                 continue;
             }
             device.received.fetch_add(1, std::memory_order_relaxed);
@@ -142,6 +148,9 @@ void DdsSimLink::drain(Device& device) {
             const auto result = msgs::fromIdl(device.idl_surface, device.surface);
             if (!result.ok()) {
                 reject(result.error);
+                if (device.surface.header.schema != msgs::kSchema) {
+                    device.surface_slot.store(device.surface);
+                }
                 continue;
             }
             device.received.fetch_add(1, std::memory_order_relaxed);

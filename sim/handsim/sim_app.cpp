@@ -36,8 +36,18 @@ struct DeviceLink {
     std::unique_ptr<iox::popo::Subscriber<msgs::DeviceState>> device_states;
     std::uint64_t published{0};
     std::uint64_t states_received{0};
+    std::uint64_t states_refused{0};  // of another schema: hapticd from another release
     std::uint64_t seq{0};
 };
+
+// A DeviceState over iceoryx counts only in this release's layout.
+void countState(DeviceLink& link, const msgs::DeviceState& state) {
+    if (state.header.schema == msgs::kSchema) {
+        ++link.states_received;
+    } else {
+        ++link.states_refused;
+    }
+}
 
 // The devices of sim.yaml as the soft hand sees them: the finger each is bound to in the
 // scene, and what it needs (constraints for an exoskeleton, pad samples for a thimble).
@@ -233,7 +243,7 @@ int runSim(const SimOptions& options) {
                     link.states_received += dds_link->takeDeviceStates(index, dds_state);
                 } else {
                     while (link.device_states->take().and_then(
-                        [&](const auto&) { ++link.states_received; })) {
+                        [&](const auto& state) { countState(link, *state); })) {
                     }
                 }
                 continue;
@@ -269,8 +279,8 @@ int runSim(const SimOptions& options) {
             } else {
                 link.contact_surfaces->loan().and_then(publishLoaned);
             }
-            while (
-                link.device_states->take().and_then([&](const auto&) { ++link.states_received; })) {
+            while (link.device_states->take().and_then(
+                [&](const auto& state) { countState(link, *state); })) {
             }
         }
         ++steps;
@@ -343,6 +353,12 @@ int runSim(const SimOptions& options) {
     for (const auto& link : links) {
         spdlog::info("device '{}': published {} targets, received {} device states",
                      link.device->name, link.published, link.states_received);
+        if (link.states_refused > 0) {
+            spdlog::warn(
+                "device '{}': refused {} device states of another message schema than "
+                "{:#010x} (a hapticd from another release)",
+                link.device->name, link.states_refused, msgs::kSchema);
+        }
     }
     return EXIT_SUCCESS;
 }

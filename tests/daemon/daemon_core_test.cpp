@@ -835,21 +835,33 @@ TEST_F(DaemonCoreTest, RejectsNonFiniteAndWrongDeviceInputAndCountsThem) {
     EXPECT_FALSE(status.sim_link.connected);
 }
 
-// A sim from another release (over iceoryx, its twin in shared memory): the header's schema
-// version is checked first, since in another layout every other field means something else.
-TEST_F(DaemonCoreTest, RefusesInputOfAnotherSchemaVersionFirst) {
-    auto constraints = validConstraintSet("exo_index");
-    constraints.header.schema_version = msgs::kSchemaVersion + 1;
-    constraints.dof = 7;  // what another layout might put here: not the reason given
-    EXPECT_THAT(sut.offerConstraintSet(0, constraints, 0), Eq(InputRejection::kOtherSchema));
+// A sim from another release (over iceoryx, its twin in shared memory; over DDS the link
+// hands such a message on for its header): the header's schema is checked first, since in
+// another layout every other field means something else, and a sim that sends only such
+// messages fades the force out as a silent one.
+TEST_F(DaemonCoreTest, RefusesInputOfAnotherSchemaFirst) {
+    std::int64_t t = 0;
+    for (int i = 0; i < 200; ++i) {  // a sim of this release: full force
+        (void)sut.offerConstraintSet(0, validConstraintSet("exo_index", t), t);
+        t = runTicks(t, 1);
+    }
+    ASSERT_EQ(sut.simFade(0), 1.0);
+    // Then a sim of the release before the field, whose header began with seq (1, 2, ...).
+    for (int i = 0; i < 30; ++i) {
+        auto constraints = validConstraintSet("exo_index", t);
+        constraints.header.schema = static_cast<std::uint32_t>(i + 1);
+        constraints.dof = 7;  // what another layout might put here: not the reason given
+        EXPECT_THAT(sut.offerConstraintSet(0, constraints, t), Eq(InputRejection::kOtherSchema));
+        t = runTicks(t, 1);
+    }
+    EXPECT_THAT(sut.simFade(0), Eq(0.0)) << "the refused input kept the force";
     auto surface = validContactSurface("thimble_index");
-    surface.header.schema_version = 0;
-    EXPECT_THAT(sut.offerContactSurface(1, surface, 0), Eq(InputRejection::kOtherSchema));
-    EXPECT_THAT(sut.rejectedCount(0, InputRejection::kOtherSchema), Eq(1U));
+    surface.header.schema = msgs::kSchema + 1;
+    EXPECT_THAT(sut.offerContactSurface(1, surface, t), Eq(InputRejection::kOtherSchema));
+    EXPECT_THAT(sut.rejectedCount(0, InputRejection::kOtherSchema), Eq(30U));
     EXPECT_THAT(sut.rejectedCount(1, InputRejection::kOtherSchema), Eq(1U));
-    EXPECT_THAT(sut.simFade(0), Eq(0.0));
     EXPECT_EQ(daemon::describe(InputRejection::kOtherSchema),
-              "header.schema_version is not this build's (a sim from another release)");
+              "header.schema is not this build's (a sim from another release)");
     EXPECT_STREQ(msgs::toString(InputRejection::kOtherSchema), "other_schema");
 }
 

@@ -14,6 +14,7 @@
 
 #include "allocation_counter.hpp"
 #include "haptic/daemon/seqlock.hpp"
+#include "haptic/daemon/sim_input_validation.hpp"
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
 
@@ -108,6 +109,27 @@ TEST_F(DdsSimLinkTest, DeliversEachDevicesNewestMessageOnceToTheRtSide) {
     EXPECT_EQ(surface->header.seq, 3U);
     EXPECT_GE(link_.received(0), 1U);
     EXPECT_EQ(link_.received(1), 1U);
+}
+
+// A sim of another release over DDS: its message fits no twin, so the link logs it and counts
+// it unconvertible, but hands it on for its header, which says the other schema; the RT side
+// then refuses it as other_schema, and the status shows it.
+TEST_F(DdsSimLinkTest, AMessageOfAnotherSchemaGoesOnForItsHeaderAlone) {
+    ASSERT_NE(publishAndTake(1), nullptr) << "no ConstraintSet arrived over DDS within 10 s";
+    idl::ConstraintSet other = msgs::toIdl(constraintSet(2));
+    other.header().schema(1);  // the release before the field: its seq read as the schema
+    constraint_writer_.write(other);
+    const msgs::ConstraintSet* taken = nullptr;
+    for (int i = 0; i < 10000 && taken == nullptr; ++i) {
+        taken = link_.takeConstraintSet(0);
+        std::this_thread::sleep_for(1ms);
+    }
+    ASSERT_NE(taken, nullptr);
+    EXPECT_EQ(taken->header.schema, 1U);
+    EXPECT_EQ(taken->header.seq, 2U);
+    EXPECT_EQ(daemon::validate(*taken, "exo", 3), daemon::InputRejection::kOtherSchema);
+    EXPECT_EQ(link_.unconvertible(), 1U);
+    EXPECT_EQ(link_.received(0), 1U) << "counted as received only in this release's schema";
 }
 
 TEST_F(DdsSimLinkTest, RtSideNeitherAllocatesNorBlocks) {

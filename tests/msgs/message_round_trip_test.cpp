@@ -116,9 +116,9 @@ class Filler {
     }
 
     void fill(MessageHeader& h) {
-        // The schema version stays this build's, or the reader refuses the message.
-        (void)measure(2);
-        h.schema_version = kSchemaVersion;
+        // The schema stays this build's, or the reader refuses the message.
+        (void)measure(4);
+        h.schema = kSchema;
         fill(h.seq);
         fill(h.stamp_ns);
         fill(h.source_id);

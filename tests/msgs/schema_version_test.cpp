@@ -1,12 +1,13 @@
-// msgs::kSchemaVersion: every message carries it first, every reader refuses another one, and
-// this file records the layout the version stands for, so a layout change without a new
-// version fails here rather than between two releases in a lab.
+// msgs::kSchema (a mark and kSchemaVersion): every message carries it first, every conversion
+// refuses another one, and this file records the layout the version stands for, so a layout
+// change without a new version fails here rather than between two releases in a lab.
 
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <string>
 #include <tuple>
+#include <utility>
 
 #include "ConstraintSetPubSubTypes.h"
 #include "ContactSurfacePubSubTypes.h"
@@ -52,24 +53,29 @@ TEST(SchemaVersion, EveryMessageCarriesItAndEveryConversionRefusesAnother) {
                     using K = decltype(kind);
                     ++kinds;
                     typename K::twin sent{};
-                    EXPECT_EQ(sent.header.schema_version, kSchemaVersion) << kind.name;
+                    EXPECT_EQ(sent.header.schema, kSchema) << kind.name;
                     typename K::idl_type wire = toIdl(sent);
-                    EXPECT_EQ(wire.header().schema_version(), kSchemaVersion) << kind.name;
+                    EXPECT_EQ(wire.header().schema(), kSchema) << kind.name;
                     typename K::twin received{};
-                    received.header.schema_version = 0;
+                    received.header.schema = 0;
                     EXPECT_TRUE(fromIdl(wire, received).ok()) << kind.name;
-                    EXPECT_EQ(received.header.schema_version, kSchemaVersion) << kind.name;
+                    EXPECT_EQ(received.header.schema, kSchema) << kind.name;
 
-                    for (const std::uint16_t other :
-                         {std::uint16_t{0}, static_cast<std::uint16_t>(kSchemaVersion + 1)}) {
-                        wire.header().schema_version(other);
+                    // A release before the field (its header began with seq: 1 reads as 1),
+                    // the next version, and the mark alone.
+                    for (const auto& [other, text] : {std::pair{std::uint32_t{1}, "0x00000001"},
+                                                      std::pair{kSchema + 1, "0x48500002"},
+                                                      std::pair{kSchemaMark, "0x48500000"}}) {
+                        wire.header().schema(other);
+                        wire.header().seq(77);
                         const ConversionResult result = fromIdl(wire, received);
                         EXPECT_EQ(result.error,
-                                  std::string(kind.name) +
-                                      ".header.schema_version: " + std::to_string(other) +
-                                      ", this build reads " + std::to_string(kSchemaVersion) +
-                                      " (the sender is from another release; hapticd, handsim, "
-                                      "hapticemu and hapticctl must come from one)");
+                                  std::string(kind.name) + ".header.schema: " + text +
+                                      ", this build reads 0x48500001 (the sender is from another "
+                                      "release; hapticd, handsim, hapticemu and hapticctl must "
+                                      "come from one)");
+                        EXPECT_EQ(received.header.schema, other) << "the header is read";
+                        EXPECT_EQ(received.header.seq, 77U);
                     }
                 }(),
                 ...);
@@ -107,6 +113,8 @@ TEST(SchemaVersion, TheRecordedLayoutIsTheBuiltOne) {
     // What kSchemaVersion 1 stands for. A change to a message (a field added, removed or
     // resized, a capacity) changes this: then raise msgs::kSchemaVersion (messages.hpp) and
     // record both here. A reorder of fields of one size escapes it: raise the version then too.
+    // The IDL's sizes are fastddsgen's: a fastddsgen that sizes the same IDL otherwise changes
+    // it too (the wire then changed, and the version is raised all the same).
     constexpr std::uint16_t kRecordedVersion = 1;
     constexpr std::uint64_t kRecordedFingerprint = 0xe60ee61972022600;
     EXPECT_EQ(kSchemaVersion, kRecordedVersion);

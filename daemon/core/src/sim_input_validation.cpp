@@ -56,7 +56,7 @@ std::string_view describe(InputRejection reason) noexcept {
         case InputRejection::kNegativeWeight:
             return "negative sample weight";
         case InputRejection::kOtherSchema:
-            return "header.schema_version is not this build's (a sim from another release)";
+            return "header.schema is not this build's (a sim from another release)";
         case InputRejection::kCount_:
             break;
     }
@@ -64,6 +64,18 @@ std::string_view describe(InputRejection reason) noexcept {
 }
 
 namespace {
+
+// The schema first: in another release's layout every other field means something else.
+InputRejection validateHeader(const msgs::MessageHeader& header,
+                              std::string_view device_id) noexcept {
+    if (header.schema != msgs::kSchema) {
+        return InputRejection::kOtherSchema;
+    }
+    if (header.source_id.view() != device_id) {
+        return InputRejection::kWrongDevice;
+    }
+    return InputRejection::kNone;
+}
 
 // The contact behind a row (msgs::ContactKinematics): joints within the device's and the
 // array's, every slot finite (unused ones too: a NaN there would make every frame differ
@@ -107,12 +119,9 @@ InputRejection validateContact(const msgs::ContactKinematics& contact, std::uint
 
 InputRejection validate(const msgs::ConstraintSet& message, std::string_view device_id,
                         std::uint16_t joint_count) noexcept {
-    // First: in another release's layout every other field means something else.
-    if (message.header.schema_version != msgs::kSchemaVersion) {
-        return InputRejection::kOtherSchema;
-    }
-    if (message.header.source_id.view() != device_id) {
-        return InputRejection::kWrongDevice;
+    if (const InputRejection header = validateHeader(message.header, device_id);
+        header != InputRejection::kNone) {
+        return header;
     }
     if (message.constraints.count > msgs::kMaxConstraints) {
         return InputRejection::kCountOverCapacity;
@@ -145,11 +154,9 @@ InputRejection validate(const msgs::ConstraintSet& message, std::string_view dev
 }
 
 InputRejection validate(const msgs::ContactSurface& message, std::string_view device_id) noexcept {
-    if (message.header.schema_version != msgs::kSchemaVersion) {
-        return InputRejection::kOtherSchema;
-    }
-    if (message.header.source_id.view() != device_id) {
-        return InputRejection::kWrongDevice;
+    if (const InputRejection header = validateHeader(message.header, device_id);
+        header != InputRejection::kNone) {
+        return header;
     }
     if (message.samples.count > msgs::kMaxContactSamples) {
         return InputRejection::kCountOverCapacity;

@@ -1,5 +1,6 @@
 #include "haptic/msgs/conversions.hpp"
 
+#include <cstdio>
 #include <type_traits>
 
 namespace haptic::msgs {
@@ -119,32 +120,36 @@ static_assert(static_cast<std::uint32_t>(idl::COMMAND_SET_METHOD) ==
 
 idl::MessageHeader toIdl(const MessageHeader& in) {
     idl::MessageHeader out;
-    out.schema_version(in.schema_version);
+    out.schema(in.schema);
     out.seq(in.seq);
     out.stamp_ns(in.stamp_ns);
     copyString(in.source_id, out.source_id());
     return out;
 }
 
-// The first check of every message: read in another release's layout, the rest of it means
-// something else (a field added, moved or resized).
-bool schemaMatches(const idl::MessageHeader& in, const char* message, ConversionResult& result) {
-    if (in.schema_version() == kSchemaVersion) {
-        return true;
-    }
-    result.error = std::string(message) +
-                   ".header.schema_version: " + std::to_string(in.schema_version()) +
-                   ", this build reads " + std::to_string(kSchemaVersion) +
-                   " (the sender is from another release; hapticd, handsim, hapticemu and "
-                   "hapticctl must come from one)";
-    return false;
+std::string hex32(std::uint32_t value) {
+    char text[11];
+    std::snprintf(text, sizeof(text), "0x%08x", value);
+    return text;
 }
 
-void fromIdl(const idl::MessageHeader& in, MessageHeader& out) {
-    out.schema_version = in.schema_version();
+// Every message's first step: the header, whatever its schema (a reader may count a refusal
+// by its source), then the schema checked: read in another release's layout, the rest of the
+// message means something else (a field added, moved or resized).
+bool fromIdl(const idl::MessageHeader& in, MessageHeader& out, const char* message,
+             ConversionResult& result) {
+    out.schema = in.schema();
     out.seq = in.seq();
     out.stamp_ns = in.stamp_ns();
     copyString(in.source_id(), out.source_id);
+    if (in.schema() == kSchema) {
+        return true;
+    }
+    result.error = std::string(message) + ".header.schema: " + hex32(in.schema()) +
+                   ", this build reads " + hex32(kSchema) +
+                   " (the sender is from another release; hapticd, handsim, hapticemu and "
+                   "hapticctl must come from one)";
+    return false;
 }
 
 idl::TrackingOrigin toIdl(const TrackingOrigin& in) {
@@ -207,14 +212,13 @@ idl::ConstraintSet toIdl(const ConstraintSet& in) {
 
 ConversionResult fromIdl(const idl::ConstraintSet& in, ConstraintSet& out) {
     ConversionResult result;
-    if (!schemaMatches(in.header(), "ConstraintSet", result)) {
+    if (!fromIdl(in.header(), out.header, "ConstraintSet", result)) {
         return result;
     }
     if (!fitsCapacity(in.constraints().size(), out.constraints, "ConstraintSet.constraints",
                       result)) {
         return result;
     }
-    fromIdl(in.header(), out.header);
     out.dof = in.dof();
     out.q_sim_rad = in.q_sim_rad();
     out.constraints.clear();
@@ -260,13 +264,12 @@ idl::ContactSurface toIdl(const ContactSurface& in) {
 
 ConversionResult fromIdl(const idl::ContactSurface& in, ContactSurface& out) {
     ConversionResult result;
-    if (!schemaMatches(in.header(), "ContactSurface", result)) {
+    if (!fromIdl(in.header(), out.header, "ContactSurface", result)) {
         return result;
     }
     if (!fitsCapacity(in.samples().size(), out.samples, "ContactSurface.samples", result)) {
         return result;
     }
-    fromIdl(in.header(), out.header);
     out.samples.clear();
     for (const auto& s : in.samples()) {
         out.samples.push_back(
@@ -297,10 +300,9 @@ idl::DeviceState toIdl(const DeviceState& in) {
 
 ConversionResult fromIdl(const idl::DeviceState& in, DeviceState& out) {
     ConversionResult result;
-    if (!schemaMatches(in.header(), "DeviceState", result)) {
+    if (!fromIdl(in.header(), out.header, "DeviceState", result)) {
         return result;
     }
-    fromIdl(in.header(), out.header);
     out.joint_count = in.joint_count();
     out.joint_position_rad = in.joint_position_rad();
     out.joint_velocity_rad_per_s = in.joint_velocity_rad_per_s();
@@ -327,14 +329,13 @@ idl::HandPose toIdl(const HandPose& in) {
 
 ConversionResult fromIdl(const idl::HandPose& in, HandPose& out) {
     ConversionResult result;
-    if (!schemaMatches(in.header(), "HandPose", result)) {
+    if (!fromIdl(in.header(), out.header, "HandPose", result)) {
         return result;
     }
     if (!fitsCapacity(in.joint_angles_rad().size(), out.joint_angles_rad,
                       "HandPose.joint_angles_rad", result)) {
         return result;
     }
-    fromIdl(in.header(), out.header);
     out.wrist_position_m = in.wrist_position_m();
     out.wrist_orientation_wxyz = in.wrist_orientation_wxyz();
     out.joint_angles_rad.clear();
@@ -409,7 +410,7 @@ idl::HapticStatus toIdl(const HapticStatus& in) {
 
 ConversionResult fromIdl(const idl::HapticStatus& in, HapticStatus& out) {
     ConversionResult result;
-    if (!schemaMatches(in.header(), "HapticStatus", result)) {
+    if (!fromIdl(in.header(), out.header, "HapticStatus", result)) {
         return result;
     }
     if (!fitsCapacity(in.devices().size(), out.devices, "HapticStatus.devices", result) ||
@@ -419,7 +420,6 @@ ConversionResult fromIdl(const idl::HapticStatus& in, HapticStatus& out) {
                      "HapticStatus.sim_link.transport", result)) {
         return result;
     }
-    fromIdl(in.header(), out.header);
     copyString(in.rendering_method(), out.rendering_method);
     copyString(in.version(), out.version);
     copyString(in.config_digest(), out.config_digest);
@@ -523,13 +523,12 @@ idl::HapticTelemetry toIdl(const HapticTelemetry& in) {
 
 ConversionResult fromIdl(const idl::HapticTelemetry& in, HapticTelemetry& out) {
     ConversionResult result;
-    if (!schemaMatches(in.header(), "HapticTelemetry", result)) {
+    if (!fromIdl(in.header(), out.header, "HapticTelemetry", result)) {
         return result;
     }
     if (!fitsCapacity(in.samples().size(), out.samples, "HapticTelemetry.samples", result)) {
         return result;
     }
-    fromIdl(in.header(), out.header);
     out.samples.clear();
     for (const auto& s : in.samples()) {
         TelemetrySample item;
@@ -582,13 +581,12 @@ idl::HapticCommand toIdl(const HapticCommand& in) {
 
 ConversionResult fromIdl(const idl::HapticCommand& in, HapticCommand& out) {
     ConversionResult result;
-    if (!schemaMatches(in.header(), "HapticCommand", result)) {
+    if (!fromIdl(in.header(), out.header, "HapticCommand", result)) {
         return result;
     }
     if (!convertEnum(in.kind(), CommandKind::kClearFault, out.kind, "HapticCommand.kind", result)) {
         return result;
     }
-    fromIdl(in.header(), out.header);
     out.request_id = in.request_id();
     copyString(in.device_id(), out.device_id);
     copyString(in.argument(), out.argument);
@@ -606,10 +604,9 @@ idl::HapticCommandReply toIdl(const HapticCommandReply& in) {
 
 ConversionResult fromIdl(const idl::HapticCommandReply& in, HapticCommandReply& out) {
     ConversionResult result;
-    if (!schemaMatches(in.header(), "HapticCommandReply", result)) {
+    if (!fromIdl(in.header(), out.header, "HapticCommandReply", result)) {
         return result;
     }
-    fromIdl(in.header(), out.header);
     out.request_id = in.request_id();
     out.accepted = in.accepted();
     copyString(in.message(), out.message);
@@ -640,10 +637,9 @@ idl::SimStatus toIdl(const SimStatus& in) {
 
 ConversionResult fromIdl(const idl::SimStatus& in, SimStatus& out) {
     ConversionResult result;
-    if (!schemaMatches(in.header(), "SimStatus", result)) {
+    if (!fromIdl(in.header(), out.header, "SimStatus", result)) {
         return result;
     }
-    fromIdl(in.header(), out.header);
     out.rate_hz = in.rate_hz();
     out.steps = in.steps();
     fromIdl(in.step_time_us(), out.step_time_us);

@@ -23,16 +23,20 @@ namespace haptic::msgs {
 
 using DeviceId = FixedString<kIdCapacity>;
 
-// The layout of the messages: bump it with any change to a message here or in idl/ (a field
-// added, removed, moved or resized, a capacity). Every message carries it first
-// (MessageHeader, first member of each), and every reader refuses another one, over DDS
-// (conversions), iceoryx (hapticd's sim input validation) and the control socket: peers from
-// two releases, say a handsim on another PC, would otherwise read each other's fields as
-// something else. tests/msgs/schema_version_test.cpp records the layout it stands for.
+// The layout of the messages: raise kSchemaVersion with any change to a message here or in
+// idl/ (a field added, removed, moved or resized, a capacity). Every message carries kSchema
+// first (MessageHeader, first member of each), and its readers refuse another one: over DDS
+// (conversions), iceoryx (hapticd's sim input validation, handsim's device states) and the
+// control socket. Peers from two releases, say a handsim on another PC, would otherwise read
+// each other's fields as something else. The mark in the upper half keeps a release from
+// before the field (whose header began with its sequence number, 1, 2, ...) from passing for
+// version 1. tests/msgs/schema_version_test.cpp records the layout the version stands for.
+inline constexpr std::uint32_t kSchemaMark = 0x48500000;  // "HP"
 inline constexpr std::uint16_t kSchemaVersion = 1;
+inline constexpr std::uint32_t kSchema = kSchemaMark | kSchemaVersion;
 
 struct MessageHeader {
-    std::uint16_t schema_version{kSchemaVersion};
+    std::uint32_t schema{kSchema};
     std::uint64_t seq{0};
     std::int64_t stamp_ns{0};
     DeviceId source_id{};  // device name or scene name
@@ -183,7 +187,7 @@ enum class SimInputRejection : std::uint8_t {
     kDelayed,      // older than sim_timeout_ns by its stamp (see DaemonCore::freshness())
     kBadStamp,     // header.stamp_ns is 0 or negative
     kStampAhead,   // stamped ahead of the sim's learnt clock by more than sim_timeout_ns
-    kOtherSchema,  // header.schema_version is not kSchemaVersion: a sim from another release
+    kOtherSchema,  // header.schema is not kSchema: a sim from another release
     kCount_,
 };
 // SimLinkStatus::rejected_by_reason has one count per reason, kNone left out.
@@ -394,13 +398,13 @@ inline constexpr std::tuple kShmMessageTypes{
 static_assert(std::apply(
     [](auto... message) { return (kIsShmMessage<typename decltype(message)::type> && ...); },
     kShmMessageTypes));
-// The header, and so its schema_version, at the start of every message: readable whatever
-// the rest of another release's layout.
+// The header, and so its schema, at the start of every message: readable whatever the rest
+// of another release's layout.
 static_assert(std::apply(
     [](auto... message) {
         return ((offsetof(typename decltype(message)::type, header) == 0) && ...);
     },
     kShmMessageTypes));
-static_assert(offsetof(MessageHeader, schema_version) == 0);
+static_assert(offsetof(MessageHeader, schema) == 0);
 
 }  // namespace haptic::msgs
