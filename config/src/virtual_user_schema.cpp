@@ -46,12 +46,7 @@ TrackerConfig readTracker(MapReader map) {
 // UDP port block.
 void checkOneBus(const std::vector<DeviceConfig>& devices, const ListReader& device_list) {
     for (std::size_t i = 1; i < devices.size(); ++i) {
-        const CanConfig& first = devices.front().can;
-        const CanConfig& can = devices[i].can;
-        const bool same = can.transport == first.transport &&
-                          (can.transport == CanTransport::kUdp ? can.udp_port == first.udp_port
-                                                               : can.interface == first.interface);
-        if (!same) {
+        if (devices[i].can.bus() != devices.front().can.bus()) {
             device_list.at(i).fail("a device on the bus of '" + devices.front().name +
                                        "' (the virtual user wears all devices on one bus)",
                                    "'" + devices[i].name + "' on another bus");

@@ -119,7 +119,6 @@ TEST(ShippedConfig, Exoskeleton) {
     EXPECT_EQ(cfg.name, "exo");
     ASSERT_TRUE(cfg.isExoskeleton());
     EXPECT_EQ(cfg.can.interface, "") << "a UDP bus: no SocketCAN interface";
-    EXPECT_FALSE(cfg.can.fd);
     EXPECT_EQ(cfg.can.command_id, 0x101U);
     EXPECT_EQ(cfg.can.state_id, 0x181U);
     EXPECT_EQ(cfg.can.heartbeat_id, 0x701U);

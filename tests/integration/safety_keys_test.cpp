@@ -3,6 +3,8 @@
 // keys are covered where they act: runtime_test's ExoskeletonSafetyKeys), and a device that
 // restarts under a running daemon (runtime_test's Plausibility has the rest of item 4).
 
+#include <sys/mman.h>
+
 #include "device_safety_rig.hpp"
 
 namespace haptic::testing {
@@ -121,10 +123,28 @@ class RealtimeKeysTest : public DeviceSafetyTest {
         replaceLine(config_.dir / "daemon.yaml", "cpu_affinity: -1 ", "cpu_affinity: 1 ");
     }
     void SetUp() override {
-        if (!fifoPermitted() || ::sysconf(_SC_NPROCESSORS_ONLN) < 2) {
-            GTEST_SKIP() << "needs SCHED_FIFO (root, CAP_SYS_NICE or LimitRTPRIO) and two cores";
+        if (!realtimePermitted(42) || ::sysconf(_SC_NPROCESSORS_ONLN) < 2) {
+            GTEST_SKIP() << "needs SCHED_FIFO 42 and mlockall (root, or CAP_SYS_NICE and "
+                            "CAP_IPC_LOCK), util-linux's prlimit and setpriv, and two cores";
         }
         DeviceSafetyTest::SetUp();
+    }
+
+    // What hapticd's real-time setup asks for, tried on a thread of the test's own and undone.
+    static bool realtimePermitted(int priority) {
+        bool fifo = false;
+        std::thread probe([&] {
+            sched_param param{};
+            param.sched_priority = priority;
+            fifo = ::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &param) == 0;
+        });
+        probe.join();
+        const bool locked = ::mlockall(MCL_CURRENT) == 0;
+        if (locked) {
+            (void)::munlockall();
+        }
+        return fifo && locked && ::access("/usr/bin/prlimit", X_OK) == 0 &&
+               ::access("/usr/bin/setpriv", X_OK) == 0;
     }
 };
 
@@ -148,13 +168,15 @@ TEST_F(RealtimeKeysTest, TheRtThreadRunsAtTheConfiguredPriorityOnTheConfiguredCo
     EXPECT_EQ(rt_threads, 1);
     EXPECT_THAT(daemon_->stderrText(),
                 ::testing::HasSubstr("real-time: mlockall, SCHED_FIFO 42, CPU 1"));
-    // Without CAP_SYS_NICE (and no LimitRTPRIO), enforce refuses to run the loop at all.
+    // Without CAP_SYS_NICE and without LimitRTPRIO, enforce refuses to run the loop at all.
     ASSERT_EQ(daemon_->terminate(), std::optional<int>(0)) << daemon_->stderrText();
     daemon_.reset();
-    const CommandResult refused = runCommand(
-        {"/usr/bin/setpriv", "--inh-caps=-sys_nice", "--bounding-set=-sys_nice", HAPTICD_PATH, "-c",
-         (config_.dir / "daemon.yaml").string(), "--dds-domain", domain()},
-        20s);
+    // No LimitRTPRIO either (prlimit), which would grant SCHED_FIFO without the capability.
+    const CommandResult refused =
+        runCommand({"/usr/bin/prlimit", "--rtprio=0", "--", "/usr/bin/setpriv",
+                    "--inh-caps=-sys_nice", "--bounding-set=-sys_nice", HAPTICD_PATH, "-c",
+                    (config_.dir / "daemon.yaml").string(), "--dds-domain", domain()},
+                   20s);
     EXPECT_NE(refused.exit_code, 0);
     EXPECT_THAT(refused.err, ::testing::HasSubstr("real-time setup failed ("));
     EXPECT_THAT(refused.err, ::testing::HasSubstr("SCHED_FIFO priority 42 (needs CAP_SYS_NICE"));
@@ -170,18 +192,19 @@ class LoopRateTest : public DeviceSafetyTest {
 
 TEST_F(LoopRateTest, TheLoopTicksAtTheConfiguredRate) {
     const auto samples = collectTelemetry(0, 500ms);
-    std::vector<double> periods_ms;
-    for (std::size_t i = 1; i < samples.size(); ++i) {
-        if (samples[i].tick == samples[i - 1].tick + 1) {
-            periods_ms.push_back(
-                static_cast<double>(samples[i].stamp_ns - samples[i - 1].stamp_ns) * 1e-6);
-        }
-    }
-    ASSERT_GT(periods_ms.size(), 500U);
-    std::sort(periods_ms.begin(), periods_ms.end());
-    EXPECT_NEAR(periods_ms[periods_ms.size() / 2], 0.5, 0.05);
+    ASSERT_GT(samples.size(), 200U);
+    // Over the whole window, by the ticks' own count and stamps: a sample the test's reader
+    // lost, or one late wake-up, does not move it.
+    const auto& first = samples.front();
+    const auto& last = samples.back();
+    ASSERT_GT(last.tick, first.tick);
+    const double period_ms = static_cast<double>(last.stamp_ns - first.stamp_ns) * 1e-6 /
+                             static_cast<double>(last.tick - first.tick);
+    // Under the sanitizers the unoptimised loop may miss some ticks.
+    const double tolerance = HAPTIC_SANITIZED != 0 ? 0.1 : 0.02;
+    EXPECT_NEAR(period_ms, 0.5, 0.5 * tolerance);
     const auto status = waitForStatus("a status", [](const auto&) { return true; });
-    EXPECT_NEAR(status.loop.rate_hz, 2000.0, 100.0);
+    EXPECT_NEAR(status.loop.rate_hz, 2000.0, 2000.0 * tolerance);
 }
 
 // log_level in daemon.yaml: at warn, hapticd's start-up lines at info level are not logged.

@@ -55,8 +55,13 @@ std::string replayRow(double t_s, double x_m, double angle_rad) {
 }
 
 TEST(HandsimTrackingSource, AReplaySceneReplaysItsFileAndHoldsOrLoopsAsTrackingLoopSays) {
-    const auto file = std::filesystem::temp_directory_path() /
-                      ("handsim_replay_" + std::to_string(::getpid()) + ".csv");
+    // Removed however the test ends.
+    struct TemporaryFile {
+        std::filesystem::path path;
+        ~TemporaryFile() { std::filesystem::remove(path); }
+    } const replay{std::filesystem::temp_directory_path() /
+                   ("handsim_replay_" + std::to_string(::getpid()) + ".csv")};
+    const auto& file = replay.path;
     std::ofstream(file) << "# t_s, wrist xyz, quaternion, 15 angles\n"
                         << replayRow(0.0, 0.0, 0.1) << replayRow(1.0, 0.02, 0.5);
     auto scene = thimbleScene();
@@ -82,7 +87,6 @@ TEST(HandsimTrackingSource, AReplaySceneReplaysItsFileAndHoldsOrLoopsAsTrackingL
             << (loop ? "looped to the start" : "held at the end");
         EXPECT_TRUE(rejection.empty()) << rejection;
     }
-    std::filesystem::remove(file);
 }
 
 // What each source made of the same stream of HandPose samples.

@@ -73,10 +73,10 @@ class DeviceEmulator {
     }
 
   protected:
-    // `codec` must already be constructed: derived classes hold it in a base listed before
-    // DeviceEmulator (base-from-member), never in a member of their own.
     // What a restart or a cleared fault leaves the device waiting for before it obeys again.
     enum class ReArm { kOnAnyCommand, kOnlyOnASafeCommand };
+    // `codec` must already be constructed: derived classes hold it in a base listed before
+    // DeviceEmulator (base-from-member), never in a member of their own.
     DeviceEmulator(can::CanBus& bus, EmulatorOptions options, protocol::DeviceCodecBase& codec,
                    const config::DeviceConfig& device, ReArm re_arm) noexcept
         : bus_(bus),
