@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "device_files.hpp"
 #include "haptic/devices/actuator_limits.hpp"
@@ -62,8 +63,18 @@ TEST(ExoskeletonModel, TheDriveDeliversLessForceTheFasterItPushesTheRodAlong) {
     EXPECT_DOUBLE_EQ(devices::deliverableForceN(30.0, 0.5 * v_max, actuator), 0.75 * f_max);
 }
 
-TEST(ExoskeletonModel, TheFingerFollowsTheIntentAndYieldsToTheActuator) {
-    const auto device = exoskeletonDevice();
+// finger.joint_limits_deg bound the emulated finger: as shipped, and with the MCP's range
+// narrowed to 10-30 degrees.
+class ExoskeletonModelLimits : public ::testing::TestWithParam<bool> {};
+INSTANTIATE_TEST_SUITE_P(DeviceFile, ExoskeletonModelLimits, ::testing::Values(true, false),
+                         [](const auto& info) { return info.param ? "Shipped" : "NarrowMcp"; });
+
+TEST_P(ExoskeletonModelLimits, TheFingerFollowsTheIntentAndYieldsToTheActuator) {
+    auto device = exoskeletonDevice();
+    if (!GetParam()) {
+        std::get<config::ExoskeletonConfig>(device.params).finger.joint_limits_rad[0] = {
+            10.0 * std::numbers::pi / 180.0, 30.0 * std::numbers::pi / 180.0};
+    }
     ExoskeletonModel free_finger(device), pushed_finger(device);
     double min_q = 10.0, max_q = -10.0;
     for (int i = 0; i < 2000; ++i) {  // one intent period at 0.5 Hz
@@ -72,7 +83,7 @@ TEST(ExoskeletonModel, TheFingerFollowsTheIntentAndYieldsToTheActuator) {
         min_q = std::min(min_q, free_finger.jointRad()[0]);
         max_q = std::max(max_q, free_finger.jointRad()[0]);
     }
-    EXPECT_GT(max_q - min_q, 0.5) << "the user moves the finger";
+    EXPECT_GT(max_q - min_q, GetParam() ? 0.5 : 0.2) << "the user moves the finger";
     // A positive actuator force lengthens the actuator: more stroke than the free finger.
     EXPECT_GT(pushed_finger.strokeM(), free_finger.strokeM());
     const auto& limits = device.exoskeleton().finger.joint_limits_rad;
@@ -80,6 +91,8 @@ TEST(ExoskeletonModel, TheFingerFollowsTheIntentAndYieldsToTheActuator) {
         EXPECT_GE(pushed_finger.jointRad()[j], limits[j].min);
         EXPECT_LE(pushed_finger.jointRad()[j], limits[j].max);
     }
+    EXPECT_GE(min_q, limits[0].min - 1e-12);
+    EXPECT_LE(max_q, limits[0].max + 1e-12);
 }
 
 // actuator.damping_n_s_per_m is the rod's own damping: released at rest away from the user's

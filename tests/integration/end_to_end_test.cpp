@@ -15,11 +15,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <thread>
+#include <utility>
 
 #include "child_process.hpp"
 #include "haptic/ipc/iceoryx_runtime.hpp"
@@ -492,6 +494,46 @@ TEST_F(RoudiTest, RoudiRestartMakesDaemonAndSimExitForARestartThatReconnects) {
     startRoudi();
     EXPECT_EQ(roudi_->terminate(), std::optional<int>(0)) << roudi_->stderrText();
     expectNoIceoryxLeftovers();
+}
+
+// A scene's rate_hz is the rate handsim steps and publishes at: the shipped thimble scene
+// (200 Hz) and default scene (100 Hz), each run for 3 s over the DDS sim link (no RouDi),
+// read off the line handsim logs at exit. The sanitized handsim steps a few times a second.
+TEST(SceneRate, HandsimStepsAtItsScenesRate) {
+    if (kSanitized) {
+        GTEST_SKIP() << "a sanitized handsim cannot hold a scene's rate";
+    }
+    namespace fs = std::filesystem;
+    const fs::path dir =
+        fs::temp_directory_path() / ("end_to_end_scene_rate_" + std::to_string(::getpid()));
+    for (const auto& [scene, rate_hz] :
+         {std::pair{"thimble_only", 200.0}, std::pair{"default", 100.0}}) {
+        fs::remove_all(dir);
+        fs::copy(kConfigDir, dir, fs::copy_options::recursive);
+        std::ifstream sim_file(dir / "sim.yaml");
+        std::string sim((std::istreambuf_iterator<char>(sim_file)),
+                        std::istreambuf_iterator<char>());
+        sim.replace(sim.find("scene: scenes/default.yaml"),
+                    std::string("scene: scenes/default.yaml").size(),
+                    std::string("scene: scenes/") + scene + ".yaml");
+        if (std::string(scene) == "thimble_only") {  // the scene binds the thimble alone
+            const std::string exo_line = "  - devices/exoskeleton.yaml";
+            sim.erase(sim.find(exo_line),
+                      sim.find('\n', sim.find(exo_line)) - sim.find(exo_line) + 1);
+        }
+        std::ofstream(dir / "sim.yaml", std::ios::trunc) << sim;
+        const auto result =
+            runCommand({HANDSIM_PATH, "-c", (dir / "sim.yaml").string(), "--sim-link", "dds",
+                        "--dds-domain", domainArgument(), "--duration", "3"},
+                       30s);
+        ASSERT_EQ(result.exit_code, 0) << scene << ": " << result.err;
+        std::smatch held;
+        ASSERT_TRUE(std::regex_search(result.err, held,
+                                      std::regex(R"(steps in [0-9.]+ s \(([0-9.]+) Hz\))")))
+            << scene << ": " << result.err;
+        EXPECT_NEAR(std::stod(held[1]), rate_hz, 0.03 * rate_hz) << scene;
+    }
+    fs::remove_all(dir);
 }
 
 TEST(FailFast, CommandWithoutDaemonExitsThreeWithinTheTimeout) {

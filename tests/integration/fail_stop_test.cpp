@@ -684,8 +684,8 @@ TEST_F(EstopRelayOnTheThimblesBusTest, TheRelayIsHeardWhereAndAsTheKeysSay) {
     ASSERT_TRUE(heardEnabledWithin(20s))
         << "the exoskeleton did not come back after clear and enable";
 
-    // Silent: limp no sooner than the timeout after the relay's last status (sent at most one
-    // 10 ms period before the silence), and within it and two ticks.
+    // Silent: limp no sooner than the timeout after the relay's last status (sent one 10 ms
+    // period before the silence at most), and within it and two ticks.
     const std::int64_t silence_ns = monotonicNs();
     ASSERT_TRUE(thimble_emu_->sendCommand("estop silence"));
     const auto limp_ns = limpAfter(silence_ns, 1500ms);
@@ -694,7 +694,11 @@ TEST_F(EstopRelayOnTheThimblesBusTest, TheRelayIsHeardWhereAndAsTheKeysSay) {
         "E-stop relay on the thimble's bus silent: exoskeleton limp after %.2f ms "
         "(timeout %d ms)\n",
         static_cast<double>(*limp_ns) * 1e-6, kLongTimeoutMs);
-    EXPECT_GE(*limp_ns, (kLongTimeoutMs - 12) * kTickNs);
+    // Not under the sanitizers: there the relay's unoptimised hapticemu falls behind its 10 ms
+    // period at times, and hapticd heard its last status up to 140 ms before the silence.
+    if (HAPTIC_SANITIZED == 0) {
+        EXPECT_GE(*limp_ns, (kLongTimeoutMs - 12) * kTickNs);
+    }
     EXPECT_LE(*limp_ns, kLongTimeoutMs * kTickNs + 2 * kTickNs + kEstopSlackNs);
     status = waitForStatus("E-STOP from the silent relay", [](const msgs::HapticStatus& s) {
         return s.state == msgs::DaemonState::kEstop && !s.faults.empty();

@@ -11,6 +11,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <string>
 #include <thread>
@@ -223,6 +226,54 @@ TEST(HandPoseTopic, HandsimFollowsALivePublisherAndRejectsBadPoses) {
     EXPECT_THAT(log, HasSubstr("tracking from HandPose topic 'tracking/hand'"));
     EXPECT_THAT(log, HasSubstr("tracking input(s) rejected"));
     EXPECT_GT(pad.received(), 10U);
+}
+
+// tracker.topic in user.yaml: the virtual user (hapticemu --user) publishes its tracker's
+// poses there, here on a topic of this test's own. Its devices on a UDP block of this process's
+// own (27600-27699: clear of the other tests' blocks and below DDS's ports).
+TEST(HandPoseTopic, TheVirtualUserPublishesOnItsTrackerTopic) {
+    namespace fs = std::filesystem;
+    const fs::path dir =
+        fs::temp_directory_path() / ("handpose_user_topic_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::copy(HAPTIC_CONFIG_DIR, dir, fs::copy_options::recursive);
+    const auto replace = [](const fs::path& file, const std::string& from, const std::string& to) {
+        std::ifstream in(file);
+        std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const auto at = text.find(from);
+        ASSERT_NE(at, std::string::npos) << from << " in " << file;
+        text.replace(at, from.size(), to);
+        std::ofstream(file, std::ios::trunc) << text;
+    };
+    const std::string topic = "tracking/test_" + std::to_string(::getpid());
+    replace(dir / "user.yaml", "topic: tracking/hand", "topic: " + topic);
+    const std::string port = std::to_string(27600 + (::getpid() % 25) * 4);
+    replace(dir / "devices/exoskeleton.yaml", "udp_port: 47000", "udp_port: " + port);
+    replace(dir / "devices/thimble.yaml", "udp_port: 47000", "udp_port: " + port);
+
+    const int domain = testDomain();
+    ChildProcess user({HAPTICEMU_PATH, "--user", (dir / "user.yaml").string(), "--dds-domain",
+                       std::to_string(domain)},
+                      "hapticemu-user");
+    ipc::DdsParticipant participant(
+        ipc::DdsSettings{static_cast<std::uint32_t>(domain),
+                         std::string(HAPTIC_CONFIG_DIR) + "/dds_profiles.xml",
+                         "haptic_participant"},
+        "handpose_topic_test");
+    auto reader = participant.createReader<idl::HandPosePubSubType>(topic, ipc::TopicKind::kStream);
+    idl::HandPose sample;
+    bool received = false;
+    for (auto deadline = std::chrono::steady_clock::now() + 20s;
+         !received && std::chrono::steady_clock::now() < deadline && user.running();) {
+        received = reader.waitAndTake(sample, 200ms);
+    }
+    EXPECT_TRUE(received) << "no HandPose on " << topic << "\n" << user.stderrText();
+    msgs::HandPose pose;
+    EXPECT_TRUE(msgs::fromIdl(sample, pose).ok());
+    EXPECT_EQ(pose.joint_angles_rad.size(), 15U);
+    EXPECT_TRUE(user.running()) << user.stderrText();
+    (void)user.terminate();
+    fs::remove_all(dir);
 }
 
 }  // namespace
