@@ -7,6 +7,7 @@
 #include <limits>
 #include <numbers>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "allocation_counter.hpp"
@@ -87,25 +88,30 @@ TEST_F(ThimbleKinematicsTest, ColdStartsConvergeOnEveryReachablePose) {
     EXPECT_LT(result.worst_dofs, 1e-9);
 }
 
+// Each leg of an inverse solution closes with `g`'s values: its spherical joint in the leg's
+// plane, and as far from the crank's elbow as the link is long.
+void expectLegsClose(const InverseResult& ik, const config::ThimbleGeometry& g) {
+    for (std::size_t i = 0; i < 3; ++i) {
+        const double gamma = g.leg_angles_rad[i];
+        const Eigen::Vector3d e(std::cos(gamma), std::sin(gamma), 0.0);
+        const Eigen::Vector3d joint =
+            ik.pose.position_m + ik.pose.rotation * (g.platform_radius_m * e);
+        const Eigen::Vector3d elbow =
+            g.base_radius_m * e +
+            g.crank_length_m * (std::cos(ik.servo_rad[i]) * e +
+                                std::sin(ik.servo_rad[i]) * Eigen::Vector3d::UnitZ());
+        EXPECT_NEAR(Eigen::Vector3d::UnitZ().cross(e).dot(joint), 0.0, 1e-12) << "leg " << i;
+        EXPECT_NEAR((joint - elbow).norm(), g.link_length_m, 1e-12) << "leg " << i;
+    }
+}
+
 TEST_F(ThimbleKinematicsTest, EverySphericalJointStaysInItsLegPlaneAndLinksKeepTheirLength) {
     std::mt19937_64 rng(7);
     const auto& g = sut.config().geometry;
     for (int n = 0; n < 200; ++n) {
         const InverseResult ik = sut.inverse(randomReachablePose(rng));
         ASSERT_TRUE(ik.ok());
-        for (std::size_t i = 0; i < 3; ++i) {
-            const double gamma = g.leg_angles_rad[i];
-            const Eigen::Vector3d e(std::cos(gamma), std::sin(gamma), 0.0);
-            const Eigen::Vector3d axis = Eigen::Vector3d::UnitZ().cross(e);
-            const Eigen::Vector3d joint =
-                ik.pose.position_m + ik.pose.rotation * (g.platform_radius_m * e);
-            const Eigen::Vector3d elbow =
-                g.base_radius_m * e +
-                g.crank_length_m * (std::cos(ik.servo_rad[i]) * e +
-                                    std::sin(ik.servo_rad[i]) * Eigen::Vector3d::UnitZ());
-            EXPECT_NEAR(axis.dot(joint), 0.0, 1e-12);
-            EXPECT_NEAR((joint - elbow).norm(), g.link_length_m, 1e-12);
-        }
+        expectLegsClose(ik, g);
     }
 }
 
@@ -133,17 +139,9 @@ TEST_F(ThimbleKinematicsTest, EachGeometryKeyShapesTheLegs) {
                 continue;
             }
             ++poses;
-            for (std::size_t i = 0; i < 3; ++i) {
-                const double gamma = g.leg_angles_rad[i];
-                const Eigen::Vector3d e(std::cos(gamma), std::sin(gamma), 0.0);
-                const Eigen::Vector3d joint =
-                    ik.pose.position_m + ik.pose.rotation * (g.platform_radius_m * e);
-                const Eigen::Vector3d elbow =
-                    g.base_radius_m * e +
-                    g.crank_length_m * (std::cos(ik.servo_rad[i]) * e +
-                                        std::sin(ik.servo_rad[i]) * Eigen::Vector3d::UnitZ());
-                EXPECT_NEAR(Eigen::Vector3d::UnitZ().cross(e).dot(joint), 0.0, 1e-12) << v;
-                EXPECT_NEAR((joint - elbow).norm(), g.link_length_m, 1e-12) << v;
+            {
+                SCOPED_TRACE("variant " + std::to_string(v));
+                expectLegsClose(ik, g);
             }
             // A level plate sits alike over legs placed anywhere on the circle: the placement
             // shows only when it tilts.
