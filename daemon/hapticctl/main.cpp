@@ -491,9 +491,14 @@ std::optional<int> sendCommandLocally(const haptic::config::DaemonConfig& cfg,
     haptic::idl::HapticCommandReply sample;
     haptic::msgs::HapticCommandReply reply;
     if (answer->kind != control::kReplyAnswer ||
-        !control::decode(answer->body.data(), answer->body.size(), sample) ||
-        !haptic::msgs::fromIdl(sample, reply).ok()) {
+        !control::decode(answer->body.data(), answer->body.size(), sample)) {
         std::fprintf(stderr, "hapticctl: malformed answer on the control socket\n");
+        return kExitError;
+    }
+    // Another release's hapticd: the conversion names the schema it sent.
+    if (const auto result = haptic::msgs::fromIdl(sample, reply); !result.ok()) {
+        std::fprintf(stderr, "hapticctl: answer on the control socket refused: %s\n",
+                     result.error.c_str());
         return kExitError;
     }
     return reportReply(reply);
@@ -545,7 +550,19 @@ int sendCommand(const haptic::config::DaemonConfig& cfg, haptic::msgs::CommandKi
             sent = writer.write(wire) || sent;
             last_sent = now;
         }
-        if (!reader.waitAndTake(sample, 50ms) || sample.request_id() != command.request_id) {
+        if (!reader.waitAndTake(sample, 50ms)) {
+            continue;
+        }
+        // Another release's reply: its request id would be read from another layout.
+        if (sample.header().schema() != haptic::msgs::kSchema) {
+            std::fprintf(stderr,
+                         "hapticctl: a reply of message schema 0x%08x, this hapticctl reads "
+                         "0x%08x: hapticd is from another release\n",
+                         static_cast<unsigned>(sample.header().schema()),
+                         static_cast<unsigned>(haptic::msgs::kSchema));
+            return kExitError;
+        }
+        if (sample.request_id() != command.request_id) {
             continue;
         }
         haptic::msgs::HapticCommandReply reply;

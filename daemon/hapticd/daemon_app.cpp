@@ -596,8 +596,9 @@ int runDaemon(const DaemonOptions& options) {
             spdlog::info("sim link dds: device '{}': received {} messages", cfg.devices[i].name,
                          dds_sim_link->received(i));
         }
-        spdlog::info("sim link dds: {} unconvertible messages dropped, {} device states published",
-                     dds_sim_link->unconvertible(), dds_sim_link->statesPublished());
+        spdlog::info(
+            "sim link dds: {} messages fitting no twin refused, {} device states published",
+            dds_sim_link->unconvertible(), dds_sim_link->statesPublished());
     }
     return exit_code;
 }

@@ -37,9 +37,10 @@ struct DdsSimLink::Device {
     daemon::SeqLock<msgs::DeviceState> state_slot;
     std::atomic<std::uint64_t> received{0};
 
-    // RT thread side.
-    std::uint64_t constraint_taken{0};
-    std::uint64_t surface_taken{0};
+    // RT thread side; the link thread reads the versions taken, so that a message of another
+    // schema never displaces one the RT thread has not taken yet.
+    std::atomic<std::uint64_t> constraint_taken{0};
+    std::atomic<std::uint64_t> surface_taken{0};
     msgs::ConstraintSet rt_constraints{};
     msgs::ContactSurface rt_surface{};
 };
@@ -120,8 +121,8 @@ void DdsSimLink::drain(Device& device) {
         // The first of each burst is enough to diagnose a mismatched sim build.
         if (device.unconvertible_logged++ % 1000 == 0) {
             spdlog::warn(
-                "sim link dds: device '{}': dropped a message that fits no twin: {} ({} "
-                "dropped so far)",
+                "sim link dds: device '{}': refused a message that fits no twin: {} ({} "
+                "so far; one of another schema goes on for hapticd to count)",
                 name, reason, count);
         }
     };
@@ -134,8 +135,11 @@ void DdsSimLink::drain(Device& device) {
             if (!result.ok()) {
                 reject(result.error);
                 // Another release's message goes on all the same, its header alone read: the
-                // RT thread refuses it first, as other_schema, and the status counts it.
-                if (device.constraints.header.schema != msgs::kSchema) {
+                // RT thread refuses it first, as other_schema, and the status counts it. Only
+                // into a slot the RT thread has emptied: it never displaces a valid message.
+                if (device.constraints.header.schema != msgs::kSchema &&
+                    device.constraint_slot.version() ==
+                        device.constraint_taken.load(std::memory_order_acquire)) {
                     device.constraint_slot.store(device.constraints);
                 }
                 continue;
@@ -148,7 +152,9 @@ void DdsSimLink::drain(Device& device) {
             const auto result = msgs::fromIdl(device.idl_surface, device.surface);
             if (!result.ok()) {
                 reject(result.error);
-                if (device.surface.header.schema != msgs::kSchema) {
+                if (device.surface.header.schema != msgs::kSchema &&
+                    device.surface_slot.version() ==
+                        device.surface_taken.load(std::memory_order_acquire)) {
                     device.surface_slot.store(device.surface);
                 }
                 continue;
@@ -179,27 +185,28 @@ void DdsSimLink::publishStates(std::chrono::steady_clock::time_point now) {
 
 const msgs::ConstraintSet* DdsSimLink::takeConstraintSet(std::size_t index) noexcept {
     Device& device = *devices_[index];
-    if (device.constraint_slot.version() == device.constraint_taken) {
+    if (device.constraint_slot.version() ==
+        device.constraint_taken.load(std::memory_order_relaxed)) {
         return nullptr;
     }
     const std::uint64_t version = device.constraint_slot.tryLoad(device.rt_constraints);
     if (version == 0) {
         return nullptr;
     }
-    device.constraint_taken = version;
+    device.constraint_taken.store(version, std::memory_order_release);
     return &device.rt_constraints;
 }
 
 const msgs::ContactSurface* DdsSimLink::takeContactSurface(std::size_t index) noexcept {
     Device& device = *devices_[index];
-    if (device.surface_slot.version() == device.surface_taken) {
+    if (device.surface_slot.version() == device.surface_taken.load(std::memory_order_relaxed)) {
         return nullptr;
     }
     const std::uint64_t version = device.surface_slot.tryLoad(device.rt_surface);
     if (version == 0) {
         return nullptr;
     }
-    device.surface_taken = version;
+    device.surface_taken.store(version, std::memory_order_release);
     return &device.rt_surface;
 }
 

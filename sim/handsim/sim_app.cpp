@@ -240,7 +240,8 @@ int runSim(const SimOptions& options) {
             const std::string& name = link.device->name;
             if (withholding) {
                 if (dds_link) {
-                    link.states_received += dds_link->takeDeviceStates(index, dds_state);
+                    link.states_received +=
+                        dds_link->takeDeviceStates(index, dds_state, link.states_refused);
                 } else {
                     while (link.device_states->take().and_then(
                         [&](const auto& state) { countState(link, *state); })) {
@@ -266,7 +267,8 @@ int runSim(const SimOptions& options) {
                     fillTargets(dds_surface);
                     link.published += dds_link->publish(index, dds_surface) ? 1 : 0;
                 }
-                link.states_received += dds_link->takeDeviceStates(index, dds_state);
+                link.states_received +=
+                    dds_link->takeDeviceStates(index, dds_state, link.states_refused);
                 continue;
             }
             auto publishLoaned = [&](auto& sample) {  // iceoryx's function_ref takes no const

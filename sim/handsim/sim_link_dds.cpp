@@ -32,11 +32,15 @@ bool SimLinkDds::publish(std::size_t device, const msgs::ContactSurface& message
     return links_[device].surface_writer.write(msgs::toIdl(message));
 }
 
-std::size_t SimLinkDds::takeDeviceStates(std::size_t device, msgs::DeviceState& latest) {
+std::size_t SimLinkDds::takeDeviceStates(std::size_t device, msgs::DeviceState& latest,
+                                         std::uint64_t& other_schema) {
     std::size_t taken = 0;
     while (links_[device].state_reader.take(idl_state_)) {
         const auto result = msgs::fromIdl(idl_state_, state_);
         if (!result.ok()) {
+            if (state_.header.schema != msgs::kSchema) {
+                ++other_schema;
+            }
             if (unconvertible_states_++ % 1000 == 0) {
                 spdlog::warn("sim link dds: dropped a DeviceState that fits no twin: {}",
                              result.error);

@@ -27,7 +27,9 @@ class SimLinkDds {
 
     // Takes every DeviceState waiting for the device; the newest convertible one ends up in
     // `latest`. Returns how many were taken (unconvertible ones are counted, not returned).
-    std::size_t takeDeviceStates(std::size_t device, msgs::DeviceState& latest);
+    // `other_schema` counts the states of another message schema among those refused.
+    std::size_t takeDeviceStates(std::size_t device, msgs::DeviceState& latest,
+                                 std::uint64_t& other_schema);
 
     [[nodiscard]] std::uint64_t unconvertibleStates() const noexcept {
         return unconvertible_states_;

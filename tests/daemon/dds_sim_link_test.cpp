@@ -24,10 +24,12 @@ namespace {
 using namespace std::chrono_literals;
 
 ipc::DdsSettings testSettings() {
-    // The shipped UDP-loopback profile on a domain of our own: 1-99 is used by no other test
+    // The shipped UDP-loopback profile on a domain of our own: 230-232 is used by no other test
     // (the process tests take 100-199, the loop benchmark 200-229, the demo 0), since this
-    // test has no resource lock and may run beside them.
-    return ipc::DdsSettings{static_cast<std::uint32_t>(1 + ::getpid() % 99),
+    // test may run beside them; its own tests run one at a time (a resource lock). Domains
+    // 1-99 had their ports (7400 + 250 d ...) inside the UDP blocks other tests bind
+    // (10000-31699).
+    return ipc::DdsSettings{static_cast<std::uint32_t>(230 + ::getpid() % 3),
                             HAPTIC_CONFIG_DIR "/dds_profiles.xml", "haptic_participant"};
 }
 

@@ -531,7 +531,8 @@ TEST(SceneRate, HandsimStepsAtItsScenesRate) {
         ASSERT_TRUE(std::regex_search(result.err, held,
                                       std::regex(R"(steps in [0-9.]+ s \(([0-9.]+) Hz\))")))
             << scene << ": " << result.err;
-        EXPECT_NEAR(std::stod(held[1]), rate_hz, 0.03 * rate_hz) << scene;
+        // Within 10 %: tells the two scenes' rates apart, and leaves room for the VM's stalls.
+        EXPECT_NEAR(std::stod(held[1]), rate_hz, 0.1 * rate_hz) << scene;
     }
     fs::remove_all(dir);
 }

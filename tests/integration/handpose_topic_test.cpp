@@ -230,7 +230,8 @@ TEST(HandPoseTopic, HandsimFollowsALivePublisherAndRejectsBadPoses) {
 
 // tracker.topic in user.yaml: the virtual user (hapticemu --user) publishes its tracker's
 // poses there, here on a topic of this test's own. Its devices on a UDP block of this process's
-// own (27600-27699: clear of the other tests' blocks and below DDS's ports).
+// own (27600-27699: clear of the other tests' blocks and of the ports of the DDS domains tests
+// use, 100-232, from 32400 up).
 TEST(HandPoseTopic, TheVirtualUserPublishesOnItsTrackerTopic) {
     namespace fs = std::filesystem;
     const fs::path dir =
@@ -241,15 +242,19 @@ TEST(HandPoseTopic, TheVirtualUserPublishesOnItsTrackerTopic) {
         std::ifstream in(file);
         std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
         const auto at = text.find(from);
-        ASSERT_NE(at, std::string::npos) << from << " in " << file;
+        if (at == std::string::npos) {
+            ADD_FAILURE() << from << " not in " << file;
+            return false;
+        }
         text.replace(at, from.size(), to);
         std::ofstream(file, std::ios::trunc) << text;
+        return true;
     };
     const std::string topic = "tracking/test_" + std::to_string(::getpid());
-    replace(dir / "user.yaml", "topic: tracking/hand", "topic: " + topic);
     const std::string port = std::to_string(27600 + (::getpid() % 25) * 4);
-    replace(dir / "devices/exoskeleton.yaml", "udp_port: 47000", "udp_port: " + port);
-    replace(dir / "devices/thimble.yaml", "udp_port: 47000", "udp_port: " + port);
+    ASSERT_TRUE(replace(dir / "user.yaml", "topic: tracking/hand", "topic: " + topic));
+    ASSERT_TRUE(replace(dir / "devices/exoskeleton.yaml", "udp_port: 47000", "udp_port: " + port));
+    ASSERT_TRUE(replace(dir / "devices/thimble.yaml", "udp_port: 47000", "udp_port: " + port));
 
     const int domain = testDomain();
     ChildProcess user({HAPTICEMU_PATH, "--user", (dir / "user.yaml").string(), "--dds-domain",

@@ -183,8 +183,8 @@ TEST_F(RealtimeKeysTest, TheRtThreadRunsAtTheConfiguredPriorityOnTheConfiguredCo
 }
 
 // loop.rate_hz at 2 kHz (shipped 1 kHz): the ticks in telemetry come every 0.5 ms by the RT
-// thread's own stamps, and the status reports the rate. (Lower rates are refused with the
-// shipped exoskeleton: its coupling's passivity margin needs at least 1 kHz, ConfigReferences.)
+// thread's own stamps. (Lower rates are refused with the shipped exoskeleton: its coupling's
+// passivity margin needs at least 1 kHz, ConfigReferences.)
 class LoopRateTest : public DeviceSafetyTest {
   protected:
     LoopRateTest() { replaceLine(config_.dir / "daemon.yaml", "rate_hz: 1000 ", "rate_hz: 2000 "); }
@@ -197,17 +197,21 @@ TEST_F(LoopRateTest, TheLoopTicksAtTheConfiguredRate) {
         GTEST_SKIP() << "an unoptimised hapticd cannot tick at 2 kHz";
     }
     const auto samples = collectTelemetry(0, 500ms);
-    ASSERT_GT(samples.size(), 200U);
-    // Over the whole window, by the ticks' own count and stamps: a sample the test's reader
-    // lost, or one late wake-up, does not move it.
-    const auto& first = samples.front();
-    const auto& last = samples.back();
-    ASSERT_GT(last.tick, first.tick);
-    const double period_ms = static_cast<double>(last.stamp_ns - first.stamp_ns) * 1e-6 /
-                             static_cast<double>(last.tick - first.tick);
-    EXPECT_NEAR(period_ms, 0.5, 0.01);
+    // Consecutive ticks only, and their median: a sample the reader lost, or a late wake-up
+    // (the timer then skips the deadlines it missed), does not move it.
+    std::vector<double> periods_ms;
+    for (std::size_t i = 1; i < samples.size(); ++i) {
+        if (samples[i].tick == samples[i - 1].tick + 1) {
+            periods_ms.push_back(
+                static_cast<double>(samples[i].stamp_ns - samples[i - 1].stamp_ns) * 1e-6);
+        }
+    }
+    ASSERT_GT(periods_ms.size(), 200U);
+    std::sort(periods_ms.begin(), periods_ms.end());
+    EXPECT_NEAR(periods_ms[periods_ms.size() / 2], 0.5, 0.05);
+    // The status reports the rate the loop was configured with.
     const auto status = waitForStatus("a status", [](const auto&) { return true; });
-    EXPECT_NEAR(status.loop.rate_hz, 2000.0, 40.0);
+    EXPECT_EQ(status.loop.rate_hz, 2000.0);
 }
 
 // log_level in daemon.yaml: at warn, hapticd's start-up lines at info level are not logged.

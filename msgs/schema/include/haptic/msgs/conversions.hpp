@@ -18,8 +18,11 @@
 
 namespace haptic::msgs {
 
-// Why a DDS sample could not become a twin: a sequence longer than the twin's capacity or an
-// enum value outside its range (CDR deserialises enums without checking them).
+// Why a DDS sample could not become a twin: a header of another schema (msgs::kSchema; checked
+// first), a sequence longer than the twin's capacity, or an enum value outside its range (CDR
+// deserialises enums without checking them). A refused sample leaves the twin's header
+// overwritten (a reader may count a refusal by its header) and the rest as it was: use the
+// twin only after a success.
 struct ConversionResult {
     std::string error;  // empty on success; otherwise names the field and the problem
     [[nodiscard]] bool ok() const noexcept { return error.empty(); }
