@@ -4,10 +4,12 @@
 # energy guard did (rescaled, substepped, frozen steps). Not part of CI (4 x the duration).
 #
 #   scripts/handsim-scenes.sh [--duration 60] [--build build/release] [--scenes "thimble_only default"]
-#                             [--helper-thread on|off]
+#                             [--helper-thread on|off] [--cpu-latency-us N]
 #
 # --helper-thread on|off runs every scene with solver.helper_thread set so (default: as each
 # scene ships it), for comparing the two in one run (docs/benchmarks.md).
+# --cpu-latency-us N runs handsim with sim.yaml's cpu_latency_us set to N (-1: no request;
+# default: as shipped). Another process holding a lower request (a running hapticd) wins.
 #
 # Each run uses a copy of config/ whose sim.yaml names the scene (and, for the thimble scene,
 # only the thimble), with --sim-link dds on its own DDS domain: no RouDi, no hapticd. Nothing
@@ -18,13 +20,15 @@ duration=60
 build=build/release
 scenes="thimble_only default whole_hand grasp_box"
 helper_thread=shipped
+cpu_latency_us=shipped
 while [[ $# -gt 0 ]]; do
     case "$1" in
         --duration) duration="$2"; shift 2 ;;
         --build) build="$2"; shift 2 ;;
         --scenes) scenes="$2"; shift 2 ;;
         --helper-thread) helper_thread="$2"; shift 2 ;;
-        *) echo "usage: $0 [--duration S] [--build DIR] [--scenes \"NAME ...\"] [--helper-thread on|off]" >&2; exit 2 ;;
+        --cpu-latency-us) cpu_latency_us="$2"; shift 2 ;;
+        *) echo "usage: $0 [--duration S] [--build DIR] [--scenes \"NAME ...\"] [--helper-thread on|off] [--cpu-latency-us N]" >&2; exit 2 ;;
     esac
 done
 
@@ -34,11 +38,12 @@ for scene in $scenes; do
     [[ -f "$root/config/scenes/$scene.yaml" ]] || { echo "no scene config/scenes/$scene.yaml" >&2; exit 2; }
 done
 [[ $helper_thread =~ ^(shipped|on|off)$ ]] || { echo "--helper-thread on or off, not '$helper_thread'" >&2; exit 2; }
+[[ $cpu_latency_us =~ ^(shipped|-1|[0-9]+)$ ]] || { echo "--cpu-latency-us -1 or a number of us, not '$cpu_latency_us'" >&2; exit 2; }
 handsim="$root/$build/sim/handsim/handsim"
 [[ -x "$handsim" ]] || { echo "$handsim not built" >&2; exit 1; }
 work="$(mktemp -d /tmp/handsim-scenes.XXXX)"
 echo "# $(date -u +%FT%TZ) $(git -C "$root" rev-parse --short HEAD) $(nproc) cores, load $(cut -d' ' -f1 /proc/loadavg)"
-echo "# $0 --duration $duration --build $build --scenes \"$scenes\" --helper-thread $helper_thread; logs in $work"
+echo "# $0 --duration $duration --build $build --scenes \"$scenes\" --helper-thread $helper_thread --cpu-latency-us $cpu_latency_us; logs in $work"
 
 domain=90
 for scene in $scenes; do
@@ -59,6 +64,10 @@ for scene in $scenes; do
     esac
     if [[ "$scene" == thimble_only ]]; then
         sed -i '/^  - devices\/exoskeleton.yaml/d' "$copy/sim.yaml"
+    fi
+    if [[ $cpu_latency_us != shipped ]]; then
+        sed -i "s/^cpu_latency_us: [-0-9]*/cpu_latency_us: $cpu_latency_us/" "$copy/sim.yaml"
+        grep -q "^cpu_latency_us: $cpu_latency_us\b" "$copy/sim.yaml" || { echo "sim.yaml has no cpu_latency_us line" >&2; exit 1; }
     fi
     domain=$((domain + 1))
     "$handsim" -c "$copy/sim.yaml" --sim-link dds --dds-domain "$domain" \

@@ -15,6 +15,7 @@ LoopConfig readLoop(MapReader map) {
     out.realtime = map.optional("realtime", RealtimeMode::kEnforce, spec::Enum<RealtimeMode>{});
     out.priority = map.optional("priority", 80, Integer<int>::closed(1, 99));
     out.cpu_affinity = map.optional("cpu_affinity", -1, Integer<int>::closed(-1, 1023));
+    out.cpu_latency_us = map.optional("cpu_latency_us", -1, Integer<int>::closed(-1, 10'000));
     out.sim_timeout_ms = map.required("sim_timeout_ms", Integer<int>::closed(1, 1000));
     if (auto field = map.take("sim_rearm_after_ms")) {
         // Shorter than the timeout would demand an enable after every fade.

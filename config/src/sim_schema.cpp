@@ -26,6 +26,8 @@ SimConfig loadSimConfig(const std::filesystem::path& path) {
     SimConfig out;
     out.source = path;
     out.log_level = detail::readLogLevel(root);
+    out.cpu_latency_us =
+        root.optional("cpu_latency_us", -1, spec::Integer<int>::closed(-1, 10'000));
     out.scene = loadSceneConfig(root.required("scene", spec::File{}));
     detail::readTransports(root, out);
     const ListReader device_list = detail::requiredDeviceList(root);

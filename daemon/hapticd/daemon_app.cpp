@@ -127,7 +127,7 @@ class RealtimeLoop {
           realtime_{cfg.loop.realtime == config::RealtimeMode::kEnforce
                         ? daemon::RealtimePolicy::kEnforce
                         : daemon::RealtimePolicy::kIgnore,
-                    cfg.loop.priority, cfg.loop.cpu_affinity},
+                    cfg.loop.priority, cfg.loop.cpu_affinity, cfg.loop.cpu_latency_us},
           period_ns_(1'000'000'000LL / cfg.loop.rate_hz),
           stall_limit_ns_(coreSettings(cfg).stall_limit_ns) {}
 
@@ -181,8 +181,9 @@ class RealtimeLoop {
     static constexpr int kSafeStopTicks = 5;
 
     void run() {
-        const auto setup = daemon::applyRealtimeSettings(realtime_);
+        auto setup = daemon::applyRealtimeSettings(realtime_);
         setup_report_ = setup.report;
+        cpu_latency_ = std::move(setup.cpu_latency);
         if (!setup.ok) {
             start_state_.store(-1);
             return;
@@ -336,6 +337,7 @@ class RealtimeLoop {
     TelemetryQueue& telemetry_;
     msgs::TelemetrySample telemetry_scratch_{};
     daemon::RealtimeSettings realtime_;
+    process::CpuLatencyRequest cpu_latency_;  // held while the loop object lives
     std::int64_t period_ns_;
     std::int64_t stall_limit_ns_;
     std::atomic<std::int64_t> exit_stall_ns_{0};

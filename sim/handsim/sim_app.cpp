@@ -19,6 +19,7 @@
 #include "haptic/ipc/iceoryx_runtime.hpp"
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
+#include "haptic/process/cpu_latency.hpp"
 #include "haptic/process/shutdown.hpp"
 #include "haptic/softhand/scene_simulation.hpp"
 #include "iceoryx_posh/popo/publisher.hpp"
@@ -136,6 +137,20 @@ int runSim(const SimOptions& options) {
     spdlog::info("stepping at {} Hz for {} device(s); solver: {} Newton iteration(s), PCG cap {}",
                  cfg.scene.rate_hz, cfg.devices.size(), cfg.scene.solver.newton_iterations,
                  cfg.scene.solver.pcg_max_iterations);
+
+    // handsim is soft real time: without the request it runs, slower (docs/softhand.md).
+    process::CpuLatencyRequest cpu_latency;
+    if (cfg.cpu_latency_us >= 0) {
+        cpu_latency = process::CpuLatencyRequest(cfg.cpu_latency_us);
+        if (cpu_latency.held()) {
+            spdlog::info("CPU wake-up latency held at {} us", cfg.cpu_latency_us);
+        } else {
+            spdlog::warn(
+                "CPU wake-up latency not held ({}; needs the udev rule "
+                "60-haptic-cpu-latency.rules): steps after each sleep take longer",
+                cpu_latency.error());
+        }
+    }
 
     const auto period = std::chrono::nanoseconds(1'000'000'000LL / cfg.scene.rate_hz);
     const auto started = std::chrono::steady_clock::now();

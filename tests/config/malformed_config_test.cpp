@@ -124,12 +124,13 @@ TEST(ConfigUnknownKeys, TopLevelTypoListsAllowedKeys) {
 }
 
 TEST(ConfigUnknownKeys, NestedTypoHasDottedPath) {
-    expectError(daemonError("unknown_key_nested.yaml"),
-                {data("unknown_key_nested.yaml"),
-                 lineOf(kDataDir / "unknown_key_nested.yaml", "rate_hx"), 3, "loop.rate_hx",
-                 "unknown key 'loop.rate_hx' (allowed: rate_hz, realtime, priority, "
-                 "cpu_affinity, sim_timeout_ms, sim_rearm_after_ms, status_rate_hz, "
-                 "telemetry_decimation, overrun_limit, overrun_window_ms)"});
+    expectError(
+        daemonError("unknown_key_nested.yaml"),
+        {data("unknown_key_nested.yaml"), lineOf(kDataDir / "unknown_key_nested.yaml", "rate_hx"),
+         3, "loop.rate_hx",
+         "unknown key 'loop.rate_hx' (allowed: rate_hz, realtime, priority, "
+         "cpu_affinity, cpu_latency_us, sim_timeout_ms, sim_rearm_after_ms, status_rate_hz, "
+         "telemetry_decimation, overrun_limit, overrun_window_ms)"});
 }
 
 TEST(ConfigUnknownKeys, ThimbleKeyInExoskeletonFile) {
@@ -233,6 +234,14 @@ TEST(ConfigOutOfRange, IntegerAboveMaximum) {
     expectError(daemonError("out_of_range.yaml"),
                 {data("out_of_range.yaml"), 3, 12, "loop.rate_hz",
                  "loop.rate_hz: expected an integer in [100, 4000], got 50000"});
+}
+
+// Past 10 ms the request would keep no CPU out of any idle state a PC has: a typo of -1 or 0.
+TEST(ConfigOutOfRange, CpuLatencyBeyondAnyIdleState) {
+    const auto file = kDataDir / "cpu_latency_out_of_range.yaml";
+    expectError(daemonError("cpu_latency_out_of_range.yaml"),
+                {file.string(), lineOf(file, "cpu_latency_us"), 19, "loop.cpu_latency_us",
+                 "expected an integer in [-1, 10000], got 20000"});
 }
 
 TEST(ConfigOutOfRange, MillimetresWrittenWhereMetresExpected) {

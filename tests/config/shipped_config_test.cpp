@@ -71,6 +71,7 @@ TEST(ShippedConfig, Daemon) {
     EXPECT_EQ(cfg.loop.realtime, RealtimeMode::kEnforce);
     EXPECT_EQ(cfg.loop.priority, 80);
     EXPECT_EQ(cfg.loop.cpu_affinity, -1);
+    EXPECT_EQ(cfg.loop.cpu_latency_us, 0);
     EXPECT_EQ(cfg.loop.sim_timeout_ms, 20);
     EXPECT_EQ(cfg.loop.sim_rearm_after_ms, 1000);
     EXPECT_EQ(cfg.loop.status_rate_hz, 20);

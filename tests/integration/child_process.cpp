@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -154,6 +155,19 @@ std::vector<std::string> withFifoPriority(std::vector<std::string> argv, int pri
     }
     argv.insert(argv.begin(), {"/usr/bin/chrt", "--fifo", std::to_string(priority)});
     return argv;
+}
+
+bool holdsOpen(pid_t pid, const std::string& file) {
+    namespace fs = std::filesystem;
+    std::error_code error;
+    for (const auto& fd :
+         fs::directory_iterator(fs::path("/proc") / std::to_string(pid) / "fd", error)) {
+        std::error_code link_error;
+        if (fs::read_symlink(fd.path(), link_error) == fs::path(file)) {
+            return true;
+        }
+    }
+    return false;
 }
 
 }  // namespace haptic::testing

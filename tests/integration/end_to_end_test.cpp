@@ -25,6 +25,7 @@
 
 #include "child_process.hpp"
 #include "haptic/ipc/iceoryx_runtime.hpp"
+#include "haptic/process/cpu_latency.hpp"
 #include "roudi_process.hpp"
 
 namespace haptic::testing {
@@ -115,6 +116,13 @@ TEST_F(RoudiTest, DaemonAndSimExchangeMessagesAndStatusIsLive) {
     std::printf("hapticctl status answered in %.2f s\n", status.seconds);
     EXPECT_THAT(status.out, HasSubstr("State: IDLE"));
     EXPECT_THAT(status.out, HasSubstr("Loop: 1000 Hz"));
+    // daemon.yaml's loop.cpu_latency_us and sim.yaml's cpu_latency_us (0 as shipped): each
+    // process holds the kernel's request while it runs, where this host lets a process do so.
+    if (process::CpuLatencyRequest(0).held()) {
+        EXPECT_TRUE(holdsOpen(daemon.pid(), process::CpuLatencyRequest::kDevicePath));
+        EXPECT_TRUE(holdsOpen(sim.pid(), process::CpuLatencyRequest::kDevicePath));
+        EXPECT_THAT(sim.stderrText(), HasSubstr("CPU wake-up latency held at 0 us"));
+    }
     EXPECT_THAT(status.out, Not(HasSubstr("period    p50     0.0 us")))
         << "no statistics window yet";
     if (!kSanitized) {  // 20 ms sim timeout: a 4 Hz sanitized sim is never "connected"

@@ -6,6 +6,7 @@
 #include <sys/mman.h>
 
 #include "device_safety_rig.hpp"
+#include "haptic/process/cpu_latency.hpp"
 
 namespace haptic::testing {
 namespace {
@@ -180,6 +181,48 @@ TEST_F(RealtimeKeysTest, TheRtThreadRunsAtTheConfiguredPriorityOnTheConfiguredCo
     EXPECT_NE(refused.exit_code, 0);
     EXPECT_THAT(refused.err, ::testing::HasSubstr("real-time setup failed ("));
     EXPECT_THAT(refused.err, ::testing::HasSubstr("SCHED_FIFO priority 42 (needs CAP_SYS_NICE"));
+}
+
+// loop.cpu_latency_us: hapticd holds its request on the kernel's PM QoS device for as long as
+// it runs (the open file is the request), and says so; under enforce, a device it cannot open
+// (here made read-only in a mount namespace of the refused run's own) stops the start.
+class CpuLatencyKeyTest : public RealtimeKeysTest {
+  protected:
+    CpuLatencyKeyTest() {
+        replaceLine(config_.dir / "daemon.yaml", "cpu_latency_us: 0 ", "cpu_latency_us: 4 ");
+    }
+};
+
+TEST_F(CpuLatencyKeyTest, HapticdHoldsTheRequestWhileItRunsAndEnforceRefusesToRunWithout) {
+    const fs::path device = process::CpuLatencyRequest::kDevicePath;
+    if (!process::CpuLatencyRequest(4).held()) {
+        GTEST_SKIP() << "this test cannot hold " << device << " itself";
+    }
+    EXPECT_TRUE(holdsOpen(daemon_->pid(), device));
+    EXPECT_THAT(daemon_->stderrText(), ::testing::HasSubstr("CPU wake-up latency held at 4 us"));
+    std::ifstream in(device, std::ios::binary);
+    std::int32_t combined = -1;
+    in.read(reinterpret_cast<char*>(&combined), sizeof(combined));
+    EXPECT_LE(combined, 4) << "the kernel combines the holders' requests to the lowest";
+    ASSERT_EQ(daemon_->terminate(), std::optional<int>(0)) << daemon_->stderrText();
+    daemon_.reset();
+
+    const fs::path read_only = config_.dir / "read-only-cpu-latency";
+    std::ofstream(read_only).close();
+    const std::string script = "mount --bind '" + read_only.string() + "' " + device.string() +
+                               " && mount -o remount,bind,ro " + device.string() +
+                               " || exit 77; exec '" + std::string(HAPTICD_PATH) + "' -c '" +
+                               (config_.dir / "daemon.yaml").string() + "' --dds-domain " +
+                               domain();
+    const CommandResult refused =
+        runCommand({"/usr/bin/unshare", "-m", "/bin/sh", "-c", script}, 20s);
+    if (refused.exit_code == 77) {
+        GTEST_SKIP() << "no mount namespace here: " << refused.err;
+    }
+    EXPECT_NE(refused.exit_code, 0);
+    EXPECT_THAT(refused.err,
+                ::testing::HasSubstr("real-time setup failed (CPU latency request: " +
+                                     device.string() + ": cannot open: Read-only file system"));
 }
 
 // loop.rate_hz at 2 kHz (shipped 1 kHz): the ticks in telemetry come every 0.5 ms by the RT

@@ -55,12 +55,25 @@ RealtimeSetupResult applyRealtimeSettings(const RealtimeSettings& settings) {
             fail("CPU affinity " + std::to_string(settings.cpu_affinity), rc);
         }
     }
+    if (settings.cpu_latency_us >= 0) {
+        result.cpu_latency = process::CpuLatencyRequest(settings.cpu_latency_us);
+        if (!result.cpu_latency.held()) {
+            if (!failures.empty()) {
+                failures += "; ";
+            }
+            failures += "CPU latency request: " + result.cpu_latency.error() +
+                        " (needs the udev rule systemd/60-haptic-cpu-latency.rules)";
+        }
+    }
 
     if (failures.empty()) {
         result.report =
             "real-time: mlockall, SCHED_FIFO " + std::to_string(settings.priority) +
             (settings.cpu_affinity >= 0 ? ", CPU " + std::to_string(settings.cpu_affinity)
-                                        : std::string(", no CPU pinning"));
+                                        : std::string(", no CPU pinning")) +
+            (settings.cpu_latency_us >= 0 ? ", CPU wake-up latency held at " +
+                                                std::to_string(settings.cpu_latency_us) + " us"
+                                          : std::string(", no CPU latency request"));
         return result;
     }
     if (settings.policy == RealtimePolicy::kEnforce) {

@@ -3,7 +3,8 @@
 //
 // Phases, with the same SCHED_FIFO priority and CPU affinity (both read from the daemon
 // config), and RouDi, handsim and any --with processes running throughout:
-//   1. cyclictest -m -p <prio> [-a <cpu>] -i 1000 -h 20000 -q --laptop, and
+//   1. cyclictest -m -p <prio> [-a <cpu>] -i 1000 -h 20000 -q --latency=<loop.cpu_latency_us>
+//      (--laptop where the config makes no request), and
 //   2. the real hapticd process; its per-tick wake-up latency and compute time come from
 //      haptic/telemetry over DDS (every tick carries them), so hapticemu for both devices can
 //      be added with --with and a daemon config that binds them, without code changes.
@@ -90,13 +91,13 @@ std::string row(const std::string& name, const LatencySummary& s) {
            " | " + fixed(s.max) + " | " + std::to_string(s.count) + " |\n";
 }
 
-std::optional<LatencyHistogram> runCyclictest(int priority, int cpu, double duration_s,
-                                              std::string& error) {
+std::optional<LatencyHistogram> runCyclictest(int priority, int cpu, int cpu_latency_us,
+                                              double duration_s, std::string& error) {
     std::vector<std::string> argv{
         HAPTIC_CYCLICTEST_PATH, "-m", "-p", std::to_string(priority), "-i", "1000", "-l",
         std::to_string(static_cast<long>(duration_s * 1000.0)), "-q", "-h", "20000",
-        // hapticd does not hold /dev/cpu_dma_latency at 0, so cyclictest must not either.
-        "--laptop"};
+        // The same CPU latency request as hapticd's (loop.cpu_latency_us), or none.
+        cpu_latency_us >= 0 ? "--latency=" + std::to_string(cpu_latency_us) : "--laptop"};
     if (cpu >= 0) {
         argv.insert(argv.end(), {"-a", std::to_string(cpu)});
     }
@@ -277,8 +278,8 @@ int runBenchmark(const BenchOptions& options) {
     for (int round = 1; round <= options.rounds && error.empty(); ++round) {
         std::fprintf(stderr, "round %d of %d: cyclictest for %.1f s, then hapticd ...\n", round,
                      options.rounds, round_s);
-        if (const auto histogram =
-                runCyclictest(cfg.loop.priority, cfg.loop.cpu_affinity, round_s, error)) {
+        if (const auto histogram = runCyclictest(cfg.loop.priority, cfg.loop.cpu_affinity,
+                                                 cfg.loop.cpu_latency_us, round_s, error)) {
             merge(cyclic_total, *histogram);
         }
         runDaemonLoop(options, cfg, domain, round_s, loop);

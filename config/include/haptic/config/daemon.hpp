@@ -31,8 +31,10 @@ struct EnumTraits<RealtimeMode> {
 struct LoopConfig {
     int rate_hz{1000};  // 100..4000
     RealtimeMode realtime{RealtimeMode::kEnforce};
-    int priority{80};        // SCHED_FIFO priority, 1..99
-    int cpu_affinity{-1};    // core index for the RT thread, -1 = no pinning
+    int priority{80};      // SCHED_FIFO priority, 1..99
+    int cpu_affinity{-1};  // core index for the RT thread, -1 = no pinning
+    // The CPUs' wake-up latency hapticd holds while it runs (/dev/cpu_dma_latency), -1: none.
+    int cpu_latency_us{-1};
     int sim_timeout_ms{20};  // older sim input fades the force out
     // Sim input lost this long while RENDERING: the device renders again only after a new
     // `enable`, not by itself when the input returns.

@@ -34,6 +34,8 @@ struct SimConfig {
     std::optional<IceoryxConfig> iceoryx;
     std::vector<DeviceConfig> devices;  // the devices the sim computes targets for
     std::optional<TrackingFilterConfig> tracking_filter;
+    // The CPUs' wake-up latency handsim holds while it runs (/dev/cpu_dma_latency), -1: none.
+    int cpu_latency_us{-1};
 };
 
 // Loads sim.yaml, its scene and its device files. Throws ConfigError.

@@ -4,6 +4,8 @@
 #include <ctime>
 #include <string>
 
+#include "haptic/process/cpu_latency.hpp"
+
 namespace haptic::daemon {
 
 // Production refuses to run without real-time scheduling; tests and the demo on a VM opt out
@@ -14,16 +16,20 @@ struct RealtimeSettings {
     RealtimePolicy policy{RealtimePolicy::kEnforce};
     int priority{80};      // SCHED_FIFO priority
     int cpu_affinity{-1};  // core index, or -1 for none
+    int cpu_latency_us{
+        -1};  // the CPUs' wake-up latency to hold (process::CpuLatencyRequest), -1: none
 };
 
 struct RealtimeSetupResult {
     bool ok{true};
     std::string report;  // what was applied, or with kIgnore, what was skipped and why
+    // Held for as long as the caller keeps it: the request ends with this object.
+    process::CpuLatencyRequest cpu_latency;
 };
 
-// Applies mlockall, SCHED_FIFO and CPU affinity to the calling thread. With kEnforce any
-// failure is returned as an error (the caller exits); with kIgnore failures are reported but
-// the loop runs anyway.
+// Applies mlockall, SCHED_FIFO and CPU affinity to the calling thread and makes the CPU
+// latency request. With kEnforce any failure is returned as an error (the caller exits); with
+// kIgnore failures are reported but the loop runs anyway.
 RealtimeSetupResult applyRealtimeSettings(const RealtimeSettings& settings);
 
 // Absolute-time periodic wake-ups on CLOCK_MONOTONIC. Sleeping to an absolute deadline does

@@ -1,0 +1,97 @@
+#include "haptic/process/cpu_latency.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <utility>
+
+namespace haptic::process {
+namespace {
+
+namespace fs = std::filesystem;
+
+// How many of this process's open files are `file` (/proc/self/fd).
+int openCount(const fs::path& file) {
+    int count = 0;
+    for (const auto& fd : fs::directory_iterator("/proc/self/fd")) {
+        std::error_code error;
+        if (fs::read_symlink(fd.path(), error) == file) {
+            ++count;
+        }
+    }
+    return count;
+}
+
+class CpuLatencyRequestTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() / ("cpu_latency_test." + std::to_string(::getpid()));
+        fs::create_directories(dir_);
+        file_ = dir_ / "cpu_dma_latency";
+        std::ofstream(file_).close();
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    fs::path dir_;
+    fs::path file_;
+};
+
+// The kernel takes four bytes as a binary value; the request lasts as long as the file is open.
+TEST_F(CpuLatencyRequestTest, WritesTheValueAsFourBinaryBytesAndHoldsTheFileUntilDestroyed) {
+    {
+        const CpuLatencyRequest request(7, file_);
+        ASSERT_TRUE(request.held()) << request.error();
+        EXPECT_EQ(request.latencyUs(), 7);
+        EXPECT_EQ(openCount(file_), 1);
+        std::ifstream in(file_, std::ios::binary);
+        std::int32_t value = -1;
+        in.read(reinterpret_cast<char*>(&value), sizeof(value));
+        EXPECT_EQ(in.gcount(), 4);
+        EXPECT_EQ(value, 7);
+        EXPECT_EQ(fs::file_size(file_), 4U);
+    }
+    EXPECT_EQ(openCount(file_), 0);
+}
+
+TEST_F(CpuLatencyRequestTest, AMoveCarriesTheRequestAndTheSourceHoldsNothing) {
+    CpuLatencyRequest first(0, file_);
+    CpuLatencyRequest second(std::move(first));
+    EXPECT_FALSE(first.held());  // NOLINT(bugprone-use-after-move): what a move leaves
+    EXPECT_TRUE(second.held());
+    EXPECT_EQ(second.latencyUs(), 0);
+    CpuLatencyRequest third;
+    EXPECT_FALSE(third.held());
+    third = std::move(second);
+    EXPECT_TRUE(third.held());
+    EXPECT_EQ(openCount(file_), 1);
+}
+
+TEST_F(CpuLatencyRequestTest, AFileItCannotOpenIsNamedWithTheSystemsReason) {
+    const CpuLatencyRequest request(0, dir_ / "missing" / "cpu_dma_latency");
+    EXPECT_FALSE(request.held());
+    EXPECT_EQ(request.latencyUs(), -1);
+    EXPECT_EQ(request.error(), (dir_ / "missing" / "cpu_dma_latency").string() +
+                                   ": cannot open: No such file or directory");
+}
+
+// The kernel's own device: while the request is held, reading it gives the combined request
+// of every holder, which is at most this one.
+TEST(CpuLatencyRequestDevice, TheKernelHoldsTheRequestWhileItIsOpen) {
+    const CpuLatencyRequest request(3);
+    if (!request.held()) {
+        GTEST_SKIP() << request.error();
+    }
+    std::ifstream in(CpuLatencyRequest::kDevicePath, std::ios::binary);
+    std::int32_t value = -1;
+    in.read(reinterpret_cast<char*>(&value), sizeof(value));
+    ASSERT_EQ(in.gcount(), 4);
+    EXPECT_GE(value, 0);
+    EXPECT_LE(value, 3);
+}
+
+}  // namespace
+}  // namespace haptic::process
