@@ -138,7 +138,8 @@ int runSim(const SimOptions& options) {
                  cfg.scene.rate_hz, cfg.devices.size(), cfg.scene.solver.newton_iterations,
                  cfg.scene.solver.pcg_max_iterations);
 
-    // handsim is soft real time: without the request it runs, slower (docs/softhand.md).
+    // handsim is soft real time: without the request it runs, slower (docs/hapticd.md, "CPU
+    // wake-up latency").
     process::CpuLatencyRequest cpu_latency;
     if (cfg.cpu_latency_us >= 0) {
         cpu_latency = process::CpuLatencyRequest(cfg.cpu_latency_us);

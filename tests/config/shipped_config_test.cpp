@@ -99,6 +99,7 @@ TEST(ShippedConfig, Daemon) {
 
 TEST(ShippedConfig, Sim) {
     const SimConfig cfg = loadSimConfig(kConfigDir / "sim.yaml");
+    EXPECT_EQ(cfg.cpu_latency_us, 0);
     EXPECT_EQ(cfg.scene.name, "default");
     EXPECT_EQ(cfg.scene.source, resolved(kConfigDir / "scenes/default.yaml"));
     EXPECT_EQ(cfg.sim_link.transport, SimTransport::kIceoryx);

@@ -6,24 +6,31 @@
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
+#include <string>
 #include <utility>
 
 namespace haptic::process {
 
 CpuLatencyRequest::CpuLatencyRequest(int latency_us, const std::filesystem::path& device) {
-    const auto failed = [&](const char* what) {
-        error_ = device.string() + ": " + what + ": " + std::strerror(errno);
+    if (latency_us < 0) {
+        error_ =
+            "a CPU latency request of " + std::to_string(latency_us) + " us: expected 0 or more";
+        return;
+    }
+    const auto failed = [&](const char* what, int error) {
+        error_ = device.string() + ": " + what + ": " + std::strerror(error);
     };
     fd_ = ::open(device.c_str(), O_WRONLY | O_CLOEXEC);
     if (fd_ < 0) {
-        failed("cannot open");
+        failed("cannot open", errno);
         return;
     }
     // The kernel reads a write of exactly four bytes as a binary value (any other length as
     // hexadecimal text).
     const std::int32_t value = latency_us;
-    if (::write(fd_, &value, sizeof(value)) != static_cast<ssize_t>(sizeof(value))) {
-        failed("cannot write the request");
+    if (const ssize_t written = ::write(fd_, &value, sizeof(value));
+        written != static_cast<ssize_t>(sizeof(value))) {
+        failed("cannot write the request", written < 0 ? errno : EIO);
         release();
         return;
     }

@@ -16,8 +16,8 @@ class CpuLatencyRequest {
     static constexpr const char* kDevicePath = "/dev/cpu_dma_latency";
 
     CpuLatencyRequest() = default;  // no request
-    // Opens `device` and writes the request. On failure holds nothing and error() says why,
-    // naming the file and the system's reason.
+    // Opens `device` and writes the request. On failure (or a negative latency) holds nothing
+    // and error() says why, naming the file and the system's reason.
     explicit CpuLatencyRequest(int latency_us, const std::filesystem::path& device = kDevicePath);
     ~CpuLatencyRequest();
     CpuLatencyRequest(CpuLatencyRequest&& other) noexcept;
