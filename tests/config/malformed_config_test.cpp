@@ -673,6 +673,14 @@ TEST(ConfigReferences, HandFingerListedTwice) {
                  "expected each finger at most once, got the string 'thumb'"});
 }
 
+// handsim's key: −1 is no request, so −2 is a typo, not another way to say none.
+TEST(ConfigOutOfRange, SimCpuLatencyBelowNoRequest) {
+    const auto file = kDataDir / "sim_cpu_latency_out_of_range.yaml";
+    expectError(
+        simError("sim_cpu_latency_out_of_range.yaml"),
+        {file.string(), 2, 17, "cpu_latency_us", "expected an integer in [-1, 10000], got -2"});
+}
+
 TEST(ConfigReferences, SimMissingScene) {
     const auto file = kDataDir / "sim_missing_scene.yaml";
     expectError(simError("sim_missing_scene.yaml"),
