@@ -16,8 +16,8 @@ struct RealtimeSettings {
     RealtimePolicy policy{RealtimePolicy::kEnforce};
     int priority{80};      // SCHED_FIFO priority
     int cpu_affinity{-1};  // core index, or -1 for none
-    int cpu_latency_us{
-        -1};  // the CPUs' wake-up latency to hold (process::CpuLatencyRequest), -1: none
+    // The CPUs' wake-up latency to hold (process::CpuLatencyRequest), or -1 for none.
+    int cpu_latency_us{-1};
 };
 
 struct RealtimeSetupResult {
