@@ -38,6 +38,8 @@ namespace {
 // under the sanitizers, whose processes stall for tens of ms. The measured figure is printed.
 constexpr std::int64_t kSlackNs = HAPTIC_SANITIZED != 0 ? 40'000'000 : 6'000'000;
 constexpr std::int64_t kTickNs = 1'000'000;
+// The non-RT thread of hapticd (status, control, RouDi checks) runs at normal priority.
+constexpr std::int64_t kNonRealtimeSlackNs = HAPTIC_SANITIZED != 0 ? 150'000'000 : kSlackNs;
 
 // The id of `pid`'s thread called `name`, or -1.
 pid_t threadNamed(pid_t pid, const std::string& name) {
@@ -334,8 +336,11 @@ TEST_F(RoudiLostTest, WhileRenderingHapticdWritesTheSafeCommandsBeforeExitingFor
                 static_cast<double>(first_limp->at_ns - kill_ns) * 1e-6,
                 static_cast<double>(exited_ns - kill_ns) * 1e-6);
     // RouDi is checked every 200 ms by the non-RT side, which wakes every 10 ms
-    // (docs/hapticd.md); the safe command follows within ticks.
-    EXPECT_LE(first_limp->at_ns - kill_ns, 200'000'000 + 10'000'000 + 2 * kTickNs + kSlackNs);
+    // (docs/hapticd.md); the safe command follows within ticks. That side runs without RT
+    // priority, so under the sanitizers, beside a second test on two cores, it can wake late
+    // by more than the RT thread's slack (a CI run's ASan build: 271 ms).
+    EXPECT_LE(first_limp->at_ns - kill_ns,
+              200'000'000 + 10'000'000 + 2 * kTickNs + kNonRealtimeSlackNs);
     // And it was hapticd's safe command (the fade, 500 ms here, cannot have limped it): the
     // first command disabling the drive after the kill came before the limp, and the drive
     // was last commanded disabled at 0 N.
