@@ -4,26 +4,20 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <utility>
+
+#include "open_files.hpp"
 
 namespace haptic::process {
 namespace {
 
 namespace fs = std::filesystem;
 
-// How many of this process's open files are `file` (/proc/self/fd).
+// How many of this process's open files are `file`.
 int openCount(const fs::path& file) {
-    int count = 0;
-    for (const auto& fd : fs::directory_iterator("/proc/self/fd")) {
-        std::error_code error;
-        if (fs::read_symlink(fd.path(), error) == file) {
-            ++count;
-        }
-    }
-    return count;
+    return testing::openCount(::getpid(), file);
 }
 
 class CpuLatencyRequestTest : public ::testing::Test {
@@ -47,11 +41,7 @@ TEST_F(CpuLatencyRequestTest, WritesTheValueAsFourBinaryBytesAndHoldsTheFileUnti
         ASSERT_TRUE(request.held()) << request.error();
         EXPECT_EQ(request.latencyUs(), 7);
         EXPECT_EQ(openCount(file_), 1);
-        std::ifstream in(file_, std::ios::binary);
-        std::int32_t value = -1;
-        in.read(reinterpret_cast<char*>(&value), sizeof(value));
-        EXPECT_EQ(in.gcount(), 4);
-        EXPECT_EQ(value, 7);
+        EXPECT_EQ(testing::readCpuLatencyUs(file_), 7);
         EXPECT_EQ(fs::file_size(file_), 4U);
     }
     EXPECT_EQ(openCount(file_), 0);
@@ -93,12 +83,10 @@ TEST(CpuLatencyRequestDevice, TheKernelHoldsTheRequestWhileItIsOpen) {
     }
     const CpuLatencyRequest request(3);
     ASSERT_TRUE(request.held()) << request.error();
-    std::ifstream in(CpuLatencyRequest::kDevicePath, std::ios::binary);
-    std::int32_t value = -1;
-    in.read(reinterpret_cast<char*>(&value), sizeof(value));
-    ASSERT_EQ(in.gcount(), 4);
-    EXPECT_GE(value, 0);
-    EXPECT_LE(value, 3);
+    const auto combined = testing::readCpuLatencyUs(CpuLatencyRequest::kDevicePath);
+    ASSERT_TRUE(combined.has_value()) << "fewer than four bytes read";
+    EXPECT_GE(*combined, 0);
+    EXPECT_LE(*combined, 3);
 }
 
 }  // namespace

@@ -157,17 +157,4 @@ std::vector<std::string> withFifoPriority(std::vector<std::string> argv, int pri
     return argv;
 }
 
-bool holdsOpen(pid_t pid, const std::string& file) {
-    namespace fs = std::filesystem;
-    std::error_code error;
-    for (const auto& fd :
-         fs::directory_iterator(fs::path("/proc") / std::to_string(pid) / "fd", error)) {
-        std::error_code link_error;
-        if (fs::read_symlink(fd.path(), link_error) == fs::path(file)) {
-            return true;
-        }
-    }
-    return false;
-}
-
 }  // namespace haptic::testing

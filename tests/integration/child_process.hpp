@@ -54,7 +54,4 @@ bool fifoPermitted();
 // process is a test artefact that hapticd would rightly report as a device fault.
 std::vector<std::string> withFifoPriority(std::vector<std::string> argv, int priority);
 
-// Whether process `pid` has `file` open (/proc/<pid>/fd).
-bool holdsOpen(pid_t pid, const std::string& file);
-
 }  // namespace haptic::testing

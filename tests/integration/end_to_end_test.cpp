@@ -26,6 +26,7 @@
 #include "child_process.hpp"
 #include "haptic/ipc/iceoryx_runtime.hpp"
 #include "haptic/process/cpu_latency.hpp"
+#include "open_files.hpp"
 #include "roudi_process.hpp"
 
 namespace haptic::testing {

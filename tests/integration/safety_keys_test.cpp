@@ -7,6 +7,7 @@
 
 #include "device_safety_rig.hpp"
 #include "haptic/process/cpu_latency.hpp"
+#include "open_files.hpp"
 
 namespace haptic::testing {
 namespace {
@@ -209,10 +210,9 @@ TEST_F(CpuLatencyKeyTest, HapticdHoldsTheRequestWhileItRunsAndEnforceRefusesToRu
     const fs::path device = process::CpuLatencyRequest::kDevicePath;
     EXPECT_TRUE(holdsOpen(daemon_->pid(), device));
     EXPECT_THAT(daemon_->stderrText(), ::testing::HasSubstr("CPU wake-up latency held at 4 us"));
-    std::ifstream in(device, std::ios::binary);
-    std::int32_t combined = -1;
-    in.read(reinterpret_cast<char*>(&combined), sizeof(combined));
-    EXPECT_LE(combined, 4) << "the kernel combines the holders' requests to the lowest";
+    const auto combined = readCpuLatencyUs(device);
+    ASSERT_TRUE(combined.has_value()) << "fewer than four bytes read from " << device;
+    EXPECT_LE(*combined, 4) << "the kernel combines the holders' requests to the lowest";
     ASSERT_EQ(daemon_->terminate(), std::optional<int>(0)) << daemon_->stderrText();
     daemon_.reset();
 

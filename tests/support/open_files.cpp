@@ -1,0 +1,36 @@
+#include "open_files.hpp"
+
+#include <filesystem>
+#include <fstream>
+
+namespace haptic::testing {
+
+int openCount(pid_t pid, const std::string& file) {
+    namespace fs = std::filesystem;
+    int count = 0;
+    std::error_code error;
+    for (const auto& fd :
+         fs::directory_iterator(fs::path("/proc") / std::to_string(pid) / "fd", error)) {
+        std::error_code link_error;
+        if (fs::read_symlink(fd.path(), link_error) == fs::path(file)) {
+            ++count;
+        }
+    }
+    return count;
+}
+
+bool holdsOpen(pid_t pid, const std::string& file) {
+    return openCount(pid, file) > 0;
+}
+
+std::optional<std::int32_t> readCpuLatencyUs(const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::int32_t value = 0;
+    in.read(reinterpret_cast<char*>(&value), sizeof(value));
+    if (in.gcount() != static_cast<std::streamsize>(sizeof(value))) {
+        return std::nullopt;
+    }
+    return value;
+}
+
+}  // namespace haptic::testing
