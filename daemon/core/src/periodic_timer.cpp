@@ -30,39 +30,39 @@ timespec fromNs(std::int64_t ns) noexcept {
 RealtimeSetupResult applyRealtimeSettings(const RealtimeSettings& settings) {
     RealtimeSetupResult result;
     std::string failures;
-    auto fail = [&](const std::string& what, int error) {
+    auto fail = [&](const std::string& reason) {
         if (!failures.empty()) {
             failures += "; ";
         }
-        failures += what + ": " + std::strerror(error);
+        failures += reason;
+    };
+    auto failWithErrno = [&](const std::string& what, int error) {
+        fail(what + ": " + std::strerror(error));
     };
 
     if (::mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
-        fail("mlockall", errno);
+        failWithErrno("mlockall", errno);
     }
     sched_param param{};
     param.sched_priority = settings.priority;
     if (const int rc = ::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &param); rc != 0) {
-        fail("SCHED_FIFO priority " + std::to_string(settings.priority) +
-                 " (needs CAP_SYS_NICE or LimitRTPRIO)",
-             rc);
+        failWithErrno("SCHED_FIFO priority " + std::to_string(settings.priority) +
+                          " (needs CAP_SYS_NICE or LimitRTPRIO)",
+                      rc);
     }
     if (settings.cpu_affinity >= 0) {
         cpu_set_t set;
         CPU_ZERO(&set);
         CPU_SET(static_cast<unsigned>(settings.cpu_affinity), &set);
         if (const int rc = ::pthread_setaffinity_np(::pthread_self(), sizeof(set), &set); rc != 0) {
-            fail("CPU affinity " + std::to_string(settings.cpu_affinity), rc);
+            failWithErrno("CPU affinity " + std::to_string(settings.cpu_affinity), rc);
         }
     }
     if (settings.cpu_latency_us >= 0) {
         result.cpu_latency = process::CpuLatencyRequest(settings.cpu_latency_us);
         if (!result.cpu_latency.held()) {
-            if (!failures.empty()) {
-                failures += "; ";
-            }
-            failures += "CPU latency request: " + result.cpu_latency.error() +
-                        " (needs the udev rule systemd/60-haptic-cpu-latency.rules)";
+            fail("CPU latency request: " + result.cpu_latency.error() +
+                 " (needs the udev rule systemd/60-haptic-cpu-latency.rules)");
         }
     }
 
