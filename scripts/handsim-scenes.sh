@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs handsim on every shipped scene for a while at the scene's own rate and prints, per
 # scene, the line handsim logs at exit: steps, rate held, step time p50/p99/max, and what the
-# energy guard did (rescaled, substepped, frozen steps). Not part of CI (4 x the duration).
+# energy guard did (rescaled, substepped, frozen steps), then the CPU time handsim used. Not
+# part of CI (4 x the duration).
 #
 #   scripts/handsim-scenes.sh [--duration 60] [--build build/release] [--scenes "thimble_only default"]
 #                             [--helper-thread on|off] [--cpu-latency-us N]
@@ -70,10 +71,16 @@ for scene in $scenes; do
         grep -q "^cpu_latency_us: $cpu_latency_us\b" "$copy/sim.yaml" || { echo "sim.yaml has no cpu_latency_us line" >&2; exit 1; }
     fi
     domain=$((domain + 1))
-    "$handsim" -c "$copy/sim.yaml" --sim-link dds --dds-domain "$domain" \
-        --duration "$duration" > "$work/$scene.log" 2>&1 || {
+    # The CPU time handsim used (user, system; all its threads) beside the wall-clock steps:
+    # a helper thread that polls costs CPU that a step's time does not show.
+    TIMEFORMAT='%U %S %R'
+    { time "$handsim" -c "$copy/sim.yaml" --sim-link dds --dds-domain "$domain" \
+        --duration "$duration" > "$work/$scene.log" 2>&1; } 2> "$work/$scene.cpu" || {
         echo "$scene: handsim failed, see $work/$scene.log" >&2
         exit 1
     }
-    echo "$scene: $(grep -E 'steps in .* s \(' "$work/$scene.log" | tail -1 | sed -E 's/^.*\] //')"
+    read -r user_s system_s real_s < "$work/$scene.cpu"
+    cpu=$(awk -v u="$user_s" -v s="$system_s" -v r="$real_s" \
+        'BEGIN { printf "CPU %.1f s user + %.1f s system in %.1f s (%.0f %% of one core)", u, s, r, 100 * (u + s) / r }')
+    echo "$scene: $(grep -E 'steps in .* s \(' "$work/$scene.log" | tail -1 | sed -E 's/^.*\] //'); $cpu"
 done

@@ -12,7 +12,9 @@ namespace {
 // did not improve at all on the 2-vCPU VM (1 046 against 1 036 us without the helper): the
 // wake-ups ate the gain. So both sides poll this long before they sleep; between steps (5-10
 // ms) the helper naps on its timer until shortly before the step it expects, and a step off
-// that beat wakes it with an empty job as it begins (time_step.cpp).
+// that beat wakes it with an empty job as it begins (time_step.cpp). With the CPU latency
+// request held (sim.yaml cpu_latency_us) a futex-only hand-over still cost the thimble scene's
+// p99 about 0.3 ms, for 11-23 % of a core saved (docs/benchmarks.md, eighteenth session).
 constexpr std::chrono::microseconds kPollBeforeSleep{200};
 // Expecting a job (expectNextJobAt): the timer wakes the helper this long before it (the RT
 // loop's wake-up p99 on the VM is under 0.1 ms), and it polls until this long after it.
