@@ -46,6 +46,9 @@ work="$(mktemp -d /tmp/handsim-scenes.XXXX)"
 echo "# $(date -u +%FT%TZ) $(git -C "$root" rev-parse --short HEAD) $(nproc) cores, load $(cut -d' ' -f1 /proc/loadavg)"
 echo "# $0 --duration $duration --build $build --scenes \"$scenes\" --helper-thread $helper_thread --cpu-latency-us $cpu_latency_us; logs in $work"
 
+# `time` below prints user, system and real seconds with a decimal point whatever the locale.
+LC_ALL=C
+TIMEFORMAT='%U %S %R'
 domain=90
 for scene in $scenes; do
     copy="$work/$scene"
@@ -73,7 +76,6 @@ for scene in $scenes; do
     domain=$((domain + 1))
     # The CPU time handsim used (user, system; all its threads) beside the wall-clock steps:
     # a helper thread that polls costs CPU that a step's time does not show.
-    TIMEFORMAT='%U %S %R'
     { time "$handsim" -c "$copy/sim.yaml" --sim-link dds --dds-domain "$domain" \
         --duration "$duration" > "$work/$scene.log" 2>&1; } 2> "$work/$scene.cpu" || {
         echo "$scene: handsim failed, see $work/$scene.log" >&2

@@ -17,7 +17,7 @@ namespace fs = std::filesystem;
 
 // How many of this process's open files are `file`.
 int openCount(const fs::path& file) {
-    return testing::openCount(::getpid(), file);
+    return haptic::testing::openCount(::getpid(), file);
 }
 
 class CpuLatencyRequestTest : public ::testing::Test {
@@ -41,7 +41,7 @@ TEST_F(CpuLatencyRequestTest, WritesTheValueAsFourBinaryBytesAndHoldsTheFileUnti
         ASSERT_TRUE(request.held()) << request.error();
         EXPECT_EQ(request.latencyUs(), 7);
         EXPECT_EQ(openCount(file_), 1);
-        EXPECT_EQ(testing::readCpuLatencyUs(file_), 7);
+        EXPECT_EQ(haptic::testing::readCpuLatencyUs(file_), 7);
         EXPECT_EQ(fs::file_size(file_), 4U);
     }
     EXPECT_EQ(openCount(file_), 0);
@@ -83,7 +83,7 @@ TEST(CpuLatencyRequestDevice, TheKernelHoldsTheRequestWhileItIsOpen) {
     }
     const CpuLatencyRequest request(3);
     ASSERT_TRUE(request.held()) << request.error();
-    const auto combined = testing::readCpuLatencyUs(CpuLatencyRequest::kDevicePath);
+    const auto combined = haptic::testing::readCpuLatencyUs(CpuLatencyRequest::kDevicePath);
     ASSERT_TRUE(combined.has_value()) << "fewer than four bytes read";
     EXPECT_GE(*combined, 0);
     EXPECT_LE(*combined, 3);

@@ -61,8 +61,8 @@ TEST_F(BadSimInputTest, RejectedCountedAndDoesNotChangeTheOutput) {
     drainTelemetry();
 
     ASSERT_TRUE(injector.sendCommand("bad on"));
-    // This reader hears about half the ticks under the sanitizers (181 of 600 in a CI run's
-    // SimKilled below), so the phase lasts twice as long there for the same bar.
+    // This reader hears a third to a half of the ticks under the sanitizers (181 of 600 in a CI
+    // run's SimKilled below), so the phase lasts twice as long there for the same bar.
     const auto thimble = collectTelemetry(kThimble, HAPTIC_SANITIZED != 0 ? 3000ms : 1500ms);
     ASSERT_TRUE(injector.sendCommand("bad off"));
     std::smatch sent_match;
@@ -279,7 +279,7 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroAndOnlyAnEnab
 TEST_F(DeviceSafetyTest, EstopClearHeartbeatLossAndBusOffShowInStatusWithZeroForce) {
     const auto expectZeroExoForce = [&](const char* when) {
         drainTelemetry();
-        // Twice as long under the sanitizers, whose reader hears about half the ticks.
+        // Twice as long under the sanitizers, whose reader hears a third to a half of the ticks.
         const auto samples = collectTelemetry(kExo, HAPTIC_SANITIZED != 0 ? 600ms : 300ms);
         ASSERT_GT(samples.size(), 100U) << when << ": exoskeleton samples heard";
         for (const auto& sample : samples) {

@@ -9,10 +9,12 @@ int openCount(pid_t pid, const std::string& file) {
     namespace fs = std::filesystem;
     int count = 0;
     std::error_code error;
-    for (const auto& fd :
-         fs::directory_iterator(fs::path("/proc") / std::to_string(pid) / "fd", error)) {
+    // A process can end, and its descriptors go, during the walk: the error_code forms never
+    // throw, and the count stops there.
+    for (fs::directory_iterator fd(fs::path("/proc") / std::to_string(pid) / "fd", error);
+         !error && fd != fs::directory_iterator(); fd.increment(error)) {
         std::error_code link_error;
-        if (fs::read_symlink(fd.path(), link_error) == fs::path(file)) {
+        if (fs::read_symlink(fd->path(), link_error) == fs::path(file)) {
             ++count;
         }
     }

@@ -14,7 +14,7 @@ namespace {
 // ms) the helper naps on its timer until shortly before the step it expects, and a step off
 // that beat wakes it with an empty job as it begins (time_step.cpp). With the CPU latency
 // request held (sim.yaml cpu_latency_us) a futex-only hand-over still cost the thimble scene's
-// p99 about 0.3 ms, for 11-23 % of a core saved (docs/benchmarks.md, eighteenth session).
+// p99 about 0.3 ms, for 10-23 % of a core saved (docs/benchmarks.md, eighteenth session).
 constexpr std::chrono::microseconds kPollBeforeSleep{200};
 // Expecting a job (expectNextJobAt): the timer wakes the helper this long before it (the RT
 // loop's wake-up p99 on the VM is under 0.1 ms), and it polls until this long after it.
