@@ -139,14 +139,20 @@ TEST_F(PlausibilityProcessTest, AThimbleServoThatDoesNotFollowItsTargetLatchesIt
 }
 
 // A device that obeys another host's commands (the other host's counters, not hapticd's):
-// hapticemu's `echo-offset 2` makes the exoskeleton echo a counter two ahead of hapticd's
-// while it still does what hapticd asks, so only the echo tells. (A second host on the bus
+// hapticemu's `echo-offset 8` makes the exoskeleton echo a counter eight ahead of hapticd's
+// while it still does what hapticd asks, so only the echo tells. Eight is half the 4-bit
+// counter's range: hapticd takes an echo 0-4 commands behind as the round trip, so an offset
+// of 8 looks plausible only on a round trip of 8-12 ticks. With 2, as this test had, every
+// tick with a round trip of 2-6 looked plausible and restarted the contradiction's clock; under
+// the sanitizers the round trip is 1 (Release: 0), so one late state frame in 250 ms (this
+// rig's heartbeat timeout) was enough, and in a CI rehearsal's ASan run the fault never
+// latched in 20 s. (A second host on the bus
 // racing hapticd frame by frame does the same in runtime_test's
 // Plausibility.AnExoskeletonObeyingAnotherHostRaisesItsOwnFault, in lockstep; from a test
 // process it would have to win every 1 ms race for 50 ms.)
 TEST_F(PlausibilityProcessTest, AnExoskeletonObeyingAnotherHostLatchesItsOwnFault) {
     renderAtTheClamp();
-    ASSERT_TRUE(exo_emu_->sendCommand("echo-offset 2"));
+    ASSERT_TRUE(exo_emu_->sendCommand("echo-offset 8"));
     const std::string message = implausibleFault("exo");
     EXPECT_THAT(message, HasSubstr("it obeys another host or none")) << message;
     expectLimpFromNowOn();
