@@ -492,10 +492,22 @@ TEST_F(FailStopTest, ADurationThatEndsWhileRenderingWritesTheSafeCommandsBeforeE
                 static_cast<double>(limp_after_ns) * 1e-6);
     EXPECT_LE(safe_command->at_ns, first_limp->at_ns + kTickNs)
         << "the device went limp before hapticd's safe command: by its own timeout";
-    EXPECT_LT(limp_after_ns,
-              static_cast<std::int64_t>(exo_device_.can.command_timeout_ms) * 1'000'000 +
-                  (HAPTIC_SANITIZED != 0 ? kSlackNs : 0))
-        << "no faster than the device's own command timeout";
+    const auto first_timeout = std::find_if(from, heard.end(), [](const auto& h) {
+        return h.message.type == ExoType::kFault && h.message.fault.active &&
+               h.message.fault.code == protocol::DeviceFaultCode::kCommandTimeout;
+    });
+    EXPECT_TRUE(first_timeout == heard.end() || first_timeout->at_ns > first_limp->at_ns)
+        << "the device had to time out: hapticd left without its safe command";
+    // In Release the force is still up when the duration ends, so the limp follows the last
+    // push within the device's own command timeout. Not under the sanitizers: there the
+    // injector's input often goes stale (sim_timeout_ms 20), and the force fades and is
+    // disabled by hapticd before the exit, the last push long before (a CI rehearsal: 215 ms);
+    // the two checks above still say whose command limped it.
+    if (HAPTIC_SANITIZED == 0) {
+        EXPECT_LT(limp_after_ns,
+                  static_cast<std::int64_t>(exo_device_.can.command_timeout_ms) * 1'000'000)
+            << "no faster than the device's own command timeout";
+    }
     // A host stall between the loop's last tick and the fail-stop (hapticd logs it at exit)
     // makes the limp late by the device's own timeout: a retry, not a pass (loop_stall_retry).
     if (HasFailure()) {
