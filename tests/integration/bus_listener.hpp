@@ -70,4 +70,11 @@ inline bool limp(const protocol::ExoskeletonMessage& m) {
            (m.actuator.status & protocol::kExoEnabled) == 0;
 }
 
+// The exoskeleton raising its own command timeout: it went limp because no command came, not
+// because hapticd sent its safe one.
+inline bool reportsCommandTimeout(const protocol::ExoskeletonMessage& m) {
+    return m.type == ExoType::kFault && m.fault.active &&
+           m.fault.code == protocol::DeviceFaultCode::kCommandTimeout;
+}
+
 }  // namespace haptic::testing

@@ -195,8 +195,7 @@ TEST_F(FailStopTest, SigkillLeavesBothDevicesSafeByThemselvesAndARestartRendersA
     }
     // The fault frame goes out in the tick that trips, just before that tick's state.
     EXPECT_TRUE(std::any_of(exo.begin(), exo.end(), [&](const auto& h) {
-        return h.at_ns > kill_ns && h.message.type == ExoType::kFault && h.message.fault.active &&
-               h.message.fault.code == protocol::DeviceFaultCode::kCommandTimeout;
+        return h.at_ns > kill_ns && reportsCommandTimeout(h.message);
     }));
 
     // The thimble: back at its retract pose (servo rate limited), reporting fault 4.
@@ -327,8 +326,7 @@ TEST_F(RoudiLostTest, WhileRenderingHapticdWritesTheSafeCommandsBeforeExitingFor
     });
     ASSERT_NE(first_limp, exo.end()) << "the exoskeleton never went limp";
     const auto first_timeout = std::find_if(exo.begin(), exo.end(), [&](const auto& h) {
-        return h.at_ns > kill_ns && h.message.type == ExoType::kFault && h.message.fault.active &&
-               h.message.fault.code == protocol::DeviceFaultCode::kCommandTimeout;
+        return h.at_ns > kill_ns && reportsCommandTimeout(h.message);
     });
     EXPECT_TRUE(first_timeout == exo.end() || first_timeout->at_ns > first_limp->at_ns)
         << "the device had to time out: hapticd left without its safe command";
@@ -492,10 +490,8 @@ TEST_F(FailStopTest, ADurationThatEndsWhileRenderingWritesTheSafeCommandsBeforeE
                 static_cast<double>(limp_after_ns) * 1e-6);
     EXPECT_LE(safe_command->at_ns, first_limp->at_ns + kTickNs)
         << "the device went limp before hapticd's safe command: by its own timeout";
-    const auto first_timeout = std::find_if(from, heard.end(), [](const auto& h) {
-        return h.message.type == ExoType::kFault && h.message.fault.active &&
-               h.message.fault.code == protocol::DeviceFaultCode::kCommandTimeout;
-    });
+    const auto first_timeout = std::find_if(
+        from, heard.end(), [](const auto& h) { return reportsCommandTimeout(h.message); });
     EXPECT_TRUE(first_timeout == heard.end() || first_timeout->at_ns > first_limp->at_ns)
         << "the device had to time out: hapticd left without its safe command";
     // In Release the force is still up when the duration ends, so the limp follows the last
