@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "haptic/protocol/exoskeleton_protocol.hpp"
+#include "haptic/runtime/contradiction_timer.hpp"
 #include "haptic/runtime/device_channel.hpp"
 #include "haptic/runtime/exoskeleton_channel.hpp"
 #include "runtime_rig.hpp"
@@ -63,13 +64,87 @@ std::string onlyFault(RuntimeRig& rig, std::uint32_t code, std::string_view devi
 // The operator's way back: clear lands in IDLE (never straight in RENDERING), and only a new
 // enable renders force again.
 void clearAndRenderAgain(RuntimeRig& rig) {
-    ASSERT_TRUE(rig.command(msgs::CommandKind::kClearFault));
+    ASSERT_TRUE(rig.command(msgs::CommandKind::kClearFault)) << rig.reply.message.view();
     renderTicks(rig, 5);
     EXPECT_EQ(rig.core.state(), msgs::DaemonState::kIdle);
     ASSERT_TRUE(rig.command(msgs::CommandKind::kEnable));
     renderTicks(rig, 300);
     EXPECT_EQ(rig.core.state(), msgs::DaemonState::kRendering);
     EXPECT_GT(std::abs(rig.exoForce()), 1.0);
+}
+
+constexpr std::int64_t kTickNs = 1'000'000;
+constexpr std::int64_t kTimeoutNs = 50 * kTickNs;
+
+// Feeds `ticks` 1 ms ticks, contradicting except on every `plausible_every`-th (0: never
+// plausible); returns the tick of the first report, or -1.
+int firstReport(runtime::ContradictionTimer& timer, int ticks, int plausible_every,
+                std::int64_t& lasted_ns) {
+    for (int i = 0; i < ticks; ++i) {
+        const bool plausible = plausible_every > 0 && i % plausible_every == plausible_every - 1;
+        lasted_ns = timer.update(!plausible, i * kTickNs, kTimeoutNs);
+        if (lasted_ns > 0) {
+            return i;
+        }
+    }
+    return -1;
+}
+
+// A contradiction on every frame is reported once it has lasted the timeout, as before.
+TEST(ContradictionTimer, AContradictionOnEveryFrameIsReportedAfterTheTimeout) {
+    runtime::ContradictionTimer timer;
+    std::int64_t lasted_ns = 0;
+    EXPECT_EQ(firstReport(timer, 1000, 0, lasted_ns), 51);
+    EXPECT_EQ(lasted_ns, 51 * kTickNs);
+}
+
+// One plausible frame in four (a late echo, one frame another host did not send) used to
+// restart the clock, so the contradiction was never reported. On 3 frames of 4 the balance
+// grows by half a tick a tick: reported after twice the timeout, with the time since its
+// first frame.
+TEST(ContradictionTimer, OnePlausibleFrameDoesNotHideAContradictionOnMostFrames) {
+    runtime::ContradictionTimer timer;
+    std::int64_t lasted_ns = 0;
+    const int tick = firstReport(timer, 1000, 4, lasted_ns);
+    EXPECT_GE(tick, 100);
+    EXPECT_LE(tick, 104);
+    EXPECT_EQ(lasted_ns, tick * kTickNs);
+}
+
+// A contradiction on at most half the frames is never reported, however long it goes on
+// (a healthy device's transients), and a run of plausible frames as long as the
+// contradicting ones ends it.
+TEST(ContradictionTimer, AContradictionOnHalfTheFramesOrFewerIsNotReported) {
+    runtime::ContradictionTimer timer;
+    std::int64_t lasted_ns = 0;
+    EXPECT_EQ(firstReport(timer, 100'000, 2, lasted_ns), -1);
+    runtime::ContradictionTimer ends;
+    std::int64_t now_ns = 0;
+    for (int i = 0; i < 40; ++i, now_ns += kTickNs) {
+        EXPECT_EQ(ends.update(true, now_ns, kTimeoutNs), 0);
+    }
+    for (int i = 0; i < 40 && ends.contradicting(); ++i, now_ns += kTickNs) {
+        EXPECT_EQ(ends.update(false, now_ns, kTimeoutNs), 0);
+    }
+    EXPECT_FALSE(ends.contradicting());
+    // A new contradiction starts from nothing: the full timeout again.
+    for (int i = 0; i < 50; ++i, now_ns += kTickNs) {
+        EXPECT_EQ(ends.update(true, now_ns, kTimeoutNs), 0) << i;
+    }
+}
+
+// A tick that cannot be judged (stale link, the device's own fault) drops what had built up.
+TEST(ContradictionTimer, AnUnjudgedTickForgetsTheContradiction) {
+    runtime::ContradictionTimer timer;
+    for (int i = 0; i < 45; ++i) {
+        EXPECT_EQ(timer.update(true, i * kTickNs, kTimeoutNs), 0);
+    }
+    timer.reset();
+    EXPECT_FALSE(timer.contradicting());
+    for (int i = 100; i < 150; ++i) {
+        EXPECT_EQ(timer.update(true, i * kTickNs, kTimeoutNs), 0) << i;
+    }
+    EXPECT_GT(timer.update(true, 151 * kTickNs, kTimeoutNs), 0);
 }
 
 TEST(Plausibility, ADeviceThatRebootedLatchesAFaultUntilClearAndEnable) {
@@ -300,6 +375,29 @@ TEST(Plausibility, AnExoskeletonObeyingAnotherHostRaisesItsOwnFault) {
     EXPECT_LE(ticks, 60);
     const std::string message = onlyFault(rig, runtime::kFaultImplausibleFeedback, "exo");
     EXPECT_THAT(message, HasSubstr("it obeys another host or none for 5"));
+}
+
+// An echo that is true on one state frame in four and another host's on the other three (the
+// emulator's `echo-offset` switched per tick; the drive follows hapticd's force throughout, so
+// only the echo says anything is wrong). The true frame used to restart the clock, so the
+// contradiction was never reported; on 3 frames of 4 its balance grows by half a tick a tick
+// and it is reported after about twice the heartbeat timeout.
+TEST(Plausibility, AnEchoThatIsTrueOnOneFrameInFourIsStillReported) {
+    RuntimeRig rig;
+    renderWithForce(rig);
+    int ticks = 0;
+    while (rig.core.state() == msgs::DaemonState::kRendering && ticks < 400) {
+        if (ticks % 10 == 0) {
+            rig.offerContact();
+        }
+        rig.emulatorFault(kExo, ticks % 4 == 3 ? "echo-offset 0" : "echo-offset 8");
+        rig.tick();
+        ++ticks;
+    }
+    EXPECT_GE(ticks, 95) << "not on every frame: the balance grows at half the rate";
+    EXPECT_LE(ticks, 115);
+    const std::string message = onlyFault(rig, runtime::kFaultImplausibleFeedback, "exo");
+    EXPECT_THAT(message, HasSubstr("it obeys another host or none for "));
 }
 
 }  // namespace

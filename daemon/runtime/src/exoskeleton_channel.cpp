@@ -86,21 +86,16 @@ std::uint32_t ExoskeletonChannel::plausibilityFaults(std::int64_t now_ns) noexce
         command_.enable ? expected_force_n_ + step * (command_.force_n - expected_force_n_) : 0.0;
     // Judged only on a fresh state (a silent device is the link monitor's to report).
     const bool judged = linkStateFresh() && state.actuator_updates > 0 && !reports_fault;
-    // The time each contradiction has lasted; a fault once it outlasts the heartbeat timeout.
-    auto lasting = [&](bool contradicts, std::int64_t& since_ns) -> double {
-        if (!judged || !contradicts) {
-            since_ns = -1;
+    // The time each contradiction has lasted on most frames; a fault once it outlasts the
+    // heartbeat timeout (ContradictionTimer: one plausible frame does not restart it).
+    auto lasting = [&](bool contradicts, ContradictionTimer& timer) -> double {
+        if (!judged) {
+            timer.reset();
             return 0.0;
         }
-        if (since_ns < 0) {
-            since_ns = now_ns;
-        }
-        return now_ns - since_ns > heartbeatTimeoutNs()
-                   ? static_cast<double>(now_ns - since_ns) * 1e-6
-                   : 0.0;
+        return static_cast<double>(timer.update(contradicts, now_ns, heartbeatTimeoutNs())) * 1e-6;
     };
-    if (const double ms = lasting(reports_enabled != command_.enable, enable_mismatch_since_ns_);
-        ms > 0.0) {
+    if (const double ms = lasting(reports_enabled != command_.enable, enable_mismatch_); ms > 0.0) {
         std::snprintf(implausible_message_, sizeof(implausible_message_),
                       command_.enable ? "device reports disabled %.0f ms after enable"
                                       : "device reports enabled %.0f ms after disable",
@@ -113,7 +108,7 @@ std::uint32_t ExoskeletonChannel::plausibilityFaults(std::int64_t now_ns) noexce
     // none at all.
     const auto echo_lag = static_cast<std::uint8_t>(
         (driver_.lastCommandCounter() - state.actuator.command_echo) & 0x0F);
-    if (const double ms = lasting(echo_lag > kMaxEchoLagTicks, echo_mismatch_since_ns_); ms > 0.0) {
+    if (const double ms = lasting(echo_lag > kMaxEchoLagTicks, echo_mismatch_); ms > 0.0) {
         std::snprintf(implausible_message_, sizeof(implausible_message_),
                       "device echoes command %u, hapticd sent %u: it obeys another host or none "
                       "for %.0f ms",
@@ -126,7 +121,7 @@ std::uint32_t ExoskeletonChannel::plausibilityFaults(std::int64_t now_ns) noexce
     const double tolerance_n = force_tolerance_n_ + 0.2 * std::abs(deliverable_n);
     const bool force_off = command_.enable && reports_enabled &&
                            std::abs(state.actuator.force_n - deliverable_n) > tolerance_n;
-    if (const double ms = lasting(force_off, force_mismatch_since_ns_); ms > 0.0) {
+    if (const double ms = lasting(force_off, force_mismatch_); ms > 0.0) {
         std::snprintf(implausible_message_, sizeof(implausible_message_),
                       "device measures %.2f N against %.2f N commanded for %.0f ms",
                       state.actuator.force_n, deliverable_n, ms);

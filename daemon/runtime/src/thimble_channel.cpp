@@ -55,7 +55,7 @@ std::uint32_t ThimbleChannel::plausibilityFaults(std::int64_t now_ns) noexcept {
         expected_servo_rad_ = measured;
         expected_synced_ = judged;
         expected_at_ns_ = now_ns;
-        angle_mismatch_since_ns_ = -1;
+        angle_mismatch_.reset();
         return 0;
     }
     // Over the time that really passed: after a stall of hapticd the servos have moved on.
@@ -74,21 +74,17 @@ std::uint32_t ThimbleChannel::plausibilityFaults(std::int64_t now_ns) noexcept {
             worst = k;
         }
     }
-    if (!(worst_error > angle_tolerance_rad_)) {
-        angle_mismatch_since_ns_ = -1;
-        return 0;
-    }
-    if (angle_mismatch_since_ns_ < 0) {
-        angle_mismatch_since_ns_ = now_ns;
-    }
-    if (now_ns - angle_mismatch_since_ns_ <= heartbeatTimeoutNs()) {
+    // Lasting on most frames, not restarted by one plausible frame (ContradictionTimer).
+    const std::int64_t lasted_ns =
+        angle_mismatch_.update(worst_error > angle_tolerance_rad_, now_ns, heartbeatTimeoutNs());
+    if (lasted_ns == 0) {
         return 0;
     }
     constexpr double kDeg = 180.0 / 3.14159265358979323846;
     std::snprintf(implausible_message_, sizeof(implausible_message_),
                   "servo %zu at %.1f deg against %.1f deg expected for %.0f ms", worst + 1,
                   measured[worst] * kDeg, expected_servo_rad_[worst] * kDeg,
-                  static_cast<double>(now_ns - angle_mismatch_since_ns_) * 1e-6);
+                  static_cast<double>(lasted_ns) * 1e-6);
     return kImplausibleFeedback;
 }
 

@@ -44,6 +44,7 @@
 #include "haptic/kinesthetic/port_safety.hpp"
 #include "haptic/kinesthetic/renderer.hpp"
 #include "haptic/kinesthetic/user_stiffness_estimator.hpp"
+#include "haptic/runtime/contradiction_timer.hpp"
 #include "haptic/runtime/device_channel.hpp"
 
 namespace haptic::runtime {
@@ -169,15 +170,15 @@ class ExoskeletonChannel final
     double probe_stroke_m_{0.0};       // the stroke that force was applied from
     double probe_energy_j_{0.0};       // what the probe's force gave the finger, in all
     kinesthetic::ActuatorVector ell_;  // sigma(q), scratch
-    std::int64_t enable_mismatch_since_ns_{-1};
+    ContradictionTimer enable_mismatch_;
     // The commanded force through the actuator's first-order lag: what the device should
     // measure. Compared with what it does (actuator.force_tolerance_n + 20 %).
     double lag_time_constant_s_;
     double force_tolerance_n_;
     config::ActuatorConfig actuator_;
     double expected_force_n_{0.0};
-    std::int64_t force_mismatch_since_ns_{-1};
-    std::int64_t echo_mismatch_since_ns_{-1};
+    ContradictionTimer force_mismatch_;
+    ContradictionTimer echo_mismatch_;
     char implausible_message_[msgs::kShortTextCapacity]{};
 };
 

@@ -17,6 +17,7 @@
 #include <cstdint>
 
 #include "haptic/devices/thimble_driver.hpp"
+#include "haptic/runtime/contradiction_timer.hpp"
 #include "haptic/runtime/device_channel.hpp"
 #include "haptic/tactile/contact_optimiser.hpp"
 #include "haptic/tactile/pad_safety.hpp"
@@ -75,7 +76,7 @@ class ThimbleChannel final
     double servo_lag_s_{0.0};
     double servo_max_rate_rad_per_s_{0.0};
     double angle_tolerance_rad_{0.0};
-    std::int64_t angle_mismatch_since_ns_{-1};
+    ContradictionTimer angle_mismatch_;
     char implausible_message_[msgs::kShortTextCapacity]{};
 };
 
