@@ -15,6 +15,14 @@ using namespace std::chrono_literals;
 
 class PlausibilityProcessTest : public BusWatchingTest {
   protected:
+    // Each test injects a device's misbehaviour while the devices render, and only that may
+    // take the force away: sim_timeout_ms 200, not the shipped 20, which the injector (and
+    // under the sanitizers a slowed hapticd) can miss, fading the force and the plate out
+    // at the moment of the injection.
+    PlausibilityProcessTest() {
+        replaceLine(config_.dir / "daemon.yaml", "sim_timeout_ms: 20", "sim_timeout_ms: 200");
+    }
+
     // Enables rendering on the injector's input until the exoskeleton reports itself at
     // more than half its clamp.
     void renderAtTheClamp() {
@@ -98,6 +106,19 @@ TEST_F(PlausibilityProcessTest, AnExoskeletonDeliveringTooLittleForceLatchesItsO
 TEST_F(PlausibilityProcessTest, AThimbleServoThatDoesNotFollowItsTargetLatchesItsOwnFault) {
     renderAtTheClamp();
     std::this_thread::sleep_for(500ms);  // the plate settles on the object
+    // Servo 2 is off its retract angle (the plate presses), so that where it sticks is not
+    // within the 5 degree tolerance of where the disable sends it.
+    double servo2_off_retract_rad = 0.0;
+    const auto pressing_deadline = std::chrono::steady_clock::now() + 5s;
+    while (servo2_off_retract_rad <= 0.15 && std::chrono::steady_clock::now() < pressing_deadline) {
+        for (const auto& h : thimble_bus_.listen(30ms)) {
+            if (h.message.type == ThimbleType::kState) {
+                servo2_off_retract_rad =
+                    std::abs(h.message.state.servo_angle_rad[1] - retract_rad_[1]);
+            }
+        }
+    }
+    ASSERT_GT(servo2_off_retract_rad, 0.15) << "the plate never pressed";
     ASSERT_TRUE(thimble_emu_->sendCommand("servo-stuck 2"));
     ASSERT_TRUE(command("disable"));
     const std::string message = implausibleFault("thimble");
