@@ -23,14 +23,18 @@ bool targetsNear(const msgs::TelemetrySample& a, const msgs::TelemetrySample& b)
     return true;
 }
 
-// A stalled injector thread on a loaded machine must not fade the output (that is the stale
-// input path, tested separately): sim_timeout_ms 200 here, so only bad messages could move it.
-class BadSimInputTest : public DeviceSafetyTest {
+// The sim input injector's steady contact, with sim_timeout_ms 200 here: a stalled injector
+// thread on a loaded machine (or a sanitized one) must not fade the output (that is the stale
+// input path, tested separately), so only what a test does to hapticd could move it.
+class SteadySimInputTest : public DeviceSafetyTest {
   protected:
-    BadSimInputTest() {
+    SteadySimInputTest() {
         replaceLine(config_.dir / "daemon.yaml", "sim_timeout_ms: 20", "sim_timeout_ms: 200");
     }
 };
+
+// Bad messages among good ones.
+class BadSimInputTest : public SteadySimInputTest {};
 
 TEST_F(BadSimInputTest, RejectedCountedAndDoesNotChangeTheOutput) {
     // The injector is its own iceoryx process: RouDi signals every registered process when it
@@ -276,7 +280,23 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroAndOnlyAnEnab
     EXPECT_TRUE(pressed) << "no rendering after the enable";
 }
 
-TEST_F(DeviceSafetyTest, EstopClearHeartbeatLossAndBusOffShowInStatusWithZeroForce) {
+// Each stop is made while the exoskeleton pushes (the injector's wall), so that its zero force
+// afterwards is the stop's doing.
+TEST_F(SteadySimInputTest, EstopClearHeartbeatLossAndBusOffShowInStatusWithZeroForce) {
+    // The injector is its own iceoryx process (RouDi signals every registered process when it
+    // stops, which must not be this test).
+    EmulatorProcess injector({SIM_INPUT_INJECTOR_PATH});
+    waitForOutput(injector, "ready");
+    const auto awaitExoPush = [&](const char* before) {
+        bool pushing = false;
+        for (const auto deadline = std::chrono::steady_clock::now() + 10s;
+             !pushing && std::chrono::steady_clock::now() < deadline;) {
+            for (const auto& sample : collectTelemetry(kExo, 50ms)) {
+                pushing = pushing || std::abs(sample.exoskeleton.actuator_force_cmd_n) > 1.0;
+            }
+        }
+        ASSERT_TRUE(pushing) << "the exoskeleton never pushed more than 1 N before " << before;
+    };
     const auto expectZeroExoForce = [&](const char* when) {
         drainTelemetry();
         // Twice as long under the sanitizers, whose reader hears a third to a half of the ticks.
@@ -293,6 +313,7 @@ TEST_F(DeviceSafetyTest, EstopClearHeartbeatLossAndBusOffShowInStatusWithZeroFor
     waitForStatus("RENDERING", [](const msgs::HapticStatus& s) {
         return s.state == msgs::DaemonState::kRendering;
     });
+    awaitExoPush("the E-STOP");
     ASSERT_TRUE(command("estop"));
     auto status = waitForStatus(
         "E-STOP", [](const msgs::HapticStatus& s) { return s.state == msgs::DaemonState::kEstop; });
@@ -306,6 +327,7 @@ TEST_F(DeviceSafetyTest, EstopClearHeartbeatLossAndBusOffShowInStatusWithZeroFor
 
     // (b) The thimble's heartbeat stops: FAULT naming the thimble.
     ASSERT_TRUE(command("enable"));
+    awaitExoPush("the heartbeat loss");
     ASSERT_TRUE(thimble_emu_->sendCommand("heartbeat stop"));
     status = waitForStatus("FAULT", [](const msgs::HapticStatus& s) {
         return s.state == msgs::DaemonState::kFault && !s.faults.empty();
@@ -330,6 +352,7 @@ TEST_F(DeviceSafetyTest, EstopClearHeartbeatLossAndBusOffShowInStatusWithZeroFor
 
     // (c) Bus-off on the exoskeleton's bus: FAULT naming only the exoskeleton.
     ASSERT_TRUE(command("enable"));
+    awaitExoPush("the bus-off");
     ASSERT_TRUE(exo_emu_->sendCommand("busoff"));
     status = waitForStatus("bus-off FAULT", [](const msgs::HapticStatus& s) {
         return s.state == msgs::DaemonState::kFault && !s.faults.empty();

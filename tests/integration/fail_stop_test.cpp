@@ -41,6 +41,22 @@ constexpr std::int64_t kTickNs = 1'000'000;
 // The non-RT thread of hapticd (status, control, RouDi checks) runs at normal priority.
 constexpr std::int64_t kNonRealtimeSlackNs = HAPTIC_SANITIZED != 0 ? 150'000'000 : kSlackNs;
 
+// The exoskeleton's own command-timeout fault frame, the first after `since_ns`, is heard
+// within its command timeout (and two ticks and the slack) of the moment hapticd stopped
+// commanding: the device's self-protection, whatever force it had (under the sanitizers the
+// force has often faded before the stop, so the limp alone would prove nothing there).
+void expectOwnCommandTimeoutWithin(const std::vector<Heard<protocol::ExoskeletonMessage>>& heard,
+                                   std::int64_t since_ns, std::int64_t timeout_ns,
+                                   const char* what) {
+    const auto timed_out = std::find_if(heard.begin(), heard.end(), [&](const auto& h) {
+        return h.at_ns > since_ns && reportsCommandTimeout(h.message);
+    });
+    ASSERT_NE(timed_out, heard.end()) << "the exoskeleton never reported its command timeout";
+    std::printf("%s: exoskeleton reported its command timeout after %.2f ms\n", what,
+                static_cast<double>(timed_out->at_ns - since_ns) * 1e-6);
+    EXPECT_LE(timed_out->at_ns - since_ns, timeout_ns + 2 * kTickNs + kSlackNs);
+}
+
 // The id of `pid`'s thread called `name`, or -1.
 pid_t threadNamed(pid_t pid, const std::string& name) {
     const fs::path tasks = fs::path("/proc") / std::to_string(pid) / "task";
@@ -194,9 +210,7 @@ TEST_F(FailStopTest, SigkillLeavesBothDevicesSafeByThemselvesAndARestartRendersA
         }
     }
     // The fault frame goes out in the tick that trips, just before that tick's state.
-    EXPECT_TRUE(std::any_of(exo.begin(), exo.end(), [&](const auto& h) {
-        return h.at_ns > kill_ns && reportsCommandTimeout(h.message);
-    }));
+    expectOwnCommandTimeoutWithin(exo, kill_ns, timeout_ns, "SIGKILL");
 
     // The thimble: back at its retract pose (servo rate limited), reporting fault 4.
     const auto thimble = thimble_bus_.listen(1000ms);
@@ -250,6 +264,7 @@ TEST_F(FailStopTest, SigstopMakesTheDevicesSafeByTimeoutAndHapticdBlamesItsOwnSt
     const std::int64_t timeout_ns =
         static_cast<std::int64_t>(exo_device_.can.command_timeout_ms) * 1'000'000;
     EXPECT_LE(first_limp->at_ns - stop_ns, timeout_ns + 2 * kTickNs + kSlackNs);
+    expectOwnCommandTimeoutWithin(stopped, stop_ns, timeout_ns, "SIGSTOP");
 
     // Awake again: its own stall is the one fault, no device is blamed, and the devices stay
     // safe (the resumed force is refused by them, then FAULT commands them safe).
@@ -280,6 +295,7 @@ TEST_F(FailStopTest, AStallOfTheLoopAloneIsHapticdsOwnFaultAndBlamesNoHealthyDev
     const std::int64_t timeout_ns =
         static_cast<std::int64_t>(exo_device_.can.command_timeout_ms) * 1'000'000;
     EXPECT_LE(first_limp->at_ns - stop_ns, timeout_ns + 2 * kTickNs + kSlackNs);
+    expectOwnCommandTimeoutWithin(stalled, stop_ns, timeout_ns, "loop stalled");
     EXPECT_GT(std::count_if(stalled.begin(), stalled.end(),
                             [](const auto& h) { return h.message.type == ExoType::kHeartbeat; }),
               0)
