@@ -150,6 +150,7 @@ TEST_F(DaemonCoreTest, AReplayedOrDuplicatedMessageIsRefusedAndDoesNotRenewTheIn
     EXPECT_EQ(sut.offerConstraintSet(0, restamped, t), InputRejection::kNotNewer)
         << "the same content, stamped again";
     EXPECT_EQ(sut.rejectedCount(0, InputRejection::kNotNewer), 3U);
+    t = runTicks(t, 1);  // the fade moves only in a tick: a renewed input would lift it
     EXPECT_EQ(sut.simFade(0), 0.0) << "the replays kept a stale input alive";
     msgs::ConstraintSet restarted = validConstraintSet("exo_index", t);
     restarted.header.seq = 1;
@@ -817,6 +818,7 @@ TEST_F(DaemonCoreTest, RejectsNonFiniteAndWrongDeviceInputAndCountsThem) {
     EXPECT_THAT(sut.offerContactSurface(1, bad_normal, 0), Eq(InputRejection::kBadNormal));
 
     EXPECT_THAT(sut.rejectedCount(0, InputRejection::kNonFinite), Eq(2U));
+    sut.update(kMs, TickTiming{});  // the fade moves only in a tick
     EXPECT_THAT(sut.simFade(0), Eq(0.0)) << "a rejected message must not count as fresh input";
 
     msgs::HapticStatus status;

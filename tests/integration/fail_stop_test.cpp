@@ -314,19 +314,35 @@ TEST_F(FailStopTest, AStallOfTheLoopAloneIsHapticdsOwnFaultAndBlamesNoHealthyDev
     });
 }
 
-// With the shipped sim_timeout_ms (20) the sim input, which dies with RouDi, fades the force
-// and hapticd's fading command already leaves the drive limp long before the RouDi check: the
-// fail-stop would go unseen. 500 ms here, so only hapticd's safe command can limp the drive
-// before its command timeout.
-class RoudiLostTest : public FailStopTest {
+// With the shipped sim_timeout_ms (20) the sim input fades the force whenever it is late
+// (under the sanitizers handsim steps at about 4 Hz, and the sim input dies with RouDi), and
+// hapticd's fading command can leave the drive limp before the stop: the fail-stop would go
+// unseen. 500 ms here, so only hapticd's safe command can limp the drive before its command
+// timeout; each test checks that hapticd was commanding the drive enabled when it stopped it.
+class RenderingAtTheStopTest : public FailStopTest {
   protected:
-    RoudiLostTest() {
+    RenderingAtTheStopTest() {
         replaceLine(config_.dir / "daemon.yaml", "sim_timeout_ms: 20", "sim_timeout_ms: 500");
+    }
+
+    // hapticd's last exoskeleton command in a short window enables the drive.
+    void expectCommandingEnabled() {
+        const auto heard = exo_bus_.listen(30ms);
+        const auto last_command = std::find_if(heard.rbegin(), heard.rend(), [](const auto& h) {
+            return h.message.type == ExoType::kCommand;
+        });
+        ASSERT_NE(last_command, heard.rend()) << "no command from hapticd";
+        ASSERT_TRUE(last_command->message.command.enable)
+            << "hapticd was not commanding the drive enabled before the stop";
     }
 };
 
+class SigtermTest : public RenderingAtTheStopTest {};
+class RoudiLostTest : public RenderingAtTheStopTest {};
+
 TEST_F(RoudiLostTest, WhileRenderingHapticdWritesTheSafeCommandsBeforeExitingForARestart) {
     renderUntilTheExoskeletonPushes();
+    expectCommandingEnabled();
     const std::int64_t kill_ns = monotonicNs();
     ASSERT_EQ(::kill(roudi_->pid(), SIGKILL), 0);
     ASSERT_TRUE(roudi_->waitFor(5s).has_value());
@@ -386,8 +402,9 @@ TEST_F(RoudiLostTest, WhileRenderingHapticdWritesTheSafeCommandsBeforeExitingFor
     expectIdleAndDisabledUntilEnable();
 }
 
-TEST_F(FailStopTest, SigtermWritesTheSafeCommandsWithinTwoTicksAndExitsCleanly) {
+TEST_F(SigtermTest, WritesTheSafeCommandsWithinTwoTicksAndExitsCleanly) {
     renderUntilTheExoskeletonPushes();
+    expectCommandingEnabled();
     const std::int64_t term_ns = monotonicNs();
     ASSERT_EQ(::kill(daemon_->pid(), SIGTERM), 0);
     const auto exo = exo_bus_.listen(200ms);

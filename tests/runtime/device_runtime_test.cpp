@@ -296,7 +296,9 @@ TEST(DeviceRuntime, StaleSimInputFadesToZeroWithinTheTimeoutAndNeverStepsUp) {
     double previous = std::abs(rig.exoForce());
     double previous_thimble = distance(rig.thimbleTargets(), retract(rig));
     ASSERT_GT(previous, 1.0);
-    // The sim stops: 20 ms later (sim_timeout) both devices are at zero / retracting.
+    // The sim stops: its last message came 10 ticks ago (renderWithContact), so tick i sees an
+    // input 11 + i ms old. At the 20 ms sim_timeout both devices are at zero / retracting, and
+    // the fade (its last quarter) has not begun before 15 ms.
     for (int i = 0; i < 30; ++i) {
         rig.tick();
         const double force = std::abs(rig.exoForce());
@@ -305,8 +307,11 @@ TEST(DeviceRuntime, StaleSimInputFadesToZeroWithinTheTimeoutAndNeverStepsUp) {
         EXPECT_LE(thimble, previous_thimble + 1e-12) << "tick " << i;
         previous = force;
         previous_thimble = thimble;
-        if (i >= 20) {
+        if (i >= 9) {
             EXPECT_EQ(force, 0.0) << "tick " << i;
+        }
+        if (i <= 3) {
+            EXPECT_GT(force, 1.0) << "tick " << i << ": faded before three quarters of the timeout";
         }
     }
     EXPECT_EQ(rig.core.deviceReport(kExo).run_state, msgs::DeviceRunState::kSafe);
