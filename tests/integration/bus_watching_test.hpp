@@ -51,6 +51,11 @@ class BusWatchingTest : public DeviceSafetyTest {
                    s.devices[kThimble].state == msgs::DeviceRunState::kReady;
         });
         const auto idle = exo_bus_.listen(std::chrono::milliseconds(200));
+        // The device was heard meanwhile (a silent window would prove nothing).
+        EXPECT_GE(
+            std::count_if(idle.begin(), idle.end(),
+                          [](const auto& h) { return h.message.type == ExoType::kActuatorState; }),
+            20);
         EXPECT_FALSE(std::any_of(idle.begin(), idle.end(), [](const auto& h) {
             return enabledWithForce(h.message, 0.0);
         })) << "enabled without an operator";

@@ -237,10 +237,14 @@ TEST(DeviceRuntime, EveryCouplingKeyOfTheDeviceFileChangesTheRendering) {
     EXPECT_GT(compared, 100);
     EXPECT_GT(damping_difference_n, 0.01) << "the finger moves, so b_v must show";
     // The port mass bounds what the passivity controller lets through at rest: b = T^2 / m.
+    // The channels' own controllers (copies, reset), fed the same motion and credit: a guard
+    // that built its controller without the key would give the same limit in both.
     EXPECT_DOUBLE_EQ(channel(*heavier).portGuard().config().passivity_port_mass_kg, 0.4);
-    kinesthetic::PassivityController light(1e-3, 0.1);
-    kinesthetic::PassivityController heavy(1e-3, 0.4);
+    kinesthetic::PassivityController light = channel(*base).portGuard().passivity();
+    kinesthetic::PassivityController heavy = channel(*heavier).portGuard().passivity();
     for (auto* controller : {&light, &heavy}) {
+        controller->reset();
+        controller->setEnabled(true);
         controller->observe(0.01);
         controller->observe(0.01);
         controller->creditEnvironmentWork(1e-5);

@@ -415,6 +415,7 @@ TEST_F(TactileOutputTest, WhereTheSkinPressesBeforeTheRigidPadTheSampleTakesTheS
     ASSERT_TRUE(model.simulation.contactForces().empty());
     msgs::ContactSurface surface;
     output.fill(model.simulation, simulatedBone(model), surface);
+    ASSERT_FALSE(surface.samples.empty());
     for (const auto& s : surface.samples) {
         ASSERT_GT(rigidDistance(s), 0.0) << "the rigid pad is 1 mm or more above the table";
         EXPECT_NEAR(s.signed_distance_m, rigidDistance(s), 1e-12);
