@@ -1,5 +1,6 @@
 #include "allocation_counter.hpp"
 
+#include <atomic>
 #include <cerrno>
 #include <cstdlib>
 #include <new>
@@ -10,10 +11,16 @@ namespace {
 
 thread_local bool t_counting = false;
 thread_local std::uint64_t t_allocations = 0;
+// Lock-free, so counting inside malloc allocates nothing and takes no lock.
+std::atomic<bool> g_counting{false};
+std::atomic<std::uint64_t> g_allocations{0};
 
 void count() noexcept {
     if (t_counting) {
         ++t_allocations;
+    }
+    if (g_counting.load(std::memory_order_relaxed)) {
+        g_allocations.fetch_add(1, std::memory_order_relaxed);
     }
 }
 
@@ -149,6 +156,17 @@ ScopedAllocationCounter::~ScopedAllocationCounter() {
 }
 std::uint64_t ScopedAllocationCounter::allocations() const {
     return t_allocations;
+}
+
+ScopedProcessAllocationCounter::ScopedProcessAllocationCounter() {
+    g_allocations.store(0);
+    g_counting.store(true);
+}
+ScopedProcessAllocationCounter::~ScopedProcessAllocationCounter() {
+    g_counting.store(false);
+}
+std::uint64_t ScopedProcessAllocationCounter::allocations() const {
+    return g_allocations.load();
 }
 
 }  // namespace haptic::testing

@@ -126,7 +126,10 @@ void HelperThread::run() {
         }
         int expected = kQueued;
         if (state == kQueued && state_.compare_exchange_strong(expected, kRunning)) {
-            job_(context_);  // the job of the start() whose kQueued the exchange took
+            if (job_ != nullptr) {  // the job of the start() whose kQueued the exchange took
+                job_(context_);
+                jobs_run_.fetch_add(1, std::memory_order_relaxed);  // before kDone publishes it
+            }
             state_.store(kDone);
             state_.notify_all();
             seen = kDone;

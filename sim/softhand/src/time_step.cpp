@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "energy_terms.hpp"
@@ -148,7 +149,10 @@ StepReport Simulation::step(double dt_s) {
         report.energy_j = energyNow();
         return report;
     }
+    const std::uint64_t helper_jobs_before = helper_ ? helper_->jobsRun() : 0;
     advance(dt_s, 0, report, std::numeric_limits<double>::quiet_NaN());
+    // Every job is collected or taken back before advance() returns.
+    report.helper_jobs = helper_ ? static_cast<int>(helper_->jobsRun() - helper_jobs_before) : 0;
     report.substepped = report.substeps > 1;
     report.active_contacts = static_cast<int>(contact_forces_.size());
     report.energy_j = energyNow();
@@ -169,7 +173,7 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
         // asleep (then the step takes the job back and does it itself). A substep runs inside
         // a step that already woke it.
         if (depth == 0) {
-            helper_->start([](void*) {}, nullptr);
+            helper_->wake();
             helper_->expectNextJobAt(
                 std::chrono::steady_clock::now() +
                 std::chrono::duration_cast<std::chrono::steady_clock::duration>(

@@ -9,6 +9,7 @@
 // steps are the same to the bit.
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <thread>
 
 namespace haptic::softhand {
@@ -25,6 +26,12 @@ class HelperThread {
     // Queues job(context) for the helper, after withdraw()ing the previous job. Everything the
     // job reads or writes belongs to it until wait() or withdraw() returns.
     void start(Job job, void* context);
+    // Wakes the helper with nothing to do (a start() of no job), ahead of the jobs to come.
+    void wake() { start(nullptr, nullptr); }
+    // Jobs the helper thread has run itself: neither taken back nor a wake().
+    [[nodiscard]] std::uint64_t jobsRun() const noexcept {
+        return jobs_run_.load(std::memory_order_relaxed);
+    }
     // Returns once the job queued last has run (at once when there is none).
     void wait();
     // Takes the job queued last back if the helper has not begun it (returns true: it will
@@ -49,6 +56,7 @@ class HelperThread {
     Job job_{nullptr};
     void* context_{nullptr};
     std::atomic<int> state_{kIdle};
+    std::atomic<std::uint64_t> jobs_run_{0};
     std::atomic<std::chrono::steady_clock::rep> next_job_{0};  // steady_clock ticks
     std::thread thread_;  // last: it starts once the members above exist
 };

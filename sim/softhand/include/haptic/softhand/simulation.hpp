@@ -128,6 +128,9 @@ struct StepReport {
     int zeroed_steps{0};
     // Warm-started PCG solves that did not descend and were solved again from zero.
     int restarted_solves{0};
+    // Jobs the helper thread ran for this step (cold solves, line-search points it evaluated
+    // ahead), not those the step took back and did itself.
+    int helper_jobs{0};
     int newton_iterations{0};  // beyond the first, summed over substeps
     int pcg_iterations{0};     // summed over substeps
     bool pcg_capped{false};
