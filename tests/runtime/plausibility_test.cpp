@@ -111,6 +111,18 @@ TEST(ContradictionTimer, OnePlausibleFrameDoesNotHideAContradictionOnMostFrames)
     EXPECT_EQ(lasted_ns, tick * kTickNs);
 }
 
+// Two contradicting ticks in three (p = 2/3): reported after about T / (2p - 1) = 3 T. The
+// balance returns to zero after every plausible tick here, so ending the contradiction at zero
+// (rather than below it) would restart it for ever and never report it.
+TEST(ContradictionTimer, TwoContradictingTicksInThreeAreReportedAfterThreeTimeouts) {
+    runtime::ContradictionTimer timer;
+    std::int64_t lasted_ns = 0;
+    const int tick = firstReport(timer, 1000, 3, lasted_ns);
+    EXPECT_GE(tick, 148);
+    EXPECT_LE(tick, 154);
+    EXPECT_EQ(lasted_ns, tick * kTickNs);
+}
+
 // A contradiction on at most half the frames is never reported, however long it goes on
 // (a healthy device's transients), and a run of plausible frames as long as the
 // contradicting ones ends it.

@@ -8,11 +8,12 @@ namespace haptic::runtime {
 // How long a device's feedback has contradicted its command, for the plausibility faults
 // (105). A contradiction counts as lasting while it holds on most of the judged frames: each
 // contradicting tick adds the time since the previous tick, each plausible one takes it away,
-// and the contradiction ends only when that balance is back at zero. So a single plausible
-// frame (a late echo, one frame of another host's traffic the device did not obey) does not
-// restart the clock, as it did: a contradiction on a share p > 1/2 of the frames outlasts a
-// timeout T after T / (2p - 1), and one on every frame after T exactly. Allocation-free and
-// O(1), for the RT loop.
+// and the contradiction ends only when that balance falls below zero (at zero a pattern such
+// as "contradicting, contradicting, plausible" would end and restart for ever). So a single
+// plausible frame (a late echo, one frame of another host's traffic the device did not obey)
+// does not restart the clock, as it did: a contradiction on a share p > 1/2 of the ticks
+// outlasts a timeout T after about T / (2p - 1), and one on every tick after T exactly.
+// Judged per tick on the latest state. Allocation-free and O(1), for the RT loop.
 class ContradictionTimer {
   public:
     // One judged tick. Returns the time the contradiction has lasted (since its first frame)
@@ -26,13 +27,13 @@ class ContradictionTimer {
                 since_ns_ = now_ns;  // the first contradicting frame: the balance starts here
                 balance_ns_ = 0;
             } else {
-                // Capped a tick above the timeout: a repaired device's report ends on its first
-                // plausible frame, however long it had contradicted before.
-                balance_ns_ = std::min(balance_ns_ + dt_ns, timeout_ns + dt_ns);
+                // Capped just above the timeout: a repaired device's report ends on its first
+                // plausible tick, however long (or after whatever stall) it had contradicted.
+                balance_ns_ = std::min(balance_ns_ + dt_ns, timeout_ns + 1);
             }
         } else if (since_ns_ >= 0) {
             balance_ns_ -= dt_ns;
-            if (balance_ns_ <= 0) {
+            if (balance_ns_ < 0) {
                 since_ns_ = -1;
                 balance_ns_ = 0;
             }

@@ -106,7 +106,8 @@ class DeviceChannel {
     virtual bool driverHandleFrame(const can::CanFrame& frame, std::int64_t now_ns) noexcept = 0;
     virtual std::uint32_t driverFaults(std::int64_t now_ns) noexcept = 0;
     // kImplausibleFeedback when the device's feedback has contradicted its command for longer
-    // than can.heartbeat_timeout_ms (then implausibleMessage() says how); 0 by default.
+    // than can.heartbeat_timeout_ms on most ticks (ContradictionTimer; then
+    // implausibleMessage() says how); 0 by default.
     virtual std::uint32_t plausibilityFaults(std::int64_t /*now_ns*/) noexcept { return 0; }
     [[nodiscard]] virtual const char* implausibleMessage() const noexcept { return ""; }
     [[nodiscard]] std::int64_t heartbeatTimeoutNs() const noexcept { return heartbeat_timeout_ns_; }
