@@ -148,6 +148,7 @@ void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noe
     // `clear` emptied the list: re-arm, so a cause that is still there is raised again.
     if (latched_ != 0 && core.stateMachine().faultCount() == 0) {
         latched_ = 0;
+        forgetContradictions();
     }
     if (first_supervise_ns_ == 0) {
         first_supervise_ns_ = now_ns;
