@@ -4,6 +4,8 @@
 // kills the sim by) and publishes its own ConstraintSets over iceoryx where it needs exact
 // control of the sim input. Shares RouDi's socket with end_to_end_test: same RESOURCE_LOCK.
 
+#include <iostream>
+
 #include "device_safety_rig.hpp"
 #include "haptic/msgs/names.hpp"
 
@@ -162,8 +164,9 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroAndOnlyAnEnab
         return s.state == msgs::DaemonState::kRendering;
     });
     // The default scene presses the fingertip now and then: kill the sim while the thimble's
-    // plate presses (the sim's contact alone decides that), preferably while the exoskeleton
-    // renders force too (that also depends on where the emulated user moves the finger).
+    // plate presses and the exoskeleton pushes (the virtual user's finger meets the object in
+    // both at once), so that both fades below start from a force and neither check holds by
+    // itself.
     drainTelemetry();
     std::vector<msgs::TelemetrySample> exo;
     std::vector<msgs::TelemetrySample> thimble;
@@ -175,14 +178,20 @@ TEST_F(DeviceSafetyTest, SimKilledWhileRenderingFadesTheForceToZeroAndOnlyAnEnab
         const bool pressing = !thimble.empty() && fromRetract(thimble.back(), retract) > 0.05;
         const bool exo_force =
             !exo.empty() && std::abs(exo.back().exoskeleton.actuator_force_cmd_n) > 0.5;
-        if (pressing && (exo_force || std::chrono::steady_clock::now() - started > 4s)) {
+        if (pressing && exo_force) {
             break;
         }
     }
     ASSERT_FALSE(thimble.empty());
+    ASSERT_FALSE(exo.empty());
     ASSERT_GT(fromRetract(thimble.back(), retract), 0.05)
-        << "the thimble never pressed; faults: "
+        << "the thimble never pressed with the exoskeleton pushing; faults: "
         << faultsOf(waitForStatus("a status", [](const auto&) { return true; }));
+    ASSERT_GT(std::abs(exo.back().exoskeleton.actuator_force_cmd_n), 0.5)
+        << "the exoskeleton never pushed with the thimble pressing";
+    std::cout << "killing the sim at " << exo.back().exoskeleton.actuator_force_cmd_n
+              << " N on the exoskeleton, the plate " << fromRetract(thimble.back(), retract)
+              << " rad from retract\n";
 
     const std::int64_t kill_ns = monotonicNs();
     ::kill(sim_->pid(), SIGKILL);
