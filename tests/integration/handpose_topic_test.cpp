@@ -61,16 +61,27 @@ class PadWatch {
                 lowest = std::min(lowest, surface.samples[i].signed_distance_m);
             }
             latest_ = lowest;
+            range_low_ = std::min(range_low_, lowest);
+            range_high_ = std::max(range_high_, lowest);
             ++received_;
         }
         return latest_;
     }
     [[nodiscard]] std::uint64_t received() const { return received_; }
+    // The lowest and highest distance of every surface taken since restartRange().
+    void restartRange() {
+        range_low_ = std::numeric_limits<double>::infinity();
+        range_high_ = -std::numeric_limits<double>::infinity();
+    }
+    [[nodiscard]] double rangeLow() const { return range_low_; }
+    [[nodiscard]] double rangeHigh() const { return range_high_; }
 
   private:
     ipc::DdsReader<idl::ContactSurface> reader_;
     idl::ContactSurface sample_;
     std::optional<double> latest_;
+    double range_low_{std::numeric_limits<double>::infinity()};
+    double range_high_{-std::numeric_limits<double>::infinity()};
     std::uint64_t received_{0};
 };
 
@@ -172,14 +183,17 @@ TEST(HandPoseTopic, HandsimFollowsALivePublisherAndRejectsBadPoses) {
 
     // Bad poses are refused: each one is reported in handsim's log (the next one is sent
     // once the last is logged, as the log names the latest reason per 0.5 s window),
-    // handsim keeps running and keeps the last good pose (the pad stays hovering). The
-    // NaN pose would otherwise press into the block.
+    // handsim keeps running and keeps the last good pose (the pad stays hovering). The NaN
+    // pose would otherwise press into the block. The tracker goes on between the bad poses
+    // (a good one 10 ms after each), so handsim keeps publishing and every surface it
+    // publishes meanwhile is judged: without it, tracking.timeout_ms would withhold the
+    // outputs and the check would compare the last surface before the bad pose with itself.
     const double hovering = *lowest;
     msgs::HandPose nan_pose = pressing;
     nan_pose.wrist_position_m[2] = std::numeric_limits<double>::quiet_NaN();
-    msgs::HandPose bad_quaternion = above;
+    msgs::HandPose bad_quaternion = pressing;
     bad_quaternion.wrist_orientation_wxyz = {0.9, 0.3, 0.0, 0.0};  // norm 0.949
-    msgs::HandPose nan_angle = above;
+    msgs::HandPose nan_angle = pressing;
     nan_angle.joint_angles_rad[4] = std::numeric_limits<double>::infinity();
     const std::pair<msgs::HandPose, std::string> bad_poses[] = {
         {nan_pose, "HandPose on 'tracking/hand': wrist_position_m is not finite"},
@@ -189,17 +203,33 @@ TEST(HandPoseTopic, HandsimFollowsALivePublisherAndRejectsBadPoses) {
         {nan_angle, "HandPose on 'tracking/hand': joint_angles_rad[4] is not finite"},
     };
     for (const auto& [bad, reason] : bad_poses) {
-        ASSERT_TRUE(publisher.publish(bad));
+        (void)pad.lowestDistance();
+        pad.restartRange();
+        const std::uint64_t surfaces_before = pad.received();
         const auto deadline = std::chrono::steady_clock::now() + 30s;
         while (sim.stderrText().find(reason) == std::string::npos && sim.running() &&
                std::chrono::steady_clock::now() < deadline) {
-            std::this_thread::sleep_for(50ms);
+            ASSERT_TRUE(publisher.publish(bad));
+            std::this_thread::sleep_for(10ms);
+            (void)pad.lowestDistance();
+            ASSERT_TRUE(publisher.publish(above));
+            std::this_thread::sleep_for(10ms);
+            (void)pad.lowestDistance();
+        }
+        // A few more bad poses after the log said so, each judged on the surfaces after it.
+        for (int i = 0; i < 10; ++i) {
+            ASSERT_TRUE(publisher.publish(bad));
+            std::this_thread::sleep_for(10ms);
+            (void)pad.lowestDistance();
+            ASSERT_TRUE(publisher.publish(above));
+            std::this_thread::sleep_for(10ms);
+            (void)pad.lowestDistance();
         }
         ASSERT_TRUE(sim.running()) << sim.stderrText();
         EXPECT_THAT(sim.stderrText(), HasSubstr(reason));
-        lowest = pad.lowestDistance();
-        ASSERT_TRUE(lowest.has_value());
-        EXPECT_NEAR(*lowest, hovering, 0.002) << "a refused pose moved the hand";
+        EXPECT_GT(pad.received(), surfaces_before + 5) << "handsim stopped publishing";
+        EXPECT_GT(pad.rangeLow(), hovering - 0.002) << "a refused pose moved the hand down";
+        EXPECT_LT(pad.rangeHigh(), hovering + 0.002) << "a refused pose moved the hand";
     }
 
     // And it still follows good poses: the published press (3 mm into the face) brings the
