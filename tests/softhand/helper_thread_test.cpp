@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <optional>
@@ -41,6 +42,11 @@ TEST(HelperThread, RunsEachJobItKeepsOnceAndHandsItsResultBack) {
         helper.wait();
         ASSERT_EQ(counter.value, i + 1);
         EXPECT_TRUE(helper.done());
+        // Counted by the helper itself, once per job it ran; a wake-up runs none.
+        ASSERT_EQ(helper.jobsRun(), static_cast<std::uint64_t>(i + 1));
+        helper.wake();
+        helper.wait();
+        ASSERT_EQ(helper.jobsRun(), static_cast<std::uint64_t>(i + 1)) << "a wake() counted";
     }
     // A job taken back never runs; one that is not taken back has run when withdraw returns.
     int expected = counter.value;
@@ -53,6 +59,8 @@ TEST(HelperThread, RunsEachJobItKeepsOnceAndHandsItsResultBack) {
             ++expected;
         }
         ASSERT_EQ(counter.value, expected) << "job " << i;
+        ASSERT_EQ(helper.jobsRun(), static_cast<std::uint64_t>(expected))
+            << "a job taken back counted, job " << i;
     }
     // start() takes back or waits for the job before it: every job runs at most once.
     for (int i = 0; i < 100; ++i) {
@@ -61,6 +69,7 @@ TEST(HelperThread, RunsEachJobItKeepsOnceAndHandsItsResultBack) {
     helper.wait();
     EXPECT_GT(counter.value, expected);
     EXPECT_LE(counter.value, expected + 100);
+    EXPECT_EQ(helper.jobsRun(), static_cast<std::uint64_t>(counter.value));
     std::printf("%d of 2000 jobs taken back before they began\n", taken_back);
 }
 
