@@ -120,6 +120,7 @@ void expectTheSameSteps(int level, const std::optional<config::SolverLimits>& li
     int substeps = 0;
     int newton = 0;
     int helper_jobs = 0;
+    int helper_results = 0;
     for (int step = 0; step < steps; ++step) {
         alone.setInput(step);
         helped.setInput(step);
@@ -144,7 +145,9 @@ void expectTheSameSteps(int level, const std::optional<config::SolverLimits>& li
                 << what << " step " << step << " body " << body;
         }
         ASSERT_EQ(a.helper_jobs, 0) << what << " step " << step;
+        ASSERT_LE(b.helper_results_used, b.helper_jobs) << what << " step " << step;
         helper_jobs += b.helper_jobs;
+        helper_results += b.helper_results_used;
         restarted += a.restarted_solves;
         backtracks += a.backtracks;
         substeps += a.substeps - 1;
@@ -152,9 +155,11 @@ void expectTheSameSteps(int level, const std::optional<config::SolverLimits>& li
     }
     // The paths the helper serves ran: cold solves it had ready, and halvings it evaluated
     // (and, at the library's defaults, further Newton iterations and substeps). And the helper
-    // ran some of those jobs itself: were every job taken back, the steps would be the same to
-    // the bit without proving anything.
+    // ran some of those jobs itself, and their results entered the steps: were every job taken
+    // back, or every result it computed discarded, the steps would be the same to the bit
+    // without proving anything.
     EXPECT_GT(helper_jobs, 0) << what;
+    EXPECT_GT(helper_results, 0) << what;
     if (limits) {
         EXPECT_GT(restarted, 0) << what;
         EXPECT_GT(backtracks, 2 * restarted) << what;
@@ -164,8 +169,8 @@ void expectTheSameSteps(int level, const std::optional<config::SolverLimits>& li
     }
     std::printf(
         "%s: %d steps, %d restarted solves, %d halvings, %d Newton iterations beyond "
-        "the first, %d extra substeps; %d jobs run on the helper\n",
-        what, steps, restarted, backtracks, newton, substeps, helper_jobs);
+        "the first, %d extra substeps; %d jobs run on the helper, %d of their results used\n",
+        what, steps, restarted, backtracks, newton, substeps, helper_jobs, helper_results);
 }
 
 TEST(HelperThread, HandsimUsesItWhereTheSceneAllowsAndASecondCoreExists) {

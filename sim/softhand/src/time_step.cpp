@@ -396,6 +396,7 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                 if (cold_ready) {
                     w.delta = w.cold_delta;
                     pcg = cold.result;
+                    ++report.helper_results_used;
                 } else {
                     pcg = solvePcg(w.pattern, w.system, w.rhs, w.free_mask, w.preconditioner,
                                    settings_.pcg_max_iterations, settings_.pcg_relative_tolerance,
@@ -430,6 +431,7 @@ bool Simulation::advance(double h, int depth, StepReport& report, double energy_
                     if (ahead_pending && !helper->withdraw()) {
                         value = ahead.value;
                         ahead_pending = false;
+                        ++report.helper_results_used;
                     } else {
                         ahead_pending = false;  // taken back before it began: evaluated here
                         // Free once the cold solve is done (collected here, kept for later).
