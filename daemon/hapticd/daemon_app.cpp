@@ -32,6 +32,7 @@
 #include "haptic/ipc/topics.hpp"
 #include "haptic/msgs/conversions.hpp"
 #include "haptic/process/shutdown.hpp"
+#include "haptic/runtime/core_settings.hpp"
 #include "haptic/runtime/device_runtime.hpp"
 #include "iceoryx_posh/popo/publisher.hpp"
 #include "iceoryx_posh/popo/subscriber.hpp"
@@ -56,60 +57,6 @@ struct DeviceEndpoints {
     std::unique_ptr<iox::popo::Publisher<msgs::DeviceState>> device_state;
 };
 
-daemon::CoreSettings coreSettings(const config::DaemonConfig& cfg) {
-    daemon::CoreSettings settings;
-    settings.version = HAPTIC_VERSION;
-    settings.config_digest = config::configurationDigest(cfg);
-    settings.rate_hz = cfg.loop.rate_hz;
-    settings.telemetry_decimation = static_cast<std::uint32_t>(cfg.loop.telemetry_decimation);
-    settings.overrun_limit = static_cast<std::uint32_t>(cfg.loop.overrun_limit);
-    settings.overrun_window_ns = static_cast<std::int64_t>(cfg.loop.overrun_window_ms) * 1'000'000;
-    settings.sim_timeout_ns = static_cast<std::int64_t>(cfg.loop.sim_timeout_ms) * 1'000'000;
-    settings.sim_rearm_after_ns =
-        static_cast<std::int64_t>(cfg.loop.sim_rearm_after_ms) * 1'000'000;
-    settings.status_period_ns = 1'000'000'000LL / cfg.loop.status_rate_hz;
-    settings.sim_transport = cfg.sim_link.transport == config::SimTransport::kDds
-                                 ? msgs::SimTransport::kDds
-                                 : msgs::SimTransport::kIceoryx;
-    for (const auto& entry : config::EnumTraits<config::RenderingMethod>::kEntries) {
-        settings.known_methods.emplace_back(entry.name);
-    }
-    for (const auto& device : cfg.devices) {
-        const std::int64_t command_timeout_ns =
-            static_cast<std::int64_t>(device.can.command_timeout_ms) * 1'000'000;
-        if (settings.stall_limit_ns == 0 || command_timeout_ns < settings.stall_limit_ns) {
-            settings.stall_limit_ns = command_timeout_ns;
-        }
-    }
-    for (const auto& device : cfg.devices) {
-        if (device.isExoskeleton()) {
-            settings.rendering_method =
-                std::string(config::toString(device.exoskeleton().rendering.method));
-            break;
-        }
-    }
-    return settings;
-}
-
-std::vector<daemon::DeviceDescriptor> deviceDescriptors(const config::DaemonConfig& cfg) {
-    std::vector<daemon::DeviceDescriptor> devices;
-    for (const auto& device : cfg.devices) {
-        daemon::DeviceDescriptor descriptor;
-        descriptor.name = device.name;
-        if (device.isExoskeleton()) {
-            descriptor.kind = msgs::DeviceKind::kExoskeleton;
-            descriptor.joint_count = 3;  // MCP, PIP, DIP of the planar finger
-            descriptor.actuator_count = 1;
-        } else {
-            descriptor.kind = msgs::DeviceKind::kThimble;
-            descriptor.joint_count = 3;  // three servo angles
-            descriptor.actuator_count = 3;
-        }
-        devices.push_back(std::move(descriptor));
-    }
-    return devices;
-}
-
 // Everything the RT thread touches, built before it starts.
 class RealtimeLoop {
   public:
@@ -117,7 +64,7 @@ class RealtimeLoop {
                  DdsSimLink* dds_sim_link, daemon::CommandChannel& commands,
                  TelemetryQueue& telemetry, runtime::DeviceRuntime& devices,
                  std::vector<std::unique_ptr<DeviceStateSnapshot>>& device_states)
-        : core_(coreSettings(cfg), deviceDescriptors(cfg)),
+        : core_(runtime::coreSettings(cfg, HAPTIC_VERSION), runtime::deviceDescriptors(cfg)),
           endpoints_(endpoints),
           dds_sim_link_(dds_sim_link),
           devices_(devices),
@@ -129,7 +76,7 @@ class RealtimeLoop {
                         : daemon::RealtimePolicy::kIgnore,
                     cfg.loop.priority, cfg.loop.cpu_affinity, cfg.loop.cpu_latency_us},
           period_ns_(1'000'000'000LL / cfg.loop.rate_hz),
-          stall_limit_ns_(coreSettings(cfg).stall_limit_ns) {}
+          stall_limit_ns_(runtime::coreSettings(cfg, HAPTIC_VERSION).stall_limit_ns) {}
 
     // The thread is named so an operator can find it (`top -H`, `ps -L`, `chrt -p`) and a
     // test can stop it alone.
