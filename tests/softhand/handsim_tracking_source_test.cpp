@@ -195,9 +195,11 @@ TEST_F(TopicSourceTest, EachTrackingFilterKeyShapesTheStepResponse) {
     other_derivative.derivative_cutoff_hz = 10.0;
     auto no_angles = *shipped;
     no_angles.angle_beta_s_per_rad.reset();
-    const auto responses =
-        run({std::nullopt, shipped, slower, faster_in_motion, other_derivative, no_angles});
-    ASSERT_EQ(responses.size(), 6U);
+    auto angles_faster_in_motion = *shipped;
+    angles_faster_in_motion.angle_beta_s_per_rad = 100.0;
+    const auto responses = run({std::nullopt, shipped, slower, faster_in_motion, other_derivative,
+                                no_angles, angles_faster_in_motion});
+    ASSERT_EQ(responses.size(), 7U);
     for (const auto& response : responses) {
         ASSERT_EQ(response.wrist_x_m.size(), 90U);
     }
@@ -225,6 +227,9 @@ TEST_F(TopicSourceTest, EachTrackingFilterKeyShapesTheStepResponse) {
     // Without angle_beta_s_per_rad the angles pass unfiltered; the wrist is filtered as before.
     EXPECT_NEAR(responses[5].angle_rad[10], 0.2, 1e-12);
     EXPECT_NEAR(responses[5].wrist_x_m[12], filtered.wrist_x_m[12], 1e-12);
+    // angle_beta_s_per_rad's value: a higher beta lets the angles lag less, the wrist as before.
+    EXPECT_GT(responses[6].angle_rad[12], filtered.angle_rad[12] + 1e-4);
+    EXPECT_NEAR(responses[6].wrist_x_m[12], filtered.wrist_x_m[12], 1e-12);
 }
 
 // tracking.timeout_ms (default 100): a gap in the tracker's samples longer than it restarts

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "allocation_counter.hpp"
@@ -222,6 +223,26 @@ TEST_F(ContactOptimiserTest, TheSampleBoundIsTheDeviceFilesPadSamples) {
     const auto command = bounded.solve(small);
     EXPECT_EQ(command.report.input.error, InputError::kNone);
     EXPECT_EQ(command.report.outcome, SolveOutcome::kMatched);
+}
+
+// optimiser.pad_stiffening_depth_m, through the mapping hapticd uses: the pad law the plate's
+// force balance assumes. On a sphere no plane matches, so where the plate settles depends on
+// how the pad stiffens: the shipped near-linear law (0.1 m) and a strongly stiffening one
+// (2 mm) put it at different heights.
+TEST_F(ContactOptimiserTest, TheStiffeningDepthKeyDecidesWhereThePlateSettles) {
+    auto stiffening = config;
+    stiffening.optimiser.pad_stiffening_depth_m = 0.002;
+    ASSERT_GT(config.optimiser.pad_stiffening_depth_m, 0.05) << "the shipped law changed";
+    ContactSurfaceOptimiser other(kinematics, OptimiserSettings::fromConfig(stiffening));
+    const auto surface = sphereSurface();
+    const auto shipped = sut.solve(surface);
+    const auto stiffer = other.solve(surface);
+    ASSERT_TRUE(shipped.report.converged);
+    ASSERT_TRUE(stiffer.report.converged);
+    std::printf("plate height: shipped law %.4f mm, 2 mm stiffening %.4f mm\n",
+                shipped.dofs.height_m * 1e3, stiffer.dofs.height_m * 1e3);
+    EXPECT_GT(std::abs(shipped.dofs.height_m - stiffer.dofs.height_m), 1e-5);
+    expectInsideWorkspace(stiffer);
 }
 
 TEST_F(ContactOptimiserTest, IterationsNeverExceedTheConfiguredBound) {
