@@ -92,6 +92,28 @@ TEST(SofthandHandBuilder, FingerSceneHasThreeJointedPhalangesOnAKinematicPalm) {
     EXPECT_EQ(model.findBone("thumb_distal"), nullptr);
 }
 
+// hand.finger names the finger a fingertip or one-finger scene builds: the middle finger's
+// bones, at its own lengths (longer than the index's), and no index.
+TEST(SofthandHandBuilder, TheFingerKeyChoosesTheFingerBuilt) {
+    const double hand_length = 0.19;
+    for (const auto model : {config::HandModel::kFingertip, config::HandModel::kFinger}) {
+        config::HandConfig middle = handConfig(model, 1);
+        middle.finger = config::Finger::kMiddle;
+        const HandModel built = buildHand(middle, {});
+        const auto* distal = built.findBone("middle_distal");
+        ASSERT_NE(distal, nullptr);
+        EXPECT_EQ(built.findBone("index_distal"), nullptr);
+        const auto middle_lengths = phalanxLengths(config::Finger::kMiddle, hand_length);
+        const auto index_lengths = phalanxLengths(config::Finger::kIndex, hand_length);
+        EXPECT_NEAR(distal->length_m, middle_lengths[2], 1e-12);
+        if (model == config::HandModel::kFinger) {
+            ASSERT_NE(built.findBone("middle_proximal"), nullptr);
+            EXPECT_NEAR(built.findBone("middle_proximal")->length_m, middle_lengths[0], 1e-12);
+            EXPECT_GT(middle_lengths[0], index_lengths[0]) << "the two fingers would not differ";
+        }
+    }
+}
+
 // Level 0 (two cells across a finger) is the whole hand's real-time level, level 1 the next.
 TEST(SofthandHandBuilder, WholeHandHasSixteenBonesAndStaysTogetherUnderGravity) {
     for (const int level : {0, 1}) {

@@ -54,6 +54,53 @@ std::string replayRow(double t_s, double x_m, double angle_rad) {
     return row + "\n";
 }
 
+// tracking.script and tracking.target_object: handsim runs the script the scene names on the
+// object it names, and holds its last pose or loops it as tracking.loop says.
+TEST(HandsimTrackingSource, AScriptedSceneRunsTheScriptItNamesOnItsTarget) {
+    auto participant = makeParticipant();
+    const auto samePose = [](const softhand::HandPoseInput& a, const softhand::HandPoseInput& b) {
+        return (a.wrist.position_m - b.wrist.position_m).norm() < 1e-12 &&
+               std::abs(a.flexion_rad[4] - b.flexion_rad[4]) < 1e-12;
+    };
+    {
+        auto scene = config::loadSceneConfig(kConfigDir + "/scenes/grasp_box.yaml");
+        ASSERT_EQ(scene.tracking.script, config::TrackingScript::kGraspLiftPlacePush);
+        const softhand::SceneSimulation sim(scene, {});
+        const softhand::GraspLiftPlacePushScript script(
+            sim.trackedHand(), scene.hand, *scene.findObject("box"), scene.tracking.loop);
+        const auto source = makeTrackingSource(scene, sim, participant);
+        EXPECT_EQ(source->describe(), "scripted grasp_lift_place_push on 'box'");
+        EXPECT_TRUE(samePose(source->initialPose(), script.at(0.0)));
+        std::string rejection;
+        const auto lifted = source->poll(1.5, rejection);
+        ASSERT_TRUE(lifted.has_value()) << rejection;
+        EXPECT_TRUE(samePose(*lifted, script.at(1.5)));
+    }
+    // The thimble scene with the press script on another box of its own, and each loop value.
+    auto scene = thimbleScene();
+    ASSERT_EQ(scene.tracking.script, config::TrackingScript::kPressSlideEdge);
+    config::SceneObject other = *scene.findObject(scene.tracking.target_object);
+    other.name = "other_block";
+    other.pose.position_m[0] += 0.05;
+    scene.objects.push_back(other);
+    scene.tracking.target_object = "other_block";
+    const softhand::SceneSimulation sim(scene, {});
+    std::vector<softhand::HandPoseInput> late;
+    for (const bool loop : {false, true}) {
+        scene.tracking.loop = loop;
+        const softhand::PressSlideEdgeScript script(sim.trackedHand(), scene.hand, other, loop);
+        const auto source = makeTrackingSource(scene, sim, participant);
+        EXPECT_EQ(source->describe(), "scripted press_slide_edge on 'other_block'");
+        std::string rejection;
+        const double t = softhand::PressSlideEdgeScript::kPeriod + 1.0;
+        const auto polled = source->poll(t, rejection);
+        ASSERT_TRUE(polled.has_value()) << rejection;
+        EXPECT_TRUE(samePose(*polled, script.at(t))) << "loop " << loop;
+        late.push_back(*polled);
+    }
+    EXPECT_FALSE(samePose(late[0], late[1])) << "holding and looping gave the same pose";
+}
+
 TEST(HandsimTrackingSource, AReplaySceneReplaysItsFileAndHoldsOrLoopsAsTrackingLoopSays) {
     // Removed however the test ends.
     struct TemporaryFile {
