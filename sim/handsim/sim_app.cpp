@@ -50,8 +50,15 @@ void countState(DeviceLink& link, const msgs::DeviceState& state) {
     }
 }
 
-// The devices of sim.yaml as the soft hand sees them: the finger each is bound to in the
-// scene, and what it needs (constraints for an exoskeleton, pad samples for a thimble).
+// Step-time percentiles over the last status window, from stored samples (the sim is not on
+// the hard RT path, so a small vector is fine here), by the project's one rank rule.
+msgs::Percentiles percentiles(std::vector<double>& samples_us) {
+    const common::PercentileSummary summary = common::summarize(samples_us);
+    return {summary.p50, summary.p99, summary.max};
+}
+
+}  // namespace
+
 std::vector<softhand::DeviceRequest> deviceRequests(const config::SimConfig& cfg) {
     std::vector<softhand::DeviceRequest> requests;
     for (const auto& device : cfg.devices) {
@@ -73,15 +80,6 @@ std::vector<softhand::DeviceRequest> deviceRequests(const config::SimConfig& cfg
     }
     return requests;
 }
-
-// Step-time percentiles over the last status window, from stored samples (the sim is not on
-// the hard RT path, so a small vector is fine here), by the project's one rank rule.
-msgs::Percentiles percentiles(std::vector<double>& samples_us) {
-    const common::PercentileSummary summary = common::summarize(samples_us);
-    return {summary.p50, summary.p99, summary.max};
-}
-
-}  // namespace
 
 int runSim(const SimOptions& options) {
     const auto& cfg = options.config;
