@@ -262,53 +262,88 @@ TEST(HandPoseTopic, HandsimFollowsALivePublisherAndRejectsBadPoses) {
 // poses there, here on a topic of this test's own. Its devices on a UDP block of this process's
 // own (27600-27699: clear of the other tests' blocks and of the ports of the DDS domains tests
 // use, 100-232, from 32400 up).
-TEST(HandPoseTopic, TheVirtualUserPublishesOnItsTrackerTopic) {
-    namespace fs = std::filesystem;
-    const fs::path dir =
-        fs::temp_directory_path() / ("handpose_user_topic_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
-    fs::copy(HAPTIC_CONFIG_DIR, dir, fs::copy_options::recursive);
-    const auto replace = [](const fs::path& file, const std::string& from, const std::string& to) {
-        std::ifstream in(file);
+// A copy of the shipped configuration whose virtual user publishes on a topic of this test's
+// own and whose devices use a UDP block of its own; removed however the test ends.
+class VirtualUserConfigDir {
+  public:
+    VirtualUserConfigDir()
+        : dir_(std::filesystem::temp_directory_path() /
+               ("handpose_user_topic_" + std::to_string(::getpid()))),
+          topic_("tracking/test_" + std::to_string(::getpid())) {
+        std::filesystem::remove_all(dir_);
+        std::filesystem::copy(HAPTIC_CONFIG_DIR, dir_, std::filesystem::copy_options::recursive);
+        const std::string port = std::to_string(27600 + (::getpid() % 25) * 4);
+        replace("user.yaml", "topic: tracking/hand", "topic: " + topic_);
+        replace("devices/exoskeleton.yaml", "udp_port: 47000", "udp_port: " + port);
+        replace("devices/thimble.yaml", "udp_port: 47000", "udp_port: " + port);
+    }
+    ~VirtualUserConfigDir() { std::filesystem::remove_all(dir_); }
+    VirtualUserConfigDir(const VirtualUserConfigDir&) = delete;
+    VirtualUserConfigDir& operator=(const VirtualUserConfigDir&) = delete;
+
+    void replace(const std::string& file, const std::string& from, const std::string& to) const {
+        const auto path = dir_ / file;
+        std::ifstream in(path);
         std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
         const auto at = text.find(from);
         if (at == std::string::npos) {
-            ADD_FAILURE() << from << " not in " << file;
-            return false;
+            ADD_FAILURE() << from << " not in " << path;
+            return;
         }
         text.replace(at, from.size(), to);
-        std::ofstream(file, std::ios::trunc) << text;
-        return true;
-    };
-    const std::string topic = "tracking/test_" + std::to_string(::getpid());
-    const std::string port = std::to_string(27600 + (::getpid() % 25) * 4);
-    ASSERT_TRUE(replace(dir / "user.yaml", "topic: tracking/hand", "topic: " + topic));
-    ASSERT_TRUE(replace(dir / "devices/exoskeleton.yaml", "udp_port: 47000", "udp_port: " + port));
-    ASSERT_TRUE(replace(dir / "devices/thimble.yaml", "udp_port: 47000", "udp_port: " + port));
+        std::ofstream(path, std::ios::trunc) << text;
+    }
+    [[nodiscard]] std::string userFile() const { return (dir_ / "user.yaml").string(); }
+    [[nodiscard]] const std::string& topic() const { return topic_; }
 
+  private:
+    std::filesystem::path dir_;
+    std::string topic_;
+};
+
+// Runs `hapticemu --user` on `config` until its first HandPose on the tracker topic arrives;
+// returns its stderr after a clean stop.
+std::string runVirtualUserUntilItTracks(const VirtualUserConfigDir& config) {
     const int domain = testDomain();
-    ChildProcess user({HAPTICEMU_PATH, "--user", (dir / "user.yaml").string(), "--dds-domain",
-                       std::to_string(domain)},
-                      "hapticemu-user");
+    ChildProcess user(
+        {HAPTICEMU_PATH, "--user", config.userFile(), "--dds-domain", std::to_string(domain)},
+        "hapticemu-user");
     ipc::DdsParticipant participant(
         ipc::DdsSettings{static_cast<std::uint32_t>(domain),
                          std::string(HAPTIC_CONFIG_DIR) + "/dds_profiles.xml",
                          "haptic_participant"},
         "handpose_topic_test");
-    auto reader = participant.createReader<idl::HandPosePubSubType>(topic, ipc::TopicKind::kStream);
+    auto reader =
+        participant.createReader<idl::HandPosePubSubType>(config.topic(), ipc::TopicKind::kStream);
     idl::HandPose sample;
     bool received = false;
     for (auto deadline = std::chrono::steady_clock::now() + 20s;
          !received && std::chrono::steady_clock::now() < deadline && user.running();) {
         received = reader.waitAndTake(sample, 200ms);
     }
-    EXPECT_TRUE(received) << "no HandPose on " << topic << "\n" << user.stderrText();
+    EXPECT_TRUE(received) << "no HandPose on " << config.topic() << "\n" << user.stderrText();
     msgs::HandPose pose;
     EXPECT_TRUE(msgs::fromIdl(sample, pose).ok());
     EXPECT_EQ(pose.joint_angles_rad.size(), 15U);
     EXPECT_TRUE(user.running()) << user.stderrText();
     (void)user.terminate();
-    fs::remove_all(dir);
+    return user.stderrText();
+}
+
+TEST(HandPoseTopic, TheVirtualUserPublishesOnItsTrackerTopic) {
+    const VirtualUserConfigDir config;
+    const std::string log = runVirtualUserUntilItTracks(config);
+    // user.yaml's log_level ships at info: the virtual user's start is logged at info.
+    EXPECT_THAT(log, HasSubstr(" info: "));
+}
+
+// log_level in user.yaml (hapticemu --user reads it, not hapticd's file): at warn, nothing at
+// info.
+TEST(HandPoseTopic, TheVirtualUserLogsAtTheLevelItsFileSays) {
+    const VirtualUserConfigDir config;
+    config.replace("user.yaml", "log_level: info", "log_level: warn");
+    const std::string log = runVirtualUserUntilItTracks(config);
+    EXPECT_THAT(log, ::testing::Not(HasSubstr(" info: ")));
 }
 
 }  // namespace
