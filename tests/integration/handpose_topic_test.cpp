@@ -202,6 +202,14 @@ TEST(HandPoseTopic, HandsimFollowsALivePublisherAndRejectsBadPoses) {
          "0.948"},
         {nan_angle, "HandPose on 'tracking/hand': joint_angles_rad[4] is not finite"},
     };
+    // One bad pose, then a good one 10 ms later, each followed by a look at the surfaces.
+    const auto badThenGood = [&](const msgs::HandPose& bad) {
+        for (const msgs::HandPose* pose : {&bad, &above}) {
+            EXPECT_TRUE(publisher.publish(*pose));
+            std::this_thread::sleep_for(10ms);
+            (void)pad.lowestDistance();
+        }
+    };
     for (const auto& [bad, reason] : bad_poses) {
         (void)pad.lowestDistance();
         pad.restartRange();
@@ -209,21 +217,11 @@ TEST(HandPoseTopic, HandsimFollowsALivePublisherAndRejectsBadPoses) {
         const auto deadline = std::chrono::steady_clock::now() + 30s;
         while (sim.stderrText().find(reason) == std::string::npos && sim.running() &&
                std::chrono::steady_clock::now() < deadline) {
-            ASSERT_TRUE(publisher.publish(bad));
-            std::this_thread::sleep_for(10ms);
-            (void)pad.lowestDistance();
-            ASSERT_TRUE(publisher.publish(above));
-            std::this_thread::sleep_for(10ms);
-            (void)pad.lowestDistance();
+            badThenGood(bad);
         }
         // A few more bad poses after the log said so, each judged on the surfaces after it.
         for (int i = 0; i < 10; ++i) {
-            ASSERT_TRUE(publisher.publish(bad));
-            std::this_thread::sleep_for(10ms);
-            (void)pad.lowestDistance();
-            ASSERT_TRUE(publisher.publish(above));
-            std::this_thread::sleep_for(10ms);
-            (void)pad.lowestDistance();
+            badThenGood(bad);
         }
         ASSERT_TRUE(sim.running()) << sim.stderrText();
         EXPECT_THAT(sim.stderrText(), HasSubstr(reason));
