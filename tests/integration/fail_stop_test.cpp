@@ -614,8 +614,15 @@ TEST_F(FailStopTest, ADriveThatStaysEnabledAfterADisableLatchesItsOwnFault) {
         }
     }
     ASSERT_TRUE(exo_emu_->sendCommand("stuck-enable off"));
-    std::this_thread::sleep_for(100ms);
-    ASSERT_TRUE(command("clear"));
+    // The fault stands until the contradiction has drained (one heartbeat timeout of plausible
+    // frames after the repair): `clear` is refused until then.
+    bool cleared = false;
+    for (const auto deadline = std::chrono::steady_clock::now() + 5s;
+         !cleared && std::chrono::steady_clock::now() < deadline;) {
+        std::this_thread::sleep_for(50ms);
+        cleared = hapticctl({"clear"}).exit_code == 0;
+    }
+    ASSERT_TRUE(cleared) << "clear refused 5 s after the repair";
     waitForStatus("IDLE after the repair and clear", [](const msgs::HapticStatus& s) {
         return s.state == msgs::DaemonState::kIdle && s.faults.empty();
     });

@@ -148,7 +148,6 @@ void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noe
     // `clear` emptied the list: re-arm, so a cause that is still there is raised again.
     if (latched_ != 0 && core.stateMachine().faultCount() == 0) {
         latched_ = 0;
-        forgetContradictions();
     }
     if (first_supervise_ns_ == 0) {
         first_supervise_ns_ = now_ns;
@@ -189,6 +188,12 @@ void DeviceChannel::supervise(daemon::DaemonCore& core, std::int64_t now_ns) noe
         }
     }
     latched_ |= active;
+    // A raised 105 stands until its contradiction has ended, not only while it is reported
+    // (the report drops on each plausible tick of an intermittent cause).
+    if (report_.standing_fault == 0 && (latched_ & kImplausibleFeedback) != 0 &&
+        contradictionPending()) {
+        report_.standing_fault = kFaultImplausibleFeedback;
+    }
 }
 
 void DeviceChannel::write() noexcept {

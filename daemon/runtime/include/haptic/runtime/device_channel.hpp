@@ -109,11 +109,12 @@ class DeviceChannel {
     // than can.heartbeat_timeout_ms on most ticks (ContradictionTimer; then
     // implausibleMessage() says how); 0 by default.
     virtual std::uint32_t plausibilityFaults(std::int64_t /*now_ns*/) noexcept { return 0; }
-    // At the re-arm after `clear`: what the plausibility checks had built up is forgotten, so
-    // the operator's enable is judged from nothing (its own round trip is not added to the
-    // balance a repaired contradiction left). A cause still present is raised again after a
-    // full can.heartbeat_timeout_ms.
-    virtual void forgetContradictions() noexcept {}
+    // Whether a plausibility check's contradiction has not ended yet (its balance is at or
+    // above zero, ContradictionTimer::contradicting()): a raised 105 stands, and `clear` is
+    // refused, until it has. So an intermittent cause cannot be cleared between two of its
+    // frames, and after a repair (the balance drains within one can.heartbeat_timeout_ms)
+    // nothing of the old contradiction is left to add to the operator's enable.
+    [[nodiscard]] virtual bool contradictionPending() const noexcept { return false; }
     [[nodiscard]] virtual const char* implausibleMessage() const noexcept { return ""; }
     [[nodiscard]] std::int64_t heartbeatTimeoutNs() const noexcept { return heartbeat_timeout_ns_; }
     virtual can::IoResult sendCommand() noexcept = 0;

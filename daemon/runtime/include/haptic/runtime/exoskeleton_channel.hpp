@@ -96,10 +96,9 @@ class ExoskeletonChannel final
     // enabled after a disable, or never enables), and, while enabled, the force it measures
     // against the commanded force through the actuator's lag.
     std::uint32_t plausibilityFaults(std::int64_t now_ns) noexcept override;
-    void forgetContradictions() noexcept override {
-        enable_mismatch_.reset();
-        force_mismatch_.reset();
-        echo_mismatch_.reset();
+    [[nodiscard]] bool contradictionPending() const noexcept override {
+        return enable_mismatch_.contradicting() || force_mismatch_.contradicting() ||
+               echo_mismatch_.contradicting();
     }
     [[nodiscard]] const char* implausibleMessage() const noexcept override {
         return implausible_message_;

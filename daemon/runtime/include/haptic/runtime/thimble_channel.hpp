@@ -47,7 +47,9 @@ class ThimbleChannel final
   protected:
     void commandSafe() noexcept override { command_.servo_target_rad = retract_servo_rad_; }
     std::uint32_t plausibilityFaults(std::int64_t now_ns) noexcept override;
-    void forgetContradictions() noexcept override { angle_mismatch_.reset(); }
+    [[nodiscard]] bool contradictionPending() const noexcept override {
+        return angle_mismatch_.contradicting();
+    }
     [[nodiscard]] const char* implausibleMessage() const noexcept override {
         return implausible_message_;
     }
