@@ -22,10 +22,10 @@ TEST(SeqLock, LoadFailsBeforeTheFirstStore) {
     EXPECT_FALSE(sut.load(out));
 }
 
-// The writer stores without pause while the reader copies, until the reader has raced the
-// writer often (tryLoad refused a copy that a store overlapped) and taken many snapshots in
-// between: only then is "no torn copy accepted" evidence. Bounded by time, not by a count of
-// stores, so a loaded machine (one core shared by both threads) only takes longer.
+// The writer stores, with short gaps, while the reader copies, until the reader has raced the
+// writer often (tryLoad refused a copy: a store was under way or overlapped it) and taken many
+// snapshots in between: only then is "no torn copy accepted" evidence. Bounded by time, not by
+// a count of stores, so a loaded machine (one core shared by both threads) only takes longer.
 TEST(SeqLock, ReadersNeverSeeATornSnapshot) {
     SeqLock<Snapshot> sut;
     std::atomic<bool> stop{false};
@@ -67,7 +67,7 @@ TEST(SeqLock, ReadersNeverSeeATornSnapshot) {
     stop = true;
     writer.join();
     std::cout << reads << " snapshots taken, " << raced << " copies refused\n";
-    EXPECT_GE(raced, kEnoughRaces) << "copies refused because a store overlapped them";
+    EXPECT_GE(raced, kEnoughRaces) << "copies refused: a store under way or overlapping";
     EXPECT_GE(reads, kEnoughReads) << "snapshots taken while the writer ran";
     Snapshot out;
     ASSERT_TRUE(sut.load(out));

@@ -131,9 +131,10 @@ struct StepReport {
     // Jobs the helper thread ran for this step (cold solves, line-search points it evaluated
     // ahead), not those the step took back and did itself.
     int helper_jobs{0};
-    // Of those, the ones whose result entered the step: a cold solve it used, a halving's
-    // point it took from the helper. A cold solve the helper ran while the warm one succeeded
-    // is a job run, not a result used.
+    // Of those, the ones whose result an attempt at the step used: a cold solve it took, a
+    // halving's point taken from the helper (an attempt whose energy rose is then split into
+    // substeps, its results with it). A cold solve the helper ran while the warm one
+    // succeeded is a job run, not a result used.
     int helper_results_used{0};
     int newton_iterations{0};  // beyond the first, summed over substeps
     int pcg_iterations{0};     // summed over substeps
